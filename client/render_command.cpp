@@ -1,0 +1,107 @@
+#include "client/render_command.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "common/image_io.hpp"
+#include "common/scene_parser.hpp"
+#include "worker/local_render.hpp"
+
+namespace tessera {
+namespace {
+
+struct RenderOptions {
+  std::string scene_path;
+  std::string output_path;
+  std::optional<int> width, height, spp, max_depth, tile_size;
+  int threads = 0;
+};
+
+// Command-line overrides go into the document before validation, so they obey the same
+// rules, and produce the same messages, as values written in the file.
+void apply_overrides(nlohmann::json& document, const RenderOptions& options) {
+  if (!document.is_object()) return;
+  auto set = [&](const char* section, const char* key, const std::optional<int>& value) {
+    if (!value) return;
+    nlohmann::json& target = document[section];
+    if (target.is_null()) target = nlohmann::json::object();
+    if (target.is_object()) target[key] = *value;
+  };
+  set("image", "width", options.width);
+  set("image", "height", options.height);
+  set("render", "samples_per_pixel", options.spp);
+  set("render", "max_depth", options.max_depth);
+  set("render", "tile_size", options.tile_size);
+}
+
+int run_render(const RenderOptions& options) {
+  std::filesystem::path output = options.output_path;
+  if (output.empty()) output = std::filesystem::path(options.scene_path).stem().string() + ".png";
+  if (!is_supported_image_path(output)) {
+    std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
+                 output.string().c_str());
+    return 2;
+  }
+
+  Scene scene;
+  try {
+    nlohmann::json document = read_json_file(options.scene_path);
+    apply_overrides(document, options);
+    scene = parse_scene(document);
+  } catch (const SceneError& e) {
+    std::fprintf(stderr, "error: %s: %s\n", options.scene_path.c_str(), e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+
+  const auto start = std::chrono::steady_clock::now();
+  const Renderer renderer(scene);
+  const auto built = std::chrono::steady_clock::now();
+  const LocalRenderResult result = render_local(renderer, options.threads);
+  const auto rendered = std::chrono::steady_clock::now();
+  write_image(result.image, output, scene.render.output_transfer);
+
+  const double build_s = std::chrono::duration<double>(built - start).count();
+  const double trace_s = std::chrono::duration<double>(rendered - built).count();
+  const double rays_per_s = trace_s > 0 ? result.rays.total() / trace_s : 0.0;
+  std::printf("rendered %dx%d, %d spp, max depth %d in %.3f s (scene build %.3f s, tracing %.3f s)\n",
+              scene.width, scene.height, scene.render.samples_per_pixel, scene.render.max_depth,
+              build_s + trace_s, build_s, trace_s);
+  std::printf("rays: %llu (%llu primary, %llu secondary, %llu shadow), %.2f Mrays/s\n",
+              static_cast<unsigned long long>(result.rays.total()),
+              static_cast<unsigned long long>(result.rays.primary),
+              static_cast<unsigned long long>(result.rays.secondary),
+              static_cast<unsigned long long>(result.rays.shadow), rays_per_s / 1e6);
+  std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
+  return 0;
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+  auto options = std::make_shared<RenderOptions>();
+  CLI::App* render = app.add_subcommand("render", "Render a scene on this machine (no server)");
+  render->add_option("scene", options->scene_path, "Scene file (JSON)")->required();
+  render->add_option("-o,--output", options->output_path,
+                     "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png)");
+  render->add_option("--width", options->width, "Override image.width")->check(CLI::PositiveNumber);
+  render->add_option("--height", options->height, "Override image.height")->check(CLI::PositiveNumber);
+  render->add_option("--spp", options->spp, "Override render.samples_per_pixel");
+  render->add_option("--max-depth", options->max_depth, "Override render.max_depth");
+  render->add_option("--tile-size", options->tile_size, "Override render.tile_size");
+  render->add_option("--threads", options->threads, "Rendering threads (default: one per core)")
+      ->check(CLI::NonNegativeNumber);
+  render->final_callback([options] {
+    const int code = run_render(*options);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace tessera

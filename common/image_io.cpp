@@ -1,0 +1,111 @@
+#include "common/image_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+
+namespace tessera {
+namespace {
+
+enum class FileKind { exr, png, jpg, tif, unknown };
+
+FileKind kind_of(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".exr") return FileKind::exr;
+  if (ext == ".png") return FileKind::png;
+  if (ext == ".jpg" || ext == ".jpeg") return FileKind::jpg;
+  if (ext == ".tif" || ext == ".tiff") return FileKind::tif;
+  return FileKind::unknown;
+}
+
+// Quantises in our own code, not OIIO's, so that the bytes never depend on its version.
+template <typename T>
+std::vector<T> encode(const Image& image, OutputTransfer transfer) {
+  constexpr float max_code = static_cast<float>(std::numeric_limits<T>::max());
+  std::vector<T> out(image.pixels().size());
+  std::transform(image.pixels().begin(), image.pixels().end(), out.begin(), [&](float v) {
+    float c = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+    if (transfer == OutputTransfer::srgb) c = linear_to_srgb(c);
+    return static_cast<T>(std::lround(c * max_code));
+  });
+  return out;
+}
+
+}  // namespace
+
+float linear_to_srgb(float linear) {
+  if (linear <= 0.0031308f) return 12.92f * linear;
+  return 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
+}
+
+bool is_supported_image_path(const std::filesystem::path& path) {
+  return kind_of(path) != FileKind::unknown;
+}
+
+void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer) {
+  const FileKind kind = kind_of(path);
+  if (kind == FileKind::unknown)
+    throw std::runtime_error("cannot write " + path.string() +
+                             ": unknown image extension (use .exr, .png, .jpg or .tif)");
+
+  // Same directory and extension, so the rename is atomic and OIIO picks the right format.
+  std::filesystem::path temp = path;
+  temp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
+                        path.extension().string());
+
+  OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
+  if (kind == FileKind::exr) type = OIIO::TypeDesc::FLOAT;
+  if (kind == FileKind::tif) type = OIIO::TypeDesc::UINT16;
+  OIIO::ImageSpec spec(image.width(), image.height(), 3, type);
+  if (kind == FileKind::exr) {
+    spec.attribute("compression", "zip");
+    spec.attribute("oiio:ColorSpace", "Linear");
+  } else {
+    spec.attribute("oiio:ColorSpace", transfer == OutputTransfer::srgb ? "sRGB" : "Linear");
+  }
+  if (kind == FileKind::jpg) spec.attribute("Compression", "jpeg:95");
+
+  auto out = OIIO::ImageOutput::create(temp.string());
+  if (!out) throw std::runtime_error("cannot write " + path.string() + ": " + OIIO::geterror());
+  bool ok = out->open(temp.string(), spec);
+  if (ok) {
+    if (kind == FileKind::exr) {
+      ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels().data());
+    } else if (kind == FileKind::tif) {
+      ok = out->write_image(OIIO::TypeDesc::UINT16, encode<std::uint16_t>(image, transfer).data());
+    } else {
+      ok = out->write_image(OIIO::TypeDesc::UINT8, encode<std::uint8_t>(image, transfer).data());
+    }
+    ok = out->close() && ok;
+  }
+  if (!ok) {
+    const std::string message = out->geterror();
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+    throw std::runtime_error("cannot write " + path.string() + ": " + message);
+  }
+  std::filesystem::rename(temp, path);
+}
+
+Image read_image(const std::filesystem::path& path) {
+  auto in = OIIO::ImageInput::open(path.string());
+  if (!in) throw std::runtime_error("cannot read " + path.string() + ": " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  Image image(spec.width, spec.height);
+  std::vector<float> all(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
+    throw std::runtime_error("cannot read " + path.string() + ": " + in->geterror());
+  const int channels = std::min(spec.nchannels, 3);
+  for (std::size_t i = 0, n = static_cast<std::size_t>(spec.width) * spec.height; i < n; ++i)
+    for (int c = 0; c < 3; ++c)
+      image.pixels()[i * 3 + c] = all[i * spec.nchannels + std::min(c, channels - 1)];
+  return image;
+}
+
+}  // namespace tessera

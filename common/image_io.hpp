@@ -1,0 +1,25 @@
+// Image files through OpenImageIO; the format follows the file extension.
+#pragma once
+
+#include <filesystem>
+
+#include "common/image.hpp"
+#include "common/scene.hpp"
+
+namespace tessera {
+
+// .exr: linear float, unclamped. .png, .jpg/.jpeg: 8-bit; .tif/.tiff: 16-bit; those are
+// clamped to [0,1] and sRGB-encoded unless `transfer` is linear. The file appears
+// atomically: it is written beside the target and renamed into place.
+void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer);
+
+// Reads any file OpenImageIO knows as linear float RGB (for EXR, exactly what was written).
+Image read_image(const std::filesystem::path& path);
+
+// True for the extensions write_image accepts.
+bool is_supported_image_path(const std::filesystem::path& path);
+
+// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0,1].
+float linear_to_srgb(float linear);
+
+}  // namespace tessera

@@ -1,0 +1,150 @@
+// The validated scene: what the JSON scene format (docs/scene-format.md) means once
+// every rule has been checked. Everything downstream trusts these values.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace tessera {
+
+using Vec3 = glm::dvec3;
+using Color = glm::dvec3;  // linear RGB
+using Mat4 = glm::dmat4;   // column-major, as GLM stores it
+
+struct Checker {
+  double size = 1.0;  // cell edge in world units, > 0
+  Color ambient{0.0};
+  Color diffuse{0.0};
+};
+
+struct Material {
+  Color emission{0.0};        // I_E
+  Color ambient{0.2};         // K_A
+  Color diffuse{0.8};         // K_D
+  Color specular{0.0};        // K_S
+  double shininess = 0.0;     // n
+  Color reflection{0.0};      // K_R (the parser fills in `specular` when absent)
+  Color transmission{0.0};    // K_T
+  double ior = 1.0;
+  std::optional<Checker> checker;
+};
+
+struct Attenuation {
+  double constant = 1.0;   // kc
+  double linear = 0.0;     // kl
+  double quadratic = 0.0;  // kq
+};
+
+struct PointLight {
+  Vec3 position{0.0};
+  Color intensity{1.0};
+  Attenuation attenuation;
+};
+
+struct DirectionalLight {
+  Vec3 direction{0.0, -1.0, 0.0};  // unit; the direction the light travels
+  Color intensity{1.0};
+};
+
+struct SpotLight {
+  Vec3 position{0.0};
+  Vec3 direction{0.0, -1.0, 0.0};  // unit; the cone's axis, pointing away from the light
+  Color intensity{1.0};
+  Attenuation attenuation;
+  double cutoff_degrees = 90.0;  // half-angle of the cone, in (0, 90]
+  double exponent = 1.0;         // >= 0
+};
+
+using Light = std::variant<PointLight, DirectionalLight, SpotLight>;
+
+struct Sphere {
+  Vec3 center{0.0};
+  double radius = 1.0;
+};
+
+struct Plane {
+  Vec3 point{0.0};
+  Vec3 normal{0.0, 1.0, 0.0};  // unit
+};
+
+struct Box {
+  Vec3 min{-1.0};
+  Vec3 max{1.0};
+};
+
+struct Triangle {
+  std::array<Vec3, 3> vertices;
+  std::optional<std::array<Vec3, 3>> normals;  // unit, per vertex
+};
+
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside
+  std::vector<Vec3> normals;  // empty, or one unit normal per position
+  bool thin = false;
+};
+
+using Shape = std::variant<Sphere, Plane, Box, Triangle, Mesh>;
+
+struct Object {
+  Shape shape;
+  std::uint32_t material = 0;  // index into Scene::materials
+  Mat4 transform{1.0};         // object to world; identity when the scene gives none
+};
+
+// Solid objects refract by Snell's law; thin ones let transmitted rays pass unbent.
+inline bool is_solid(const Object& object) {
+  if (std::holds_alternative<Sphere>(object.shape) || std::holds_alternative<Box>(object.shape))
+    return true;
+  if (const auto* mesh = std::get_if<Mesh>(&object.shape)) return !mesh->thin;
+  return false;
+}
+
+struct Camera {
+  Vec3 eye{0.0};
+  Vec3 look_at{0.0, 0.0, -1.0};
+  Vec3 up{0.0, 1.0, 0.0};
+  double fov_y_degrees = 45.0;
+};
+
+enum class OutputTransfer { srgb, linear };
+
+struct RenderSettings {
+  int samples_per_pixel = 1;
+  int max_depth = 5;
+  int tile_size = 32;
+  OutputTransfer output_transfer = OutputTransfer::srgb;
+};
+
+struct Scene {
+  int width = 0;
+  int height = 0;
+  Camera camera;
+  RenderSettings render;
+  Color background{0.0};
+  Color ambient_light{0.1};
+  std::vector<Material> materials;  // index 0 is the default material
+  std::vector<Light> lights;
+  std::vector<Object> objects;
+};
+
+// What one scene may cost. One struct so that the server can expose each as a flag.
+struct Limits {
+  int max_width = 16384;
+  int max_height = 16384;
+  int max_samples_per_pixel = 4096;
+  int max_depth = 64;
+  int max_tile_size = 4096;
+  std::size_t max_objects = 100000;
+  std::size_t max_lights = 1024;
+  std::size_t max_materials = 10000;
+  std::size_t max_triangles = 20000000;  // summed over meshes, boxes and triangles
+};
+
+}  // namespace tessera

@@ -1,0 +1,62 @@
+// Internal to the scene parser: the pieces of parse_scene that live in their own files.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/scene.hpp"
+#include "common/value_reader.hpp"
+
+namespace tessera {
+
+// --- material_parser.cpp ---
+
+Material parse_material(const ValueReader& value);
+
+// Scene::materials as it fills up: the default material at 0, then the named ones, then
+// the inline ones in the order objects define them.
+class MaterialTable {
+ public:
+  explicit MaterialTable(const Limits& limits);
+
+  void add_named(const ValueReader& materials);  // the top-level "materials" object
+  // An object's "material": a name from "materials" or an inline material object.
+  std::uint32_t resolve(const ValueReader& reference);
+  std::vector<Material> take() && { return std::move(materials_); }
+
+ private:
+  std::uint32_t add(Material material, const ValueReader& where);
+
+  std::size_t max_materials_;
+  std::vector<Material> materials_;
+  std::map<std::string, std::uint32_t, std::less<>> by_name_;
+};
+
+// --- light_parser.cpp ---
+
+std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits);
+
+// --- object_parser.cpp ---
+
+std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
+                                  const Limits& limits);
+Mat4 parse_transform(const ValueReader& steps);
+
+// --- shape_parser.cpp ---
+
+struct ShapeType {
+  std::string_view name;
+  std::span<const std::string_view> keys;  // besides "type", "material" and "transform"
+  Shape (*parse)(const ObjectReader& object);
+};
+
+std::span<const ShapeType> shape_types();
+// What a shape costs against Limits::max_triangles.
+std::size_t triangle_count(const Shape& shape);
+
+}  // namespace tessera

@@ -1,0 +1,140 @@
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <string_view>
+
+#include "common/scene_parser_parts.hpp"
+
+namespace tessera {
+namespace {
+
+// Zero area up to rounding, relative to the triangle's own size so that the test means
+// the same for a scene modelled in millimetres and one modelled in kilometres.
+bool is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 e1 = b - a;
+  const Vec3 e2 = c - a;
+  const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z), std::abs(e2.x),
+                                 std::abs(e2.y), std::abs(e2.z)});
+  if (!(scale > 0.0) || !std::isfinite(scale)) return true;
+  return glm::length(glm::cross(e1 / scale, e2 / scale)) <= 1e-12;
+}
+
+Shape parse_sphere(const ObjectReader& object) {
+  Sphere sphere;
+  sphere.center = object.require("center").vec3();
+  sphere.radius = object.require("radius").number(Range::above(0.0));
+  return sphere;
+}
+
+Shape parse_plane(const ObjectReader& object) {
+  Plane plane;
+  plane.point = object.require("point").vec3();
+  plane.normal = object.require("normal").direction();
+  return plane;
+}
+
+Shape parse_box(const ObjectReader& object) {
+  Box box;
+  box.min = object.require("min").vec3();
+  const ValueReader max = object.require("max");
+  box.max = max.vec3();
+  static constexpr char axes[] = {'x', 'y', 'z'};
+  for (int i = 0; i < 3; ++i) {
+    if (box.min[i] < box.max[i]) continue;
+    max.fail(std::string("must be greater than \"min\" in every component, but max.") + axes[i] +
+             " = " + format_number(box.max[i]) + " <= min." + axes[i] + " = " +
+             format_number(box.min[i]));
+  }
+  return box;
+}
+
+Shape parse_triangle(const ObjectReader& object) {
+  Triangle triangle;
+  const ValueReader vertices = object.require("vertices");
+  vertices.expect_array_of(3, "an array of 3 points");
+  for (std::size_t i = 0; i < 3; ++i) triangle.vertices[i] = vertices.element(i).vec3();
+  if (is_degenerate(triangle.vertices[0], triangle.vertices[1], triangle.vertices[2]))
+    vertices.fail("must span a non-zero area, but the points are collinear or coincide");
+  if (const auto normals = object.find("normals")) {
+    normals->expect_array_of(3, "an array of 3 normals, one per vertex");
+    std::array<Vec3, 3> unit;
+    for (std::size_t i = 0; i < 3; ++i) unit[i] = normals->element(i).direction();
+    triangle.normals = unit;
+  }
+  return triangle;
+}
+
+std::array<std::uint32_t, 3> parse_mesh_triangle(const ValueReader& value,
+                                                 const std::vector<Vec3>& positions) {
+  value.expect_array_of(3, "an array of 3 position indices");
+  const IntRange in_range{0, static_cast<std::int64_t>(positions.size()) - 1,
+                          "the mesh has " + std::to_string(positions.size()) + " positions"};
+  std::array<std::uint32_t, 3> indices{};
+  for (std::size_t k = 0; k < 3; ++k)
+    indices[k] = static_cast<std::uint32_t>(value.element(k).integer(in_range));
+  if (is_degenerate(positions[indices[0]], positions[indices[1]], positions[indices[2]])) {
+    value.fail("is degenerate: positions " + std::to_string(indices[0]) + ", " +
+               std::to_string(indices[1]) + ", " + std::to_string(indices[2]) +
+               " are collinear or coincide");
+  }
+  return indices;
+}
+
+Shape parse_mesh(const ObjectReader& object) {
+  Mesh mesh;
+  const ValueReader positions = object.require("positions");
+  const std::size_t position_count = positions.array_size("an array of points");
+  if (position_count < 3)
+    positions.fail("must have at least 3 points, got " + std::to_string(position_count));
+  mesh.positions.reserve(position_count);
+  for (std::size_t i = 0; i < position_count; ++i)
+    mesh.positions.push_back(positions.element(i).vec3());
+
+  const ValueReader triangles = object.require("triangles");
+  const std::size_t index_triples = triangles.array_size("an array of triangles");
+  if (index_triples == 0) triangles.fail("must have at least 1 triangle, got 0");
+  mesh.triangles.reserve(index_triples);
+  for (std::size_t t = 0; t < index_triples; ++t)
+    mesh.triangles.push_back(parse_mesh_triangle(triangles.element(t), mesh.positions));
+
+  if (const auto normals = object.find("normals")) {
+    const std::size_t normal_count = normals->array_size("an array of normals");
+    if (normal_count != position_count) {
+      normals->fail("must have one normal per position (" + std::to_string(position_count) +
+                    "), got " + std::to_string(normal_count));
+    }
+    mesh.normals.reserve(normal_count);
+    for (std::size_t i = 0; i < normal_count; ++i)
+      mesh.normals.push_back(normals->element(i).direction());
+  }
+  mesh.thin = object.boolean_or("thin", false);
+  return mesh;
+}
+
+constexpr std::string_view sphere_keys[] = {"center", "radius"};
+constexpr std::string_view plane_keys[] = {"point", "normal"};
+constexpr std::string_view box_keys[] = {"min", "max"};
+constexpr std::string_view triangle_keys[] = {"vertices", "normals"};
+constexpr std::string_view mesh_keys[] = {"positions", "triangles", "normals", "thin"};
+
+constexpr ShapeType types[] = {
+    {"sphere", sphere_keys, parse_sphere}, {"plane", plane_keys, parse_plane},
+    {"box", box_keys, parse_box},          {"triangle", triangle_keys, parse_triangle},
+    {"mesh", mesh_keys, parse_mesh},
+};
+
+struct TriangleCount {
+  std::size_t operator()(const Box&) const { return 12; }
+  std::size_t operator()(const Triangle&) const { return 1; }
+  std::size_t operator()(const Mesh& mesh) const { return mesh.triangles.size(); }
+  std::size_t operator()(const auto&) const { return 0; }
+};
+
+}  // namespace
+
+std::span<const ShapeType> shape_types() { return types; }
+
+std::size_t triangle_count(const Shape& shape) { return std::visit(TriangleCount{}, shape); }
+
+}  // namespace tessera

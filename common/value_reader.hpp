@@ -1,0 +1,121 @@
+// Internal to the scene parser: typed access to one JSON value that knows its own JSON
+// Pointer, so that every rule reports exactly where it was broken.
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+#include <limits>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "common/scene.hpp"
+#include "common/scene_error.hpp"
+
+namespace tessera {
+
+// The interval a number must lie in; an absent end is unbounded.
+struct Range {
+  std::optional<double> min;
+  std::optional<double> max;
+  bool min_open = false;
+  bool max_open = false;
+
+  static Range at_least(double min) { return {min, std::nullopt, false, false}; }
+  static Range above(double min) { return {min, std::nullopt, true, false}; }
+  static Range between(double min, bool min_open, double max, bool max_open) {
+    return {min, max, min_open, max_open};
+  }
+
+  bool contains(double value) const;
+  std::string describe() const;  // ">= 0", "in (0, 180)"
+};
+
+// Inclusive bounds for integers; `max_reason` names where the maximum comes from.
+struct IntRange {
+  std::int64_t min = std::numeric_limits<std::int64_t>::min();
+  std::int64_t max = std::numeric_limits<std::int64_t>::max();
+  std::string max_reason;  // e.g. "limit max_width"
+};
+
+// RFC 6901: "~" becomes "~0" and "/" becomes "~1", since keys are user-chosen names.
+std::string pointer_token(std::string_view key);
+std::string quote(std::string_view text);
+std::string quoted_list(std::span<const std::string_view> words);  // "a", "b", "c"
+std::string format_number(double value);
+// A short rendering of a value for the "got ..." part of a message.
+std::string describe(const nlohmann::json& value);
+// Unit vector, or nothing for the zero vector; pre-scaling keeps tiny vectors from
+// underflowing to a zero length.
+std::optional<Vec3> try_normalize(const Vec3& v);
+
+class ValueReader {
+ public:
+  ValueReader(const nlohmann::json& value, std::string pointer)
+      : value_(&value), pointer_(std::move(pointer)) {}
+
+  const nlohmann::json& json() const { return *value_; }
+  const std::string& pointer() const { return pointer_; }
+
+  [[noreturn]] void fail(const std::string& detail) const { throw SceneError(pointer_, detail); }
+  // "must be <expected>, got <JSON type>"
+  [[noreturn]] void fail_type(std::string_view expected) const;
+
+  ValueReader element(std::size_t index) const;
+  ValueReader member(std::string_view key) const;
+
+  // The array's size; `expected` describes what the array should hold.
+  std::size_t array_size(std::string_view expected = "an array") const;
+  // As array_size, but the array must have exactly `size` elements.
+  void expect_array_of(std::size_t size, std::string_view expected) const;
+
+  double number(const Range& range = {}) const;
+  // Integral JSON numbers only; 5.0 counts as 5, 5.5 does not.
+  std::int64_t integer(const IntRange& range = {}) const;
+  bool boolean() const;
+  const std::string& string() const;
+  std::string_view choice(std::span<const std::string_view> allowed) const;
+  Vec3 vec3() const;
+  Vec3 direction() const;  // non-zero; returned normalized
+  Color color() const;     // [r, g, b] or one number for gray; finite and >= 0
+
+ private:
+  const nlohmann::json* value_;
+  std::string pointer_;
+};
+
+// A JSON object whose keys are checked against the ones its part of the format knows.
+class ObjectReader {
+ public:
+  // `expected` describes the object in the error for a non-object value.
+  explicit ObjectReader(ValueReader value, std::string_view expected = "an object");
+
+  // Runs before reading any member, so that a misspelt key is reported as such rather
+  // than as the required key it was meant to be.
+  void allow_only(std::span<const std::string_view> keys) const;
+  void allow_only(std::initializer_list<std::string_view> keys) const {
+    allow_only(std::span<const std::string_view>(keys.begin(), keys.size()));
+  }
+
+  const ValueReader& value() const { return value_; }
+  const std::string& pointer() const { return value_.pointer(); }
+  const nlohmann::json::object_t& members() const;
+
+  std::optional<ValueReader> find(std::string_view key) const;
+  ValueReader require(std::string_view key) const;  // "required" error at the missing key
+
+  double number_or(std::string_view key, double fallback, const Range& range = {}) const;
+  std::int64_t integer_or(std::string_view key, std::int64_t fallback,
+                          const IntRange& range = {}) const;
+  bool boolean_or(std::string_view key, bool fallback) const;
+  Color color_or(std::string_view key, const Color& fallback) const;
+  Vec3 vec3_or(std::string_view key, const Vec3& fallback) const;
+
+ private:
+  ValueReader value_;
+};
+
+}  // namespace tessera

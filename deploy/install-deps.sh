@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs every package Tessera needs to build, test and run, from Debian 12.
+# This is the one list of dependencies: README, CI and the container build call it.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libboost-dev libboost-system-dev
+  nlohmann-json3-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
+  libtbb-dev libsqlite3-dev libcli11-dev libspdlog-dev
+  libgtest-dev libgmock-dev
+)
+
+if [ "$(id -u)" -ne 0 ]; then
+  echo "install-deps.sh: run as root (it calls apt-get)" >&2
+  exit 1
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -q
+apt-get install -y -q --no-install-recommends "${packages[@]}"

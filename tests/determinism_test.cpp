@@ -1,0 +1,86 @@
+// A pixel's value depends only on the scene and the pixel: never on tile size, tile order
+// or thread count. Checked bit for bit.
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "tests/render_helpers.hpp"
+
+namespace tessera {
+namespace {
+
+using test::json;
+
+// Every feature at once, with several samples per pixel.
+json busy_scene() {
+  return {
+      {"image", {{"width", 67}, {"height", 45}}},
+      {"camera", {{"eye", {0, 2, 7}}, {"look_at", {0, 0.8, 0}}, {"fov_y", 40}}},
+      {"render", {{"samples_per_pixel", 4}, {"max_depth", 6}}},
+      {"background", {0.3, 0.4, 0.6}},
+      {"materials",
+       {{"floor", {{"checker", {{"size", 0.7}, {"diffuse", 0.1}}}}},
+        {"mirror", {{"diffuse", 0.1}, {"specular", 0.8}, {"shininess", 80}}},
+        {"glass", {{"diffuse", 0}, {"ambient", 0}, {"transmission", 0.9}, {"ior", 1.5},
+                   {"specular", 0.1}, {"shininess", 100}}}}},
+      {"lights",
+       {{{"type", "point"}, {"position", {3, 5, 4}}, {"attenuation", {1, 0.02, 0.005}}},
+        {{"type", "spot"}, {"position", {-3, 4, 2}}, {"direction", {1, -1, -0.5}}, {"cutoff", 30},
+         {"exponent", 4}},
+        {{"type", "directional"}, {"direction", {0.2, -1, -0.3}}, {"intensity", 0.3}}}},
+      {"objects",
+       {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}}, {"material", "floor"}},
+        {{"type", "sphere"}, {"center", {-1.2, 1, 0}}, {"radius", 1}, {"material", "mirror"}},
+        {{"type", "sphere"}, {"center", {1.2, 0.8, 0.5}}, {"radius", 0.8}, {"material", "glass"}},
+        {{"type", "box"}, {"min", {-0.4, 0, -2}}, {"max", {0.4, 1.5, -1.2}},
+         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}}}}};
+}
+
+TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
+  const Renderer renderer(parse_scene(busy_scene()));
+  const Image reference = render_local(renderer, 1, 32).image;
+  for (int tile_size : {1, 7, 32, 64})
+    for (int threads : {1, 2}) {
+      const Image image = render_local(renderer, threads, tile_size).image;
+      ASSERT_EQ(image.pixels().size(), reference.pixels().size());
+      EXPECT_EQ(std::memcmp(image.pixels().data(), reference.pixels().data(),
+                            reference.pixels().size_bytes()),
+                0)
+          << "tile size " << tile_size << ", " << threads << " threads";
+    }
+}
+
+TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
+  // As when a worker on another machine, with a freshly built BVH, renders one tile.
+  const json scene = busy_scene();
+  const Image whole = render_local(Renderer(parse_scene(scene)), 2, 16).image;
+  const Renderer fresh(parse_scene(scene));
+  const TileRect tile{23, 11, 19, 13};
+  std::vector<float> pixels(tile.pixel_count() * 3);
+  fresh.render_tile(tile, pixels);
+  for (int y = 0; y < tile.height; ++y)
+    EXPECT_EQ(std::memcmp(&pixels[y * tile.width * 3], whole.pixel(tile.x, tile.y + y),
+                          tile.width * 3 * sizeof(float)),
+              0)
+        << "row " << y;
+}
+
+TEST(Determinism, SamplesSpreadOverThePixelAndAverageEqually) {
+  // The edge of an emitting box runs down the middle of the left pixel: with 64 samples
+  // spread over the pixel, about half hit it.
+  json scene = {{"image", {{"width", 2}, {"height", 1}}},
+                {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
+                {"ambient_light", 0},
+                {"render", {{"samples_per_pixel", 64}}},
+                {"objects", {{{"type", "box"}, {"min", {0, -10, -1}}, {"max", {10, 10, 0}},
+                              {"transform", {{{"translate", {-2.0710678, 0, 0}}}}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0}, {"emission", 1}}}}}}};
+  // At z = 0 the view spans x in ±2·5·tan(22.5°) = ±4.142, so the left pixel's middle is
+  // x = -2.071.
+  const Image image = test::render_image(scene);
+  EXPECT_NEAR(image.pixel(0, 0)[0], 0.5, 0.05);
+  EXPECT_EQ(image.pixel(1, 0)[0], 1.0f);
+}
+
+}  // namespace
+}  // namespace tessera

@@ -1,0 +1,161 @@
+// Shapes, transforms and the robustness of secondary rays.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "tests/render_helpers.hpp"
+
+namespace tessera {
+namespace {
+
+using test::json;
+using test::pinhole_scene;
+using test::render_image;
+using test::render_pixel;
+
+TEST(Geometry, NonUniformlyScaledSphereIsAnEllipsoid) {
+  // x²/4 + y² + z² = 1, hit by a ray along -z at x = 1.5: z = √(1 - 1.5²/4) and the
+  // normal is ∝ (x/4, y, z). Light travels along -z, so the pixel is K_D · n.z.
+  json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
+  scene["lights"].push_back({{"type", "directional"}, {"direction", {0, 0, -1}}, {"intensity", 1}});
+  scene["objects"].push_back({{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1},
+                              {"transform", {{{"scale", {2, 1, 1}}}}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
+  const double z = std::sqrt(1.0 - 1.5 * 1.5 / 4.0);
+  const double n_z = z / glm::length(Vec3(1.5 / 4.0, 0, z));
+  EXPECT_NEAR(render_pixel(scene).r, 0.5 * n_z, 1e-5);
+
+  scene["objects"][0].erase("transform");  // the unit sphere is missed at x = 1.5
+  EXPECT_EQ(render_pixel(scene).r, 0.0);
+}
+
+TEST(Geometry, TransformStepsApplyInOrder) {
+  // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
+  // would cover [4, 8], missing the ray at x = 1.5.
+  json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
+  scene["ambient_light"] = 1;
+  scene["objects"].push_back(
+      {{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1},
+       {"transform", {{{"scale", 2}}, {{"translate", {3, 0, 0}}}}},
+       {"material", {{"ambient", 1}}}});
+  EXPECT_EQ(render_pixel(scene).r, 1.0);
+  scene["objects"][0]["transform"] = {{{"translate", {3, 0, 0}}}, {{"scale", 2}}};
+  EXPECT_EQ(render_pixel(scene).r, 0.0);
+}
+
+TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
+  // A mirroring scale flips triangle winding; refraction must still see the box as a
+  // solid (enter then leave), so a ray at normal incidence passes straight through.
+  json scene = pinhole_scene({0.3, 0.2, 5}, {0.3, 0.2, 0});
+  scene["objects"].push_back({{"type", "box"}, {"min", {-1, -1, -1}}, {"max", {1, 1, 1}},
+                              {"transform", {{{"scale", {-1, 1, 1}}}}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0}, {"transmission", 0.5},
+                                            {"ior", 1.5}}}});
+  scene["background"] = 1;
+  EXPECT_NEAR(render_pixel(scene).r, 0.25, 1e-6);
+}
+
+// Every pixel of a scene where secondary rays must not hit their own surface: a mirror or
+// a clear glass sphere under a white sky. Any self-intersection darkens a pixel.
+void expect_uniform_sky(const Vec3& centre, double radius, const json& material) {
+  json scene = {{"image", {{"width", 48}, {"height", 48}}},
+                {"camera", {{"eye", {centre.x, centre.y, centre.z + 3 * radius}},
+                            {"look_at", {centre.x, centre.y, centre.z}}}},
+                {"background", 1},
+                {"ambient_light", 0},
+                {"render", {{"max_depth", 8}}},
+                {"objects", {{{"type", "sphere"}, {"center", {centre.x, centre.y, centre.z}},
+                              {"radius", radius}, {"material", material}}}}};
+  const Image image = render_image(scene);
+  int dark = 0;
+  for (float v : image.pixels()) dark += std::fabs(v - 1.0f) > 1e-5f;
+  EXPECT_EQ(dark, 0) << "centre " << centre.x << " radius " << radius;
+}
+
+TEST(Geometry, NoSelfIntersectionNearOrFarSmallOrLarge) {
+  const json mirror = {{"ambient", 0}, {"diffuse", 0}, {"reflection", 1}};
+  const json clear_glass = {{"ambient", 0}, {"diffuse", 0}, {"transmission", 1}, {"ior", 1.5}};
+  for (const auto& [centre, radius] :
+       {std::pair{Vec3(0, 0, 0), 1.0}, std::pair{Vec3(1e5, -2e5, 3e5), 10.0},
+        std::pair{Vec3(0, 0, 0), 1e4}, std::pair{Vec3(2, 1, 0), 1e-3}}) {
+    expect_uniform_sky(centre, radius, mirror);
+    expect_uniform_sky(centre, radius, clear_glass);
+  }
+}
+
+// A floor 1e5 units from the origin, lit from above and seen from 8 units away: every
+// pixel of the lower half of the image is K_D·(N·L), with no shadow acne.
+void expect_clean_far_floor(const json& floor, const Vec3& normal) {
+  const Vec3 far(1e5, 0, -1e5);
+  const Vec3 light(-0.3, -1, -0.2);
+  json scene = {{"image", {{"width", 64}, {"height", 48}}},
+                {"camera", {{"eye", {far.x, 3, far.z + 8}}, {"look_at", {far.x, 0, far.z}}}},
+                {"ambient_light", 0},
+                {"lights", {{{"type", "directional"}, {"direction", {light.x, light.y, light.z}}}}},
+                {"objects", {floor}}};
+  scene["objects"][0]["material"] = {{"ambient", 0}, {"diffuse", 0.5}};
+  const double expected = 0.5 * glm::dot(glm::normalize(normal), -glm::normalize(light));
+  const Image image = render_image(scene);
+  int wrong = 0;
+  for (int y = 24; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) wrong += std::fabs(image.pixel(x, y)[0] - expected) > 1e-5;
+  EXPECT_EQ(wrong, 0) << floor.dump();
+}
+
+TEST(Geometry, NoShadowAcneOnALargeFarAwayFloor) {
+  // A slightly tilted plane: its points do not round to floats lying on it.
+  expect_clean_far_floor({{"type", "plane"}, {"point", {1e5, 0, -1e5}}, {"normal", {0.02, 1, 0.03}}},
+                         {0.02, 1, 0.03});
+  // The top of a huge box: triangles, intersected by Embree in single precision.
+  expect_clean_far_floor({{"type", "box"}, {"min", {0, -1, -2e5}}, {"max", {2e5, 0, 0}}}, {0, 1, 0});
+}
+
+TEST(Geometry, CheckerOnACellBoundaryHasNoSpeckle) {
+  // The floor at y = 0 lies exactly on a cell boundary of a unit checkerboard. Seen from
+  // straight above, pixel (i, j) hits x = ex + sx·h·tan(fov/2), z = ez - sy·h·tan(fov/2).
+  const int size = 96;
+  const double h = 6, ex = 0.37, ez = 0.21, fov = 60;
+  json scene = {{"image", {{"width", size}, {"height", size}}},
+                {"camera", {{"eye", {ex, h, ez}}, {"look_at", {ex, 0, ez}}, {"up", {0, 0, -1}},
+                            {"fov_y", fov}}},
+                {"ambient_light", 0},
+                {"lights", {{{"type", "directional"}, {"direction", {0, -1, 0}}}}},
+                {"objects", {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0.8},
+                                            {"checker", {{"size", 1}, {"diffuse", 0.2}}}}}}}}};
+  const Image image = render_image(scene);
+  const double half = h * std::tan(glm::radians(fov / 2));
+  int checked = 0, wrong = 0;
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) {
+      const double x = ex + (2.0 * (i + 0.5) / size - 1.0) * half;
+      const double z = ez - (1.0 - 2.0 * (j + 0.5) / size) * half;
+      if (std::fabs(x - std::round(x)) < 1e-3 || std::fabs(z - std::round(z)) < 1e-3) continue;
+      // The point falls in the cell just below the floor: floor(y) = -1.
+      const bool odd = (static_cast<long>(std::floor(x) + std::floor(z)) - 1) % 2 != 0;
+      ++checked;
+      wrong += std::fabs(image.pixel(i, j)[0] - (odd ? 0.2f : 0.8f)) > 1e-6f;
+    }
+  EXPECT_GT(checked, size * size * 9 / 10);
+  EXPECT_EQ(wrong, 0);
+}
+
+TEST(Geometry, SmoothMeshNormalsAreInterpolated) {
+  // One triangle in z = 0 whose vertex normals all tilt 60° towards +x: lit along -z, a
+  // flat normal gives K_D, the interpolated one K_D · cos 60°.
+  json scene = pinhole_scene({0.2, 0.2, 5}, {0.2, 0.2, 0});
+  scene["lights"].push_back({{"type", "directional"}, {"direction", {0, 0, -1}}});
+  const double s = std::sin(glm::radians(60.0)), c = std::cos(glm::radians(60.0));
+  scene["objects"].push_back({{"type", "mesh"},
+                              {"positions", {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}}},
+                              {"triangles", {{0, 1, 2}}},
+                              {"normals", {{s, 0, c}, {s, 0, c}, {s, 0, c}}},
+                              {"thin", true},
+                              {"material", {{"ambient", 0}, {"diffuse", 1}}}});
+  EXPECT_NEAR(render_pixel(scene).r, c, 1e-5);
+  scene["objects"][0].erase("normals");
+  EXPECT_NEAR(render_pixel(scene).r, 1.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace tessera

@@ -1,0 +1,118 @@
+#include <filesystem>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "common/image.hpp"
+#include "common/image_io.hpp"
+
+namespace tessera {
+namespace {
+
+std::filesystem::path temp_dir() {
+  auto dir = std::filesystem::temp_directory_path() /
+             ("tessera-image-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+              "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+TEST(Tiles, CoverTheImageExactlyOnce) {
+  for (int tile_size : {1, 7, 32, 64, 1000}) {
+    const auto tiles = split_into_tiles(100, 37, tile_size);
+    std::vector<int> covered(100 * 37, 0);
+    for (const TileRect& t : tiles) {
+      EXPECT_LE(t.width, tile_size);
+      EXPECT_LE(t.height, tile_size);
+      for (int y = t.y; y < t.y + t.height; ++y)
+        for (int x = t.x; x < t.x + t.width; ++x) covered[y * 100 + x] += 1;
+    }
+    EXPECT_EQ(std::set<int>(covered.begin(), covered.end()), std::set<int>{1}) << tile_size;
+  }
+  EXPECT_EQ(split_into_tiles(100, 37, 32).size(), 4u * 2u);
+  EXPECT_EQ(split_into_tiles(100, 37, 32).back(), (TileRect{96, 32, 4, 5}));
+}
+
+TEST(Tiles, RejectNonPositiveSizes) {
+  EXPECT_THROW(split_into_tiles(0, 10, 4), std::invalid_argument);
+  EXPECT_THROW(split_into_tiles(10, 10, 0), std::invalid_argument);
+}
+
+TEST(Image, PastePutsTilePixelsInPlace) {
+  Image image(4, 3);
+  const std::vector<float> tile{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};  // 2x2
+  image.paste({2, 1, 2, 2}, tile);
+  EXPECT_EQ(image.pixel(2, 1)[0], 1.0f);
+  EXPECT_EQ(image.pixel(3, 1)[2], 6.0f);
+  EXPECT_EQ(image.pixel(2, 2)[0], 7.0f);
+  EXPECT_EQ(image.pixel(3, 2)[2], 12.0f);
+  EXPECT_EQ(image.pixel(1, 1)[0], 0.0f);
+  EXPECT_THROW(image.paste({3, 1, 2, 2}, tile), std::out_of_range);
+  EXPECT_THROW(image.paste({0, 0, 1, 1}, tile), std::invalid_argument);
+}
+
+TEST(ImageIo, ExrKeepsLinearFloatsExactlyAndUnclamped) {
+  const auto dir = temp_dir();
+  Image image(3, 2);
+  const float values[] = {0.0f, 0.25f, 1.0f, 7.5f, 1e-6f, 123.456f};
+  for (std::size_t i = 0; i < image.pixels().size(); ++i) image.pixels()[i] = values[i % 6] + i;
+  write_image(image, dir / "a.exr", OutputTransfer::srgb);
+  const Image back = read_image(dir / "a.exr");
+  ASSERT_EQ(back.width(), 3);
+  ASSERT_EQ(back.height(), 2);
+  for (std::size_t i = 0; i < image.pixels().size(); ++i)
+    EXPECT_EQ(back.pixels()[i], image.pixels()[i]) << i;
+}
+
+TEST(ImageIo, PngIsClampedAndSrgbEncoded) {
+  const auto dir = temp_dir();
+  Image image(4, 1);
+  const float values[] = {0.5f, 2.0f, -1.0f, 0.0031308f};
+  for (int x = 0; x < 4; ++x)
+    for (int c = 0; c < 3; ++c) image.pixel(x, 0)[c] = values[x];
+  write_image(image, dir / "a.png", OutputTransfer::srgb);
+  const Image srgb = read_image(dir / "a.png");
+  // 0.5 linear is 0.7354 in sRGB, code 188 of 255.
+  EXPECT_FLOAT_EQ(srgb.pixel(0, 0)[0], 188.0f / 255.0f);
+  EXPECT_FLOAT_EQ(srgb.pixel(1, 0)[0], 1.0f);
+  EXPECT_FLOAT_EQ(srgb.pixel(2, 0)[0], 0.0f);
+  EXPECT_FLOAT_EQ(srgb.pixel(3, 0)[0], 10.0f / 255.0f);  // 0.04045 on the linear segment
+
+  write_image(image, dir / "b.png", OutputTransfer::linear);
+  EXPECT_FLOAT_EQ(read_image(dir / "b.png").pixel(0, 0)[0], 128.0f / 255.0f);
+}
+
+TEST(ImageIo, TiffIsSixteenBitAndJpegWorks) {
+  const auto dir = temp_dir();
+  Image image(2, 2);
+  for (float& v : image.pixels()) v = 0.5f;
+  write_image(image, dir / "a.tif", OutputTransfer::linear);
+  EXPECT_FLOAT_EQ(read_image(dir / "a.tif").pixel(1, 1)[1], 32768.0f / 65535.0f);
+  write_image(image, dir / "a.jpg", OutputTransfer::srgb);
+  EXPECT_NEAR(read_image(dir / "a.jpg").pixel(0, 0)[0], 188.0f / 255.0f, 2.0f / 255.0f);
+}
+
+TEST(ImageIo, WriteIsAtomicAndLeavesNoTemporaryFiles) {
+  const auto dir = temp_dir();
+  Image image(2, 2);
+  write_image(image, dir / "out.png", OutputTransfer::srgb);
+  write_image(image, dir / "out.png", OutputTransfer::srgb);  // replaces in place
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    names.push_back(entry.path().filename().string());
+  EXPECT_EQ(names, std::vector<std::string>{"out.png"});
+}
+
+TEST(ImageIo, RejectsUnknownExtensionsAndUnwritablePaths) {
+  Image image(2, 2);
+  EXPECT_FALSE(is_supported_image_path("a.bmp"));
+  EXPECT_TRUE(is_supported_image_path("A.PNG"));
+  EXPECT_THROW(write_image(image, "a.bmp", OutputTransfer::srgb), std::runtime_error);
+  EXPECT_THROW(write_image(image, "/nonexistent-dir/a.png", OutputTransfer::srgb),
+               std::runtime_error);
+  EXPECT_THROW(read_image("/nonexistent-dir/a.png"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace tessera

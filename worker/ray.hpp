@@ -1,0 +1,48 @@
+// Rays as Embree sees them: single precision. Geometry recomputes hits in double from
+// exactly these floats, so a hit never depends on which ISA path Embree took.
+#pragma once
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+#include "common/scene.hpp"
+
+namespace tessera {
+
+struct Ray {
+  glm::vec3 origin{0.0f};
+  glm::vec3 direction{0.0f, 0.0f, -1.0f};  // unit
+};
+
+inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// Moves a surface point off the surface, to the side `towards` points to, by an amount
+// that grows with the magnitude of its coordinates: a few hundred units in the last place
+// away from the origin, a fixed small distance near it. This follows the method of Wächter
+// and Binder (Ray Tracing Gems, ch. 6) and keeps secondary rays free of self-intersection
+// on large and far-away surfaces, where a fixed epsilon fails.
+inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, const Vec3& towards) {
+  constexpr float kOriginZone = 1.0f / 32.0f;
+  constexpr float kFloatScale = 1.0f / 65536.0f;
+  constexpr float kIntScale = 256.0f;
+  const Vec3 n = glm::dot(normal, towards) < 0.0 ? -normal : normal;
+  glm::vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    const float p = static_cast<float>(point[i]);
+    const float nf = static_cast<float>(n[i]);
+    if (std::fabs(p) < kOriginZone) {
+      out[i] = p + kFloatScale * nf;
+      continue;
+    }
+    const auto ulps = static_cast<std::int32_t>(kIntScale * nf);
+    const auto bits = std::bit_cast<std::int32_t>(p);
+    out[i] = std::bit_cast<float>(bits + (p < 0.0f ? -ulps : ulps));
+  }
+  return out;
+}
+
+}  // namespace tessera

@@ -1,0 +1,35 @@
+// A scene made ready to render: Embree device and BVH built once, after which any
+// rectangle of the image can be rendered, from any thread, in any order.
+#pragma once
+
+#include <memory>
+#include <span>
+
+#include "common/image.hpp"
+#include "common/scene.hpp"
+#include "worker/camera.hpp"
+#include "worker/embree_device.hpp"
+#include "worker/scene_geometry.hpp"
+#include "worker/tracer.hpp"
+
+namespace tessera {
+
+class Renderer {
+ public:
+  explicit Renderer(Scene scene);
+
+  const Scene& scene() const { return scene_; }
+
+  // Renders `tile` into `out` (tile.width * tile.height RGB float triples, row-major).
+  // A pixel's value depends only on the scene and the pixel's coordinates.
+  RayCounts render_tile(const TileRect& tile, std::span<float> out) const;
+
+ private:
+  Scene scene_;
+  EmbreeDevice device_;
+  SceneGeometry geometry_;
+  Tracer tracer_;
+  PinholeCamera camera_;
+};
+
+}  // namespace tessera

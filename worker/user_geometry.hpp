@@ -1,0 +1,12 @@
+#pragma once
+
+#include <embree3/rtcore.h>
+
+namespace tessera {
+
+// Install bounds, intersect and occluded callbacks; the geometry's user pointer must be a
+// PreparedSphere or PreparedPlane respectively.
+void set_sphere_callbacks(RTCGeometry geometry);
+void set_plane_callbacks(RTCGeometry geometry);
+
+}  // namespace tessera
