@@ -39,28 +39,8 @@ void apply_overrides(nlohmann::json& document, const RenderOptions& options) {
   set("render", "tile_size", options.tile_size);
 }
 
-int run_render(const RenderOptions& options) {
-  std::filesystem::path output = options.output_path;
-  if (output.empty()) output = std::filesystem::path(options.scene_path).stem().string() + ".png";
-  if (!is_supported_image_path(output)) {
-    std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
-                 output.string().c_str());
-    return 2;
-  }
-
-  Scene scene;
-  try {
-    nlohmann::json document = read_json_file(options.scene_path);
-    apply_overrides(document, options);
-    scene = parse_scene(document);
-  } catch (const SceneError& e) {
-    std::fprintf(stderr, "error: %s: %s\n", options.scene_path.c_str(), e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
-
+int render_and_report(const RenderOptions& options, const Scene& scene,
+                      const std::filesystem::path& output) {
   const auto start = std::chrono::steady_clock::now();
   const Renderer renderer(scene);
   const auto built = std::chrono::steady_clock::now();
@@ -71,9 +51,10 @@ int run_render(const RenderOptions& options) {
   const double build_s = std::chrono::duration<double>(built - start).count();
   const double trace_s = std::chrono::duration<double>(rendered - built).count();
   const double rays_per_s = trace_s > 0 ? result.rays.total() / trace_s : 0.0;
-  std::printf("rendered %dx%d, %d spp, max depth %d in %.3f s (scene build %.3f s, tracing %.3f s)\n",
-              scene.width, scene.height, scene.render.samples_per_pixel, scene.render.max_depth,
-              build_s + trace_s, build_s, trace_s);
+  std::printf(
+      "rendered %dx%d, %d spp, max depth %d in %.3f s (scene build %.3f s, tracing %.3f s)\n",
+      scene.width, scene.height, scene.render.samples_per_pixel, scene.render.max_depth,
+      build_s + trace_s, build_s, trace_s);
   std::printf("rays: %llu (%llu primary, %llu secondary, %llu shadow), %.2f Mrays/s\n",
               static_cast<unsigned long long>(result.rays.total()),
               static_cast<unsigned long long>(result.rays.primary),
@@ -81,6 +62,28 @@ int run_render(const RenderOptions& options) {
               static_cast<unsigned long long>(result.rays.shadow), rays_per_s / 1e6);
   std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
   return 0;
+}
+
+int run_render(const RenderOptions& options) {
+  std::filesystem::path output = options.output_path;
+  if (output.empty()) output = std::filesystem::path(options.scene_path).stem().string() + ".png";
+  if (!is_supported_image_path(output)) {
+    std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
+                 output.string().c_str());
+    return 2;
+  }
+  try {
+    nlohmann::json document = read_json_file(options.scene_path);
+    apply_overrides(document, options);
+    const Scene scene = parse_scene(document);
+    return render_and_report(options, scene, output);
+  } catch (const SceneError& e) {
+    std::fprintf(stderr, "error: %s: %s\n", options.scene_path.c_str(), e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
 }
 
 }  // namespace
@@ -92,7 +95,8 @@ void add_render_command(CLI::App& app) {
   render->add_option("-o,--output", options->output_path,
                      "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png)");
   render->add_option("--width", options->width, "Override image.width")->check(CLI::PositiveNumber);
-  render->add_option("--height", options->height, "Override image.height")->check(CLI::PositiveNumber);
+  render->add_option("--height", options->height, "Override image.height")
+      ->check(CLI::PositiveNumber);
   render->add_option("--spp", options->spp, "Override render.samples_per_pixel");
   render->add_option("--max-depth", options->max_depth, "Override render.max_depth");
   render->add_option("--tile-size", options->tile_size, "Override render.tile_size");

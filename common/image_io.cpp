@@ -1,11 +1,11 @@
 #include "common/image_io.hpp"
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
 
@@ -16,7 +16,8 @@ enum class FileKind { exr, png, jpg, tif, unknown };
 
 FileKind kind_of(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext == ".exr") return FileKind::exr;
   if (ext == ".png") return FileKind::png;
   if (ext == ".jpg" || ext == ".jpeg") return FileKind::jpg;

@@ -24,13 +24,13 @@ struct Checker {
 };
 
 struct Material {
-  Color emission{0.0};        // I_E
-  Color ambient{0.2};         // K_A
-  Color diffuse{0.8};         // K_D
-  Color specular{0.0};        // K_S
-  double shininess = 0.0;     // n
-  Color reflection{0.0};      // K_R (the parser fills in `specular` when absent)
-  Color transmission{0.0};    // K_T
+  Color emission{0.0};      // I_E
+  Color ambient{0.2};       // K_A
+  Color diffuse{0.8};       // K_D
+  Color specular{0.0};      // K_S
+  double shininess = 0.0;   // n
+  Color reflection{0.0};    // K_R (the parser fills in `specular` when absent)
+  Color transmission{0.0};  // K_T
   double ior = 1.0;
   std::optional<Checker> checker;
 };
@@ -86,7 +86,7 @@ struct Triangle {
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside
-  std::vector<Vec3> normals;  // empty, or one unit normal per position
+  std::vector<Vec3> normals;                            // empty, or one unit normal per position
   bool thin = false;
 };
 

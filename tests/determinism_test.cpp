@@ -21,18 +21,28 @@ json busy_scene() {
       {"materials",
        {{"floor", {{"checker", {{"size", 0.7}, {"diffuse", 0.1}}}}},
         {"mirror", {{"diffuse", 0.1}, {"specular", 0.8}, {"shininess", 80}}},
-        {"glass", {{"diffuse", 0}, {"ambient", 0}, {"transmission", 0.9}, {"ior", 1.5},
-                   {"specular", 0.1}, {"shininess", 100}}}}},
+        {"glass",
+         {{"diffuse", 0},
+          {"ambient", 0},
+          {"transmission", 0.9},
+          {"ior", 1.5},
+          {"specular", 0.1},
+          {"shininess", 100}}}}},
       {"lights",
        {{{"type", "point"}, {"position", {3, 5, 4}}, {"attenuation", {1, 0.02, 0.005}}},
-        {{"type", "spot"}, {"position", {-3, 4, 2}}, {"direction", {1, -1, -0.5}}, {"cutoff", 30},
+        {{"type", "spot"},
+         {"position", {-3, 4, 2}},
+         {"direction", {1, -1, -0.5}},
+         {"cutoff", 30},
          {"exponent", 4}},
         {{"type", "directional"}, {"direction", {0.2, -1, -0.3}}, {"intensity", 0.3}}}},
       {"objects",
        {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}}, {"material", "floor"}},
         {{"type", "sphere"}, {"center", {-1.2, 1, 0}}, {"radius", 1}, {"material", "mirror"}},
         {{"type", "sphere"}, {"center", {1.2, 0.8, 0.5}}, {"radius", 0.8}, {"material", "glass"}},
-        {{"type", "box"}, {"min", {-0.4, 0, -2}}, {"max", {0.4, 1.5, -1.2}},
+        {{"type", "box"},
+         {"min", {-0.4, 0, -2}},
+         {"max", {0.4, 1.5, -1.2}},
          {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}}}}};
 }
 
@@ -72,9 +82,12 @@ TEST(Determinism, SamplesSpreadOverThePixelAndAverageEqually) {
                 {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
                 {"ambient_light", 0},
                 {"render", {{"samples_per_pixel", 64}}},
-                {"objects", {{{"type", "box"}, {"min", {0, -10, -1}}, {"max", {10, 10, 0}},
-                              {"transform", {{{"translate", {-2.0710678, 0, 0}}}}},
-                              {"material", {{"ambient", 0}, {"diffuse", 0}, {"emission", 1}}}}}}};
+                {"objects",
+                 {{{"type", "box"},
+                   {"min", {0, -10, -1}},
+                   {"max", {10, 10, 0}},
+                   {"transform", {{{"translate", {-2.0710678, 0, 0}}}}},
+                   {"material", {{"ambient", 0}, {"diffuse", 0}, {"emission", 1}}}}}}};
   // At z = 0 the view spans x in ±2·5·tan(22.5°) = ±4.142, so the left pixel's middle is
   // x = -2.071.
   const Image image = test::render_image(scene);

@@ -18,7 +18,9 @@ TEST(Geometry, NonUniformlyScaledSphereIsAnEllipsoid) {
   // normal is ∝ (x/4, y, z). Light travels along -z, so the pixel is K_D · n.z.
   json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
   scene["lights"].push_back({{"type", "directional"}, {"direction", {0, 0, -1}}, {"intensity", 1}});
-  scene["objects"].push_back({{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1},
+  scene["objects"].push_back({{"type", "sphere"},
+                              {"center", {0, 0, 0}},
+                              {"radius", 1},
                               {"transform", {{{"scale", {2, 1, 1}}}}},
                               {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
   const double z = std::sqrt(1.0 - 1.5 * 1.5 / 4.0);
@@ -34,10 +36,11 @@ TEST(Geometry, TransformStepsApplyInOrder) {
   // would cover [4, 8], missing the ray at x = 1.5.
   json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
   scene["ambient_light"] = 1;
-  scene["objects"].push_back(
-      {{"type", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1},
-       {"transform", {{{"scale", 2}}, {{"translate", {3, 0, 0}}}}},
-       {"material", {{"ambient", 1}}}});
+  scene["objects"].push_back({{"type", "sphere"},
+                              {"center", {0, 0, 0}},
+                              {"radius", 1},
+                              {"transform", {{{"scale", 2}}, {{"translate", {3, 0, 0}}}}},
+                              {"material", {{"ambient", 1}}}});
   EXPECT_EQ(render_pixel(scene).r, 1.0);
   scene["objects"][0]["transform"] = {{{"translate", {3, 0, 0}}}, {{"scale", 2}}};
   EXPECT_EQ(render_pixel(scene).r, 0.0);
@@ -47,10 +50,12 @@ TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
   // A mirroring scale flips triangle winding; refraction must still see the box as a
   // solid (enter then leave), so a ray at normal incidence passes straight through.
   json scene = pinhole_scene({0.3, 0.2, 5}, {0.3, 0.2, 0});
-  scene["objects"].push_back({{"type", "box"}, {"min", {-1, -1, -1}}, {"max", {1, 1, 1}},
-                              {"transform", {{{"scale", {-1, 1, 1}}}}},
-                              {"material", {{"ambient", 0}, {"diffuse", 0}, {"transmission", 0.5},
-                                            {"ior", 1.5}}}});
+  scene["objects"].push_back(
+      {{"type", "box"},
+       {"min", {-1, -1, -1}},
+       {"max", {1, 1, 1}},
+       {"transform", {{{"scale", {-1, 1, 1}}}}},
+       {"material", {{"ambient", 0}, {"diffuse", 0}, {"transmission", 0.5}, {"ior", 1.5}}}});
   scene["background"] = 1;
   EXPECT_NEAR(render_pixel(scene).r, 0.25, 1e-6);
 }
@@ -59,13 +64,17 @@ TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
 // a clear glass sphere under a white sky. Any self-intersection darkens a pixel.
 void expect_uniform_sky(const Vec3& centre, double radius, const json& material) {
   json scene = {{"image", {{"width", 48}, {"height", 48}}},
-                {"camera", {{"eye", {centre.x, centre.y, centre.z + 3 * radius}},
-                            {"look_at", {centre.x, centre.y, centre.z}}}},
+                {"camera",
+                 {{"eye", {centre.x, centre.y, centre.z + 3 * radius}},
+                  {"look_at", {centre.x, centre.y, centre.z}}}},
                 {"background", 1},
                 {"ambient_light", 0},
                 {"render", {{"max_depth", 8}}},
-                {"objects", {{{"type", "sphere"}, {"center", {centre.x, centre.y, centre.z}},
-                              {"radius", radius}, {"material", material}}}}};
+                {"objects",
+                 {{{"type", "sphere"},
+                   {"center", {centre.x, centre.y, centre.z}},
+                   {"radius", radius},
+                   {"material", material}}}}};
   const Image image = render_image(scene);
   int dark = 0;
   for (float v : image.pixels()) dark += std::fabs(v - 1.0f) > 1e-5f;
@@ -104,10 +113,11 @@ void expect_clean_far_floor(const json& floor, const Vec3& normal) {
 
 TEST(Geometry, NoShadowAcneOnALargeFarAwayFloor) {
   // A slightly tilted plane: its points do not round to floats lying on it.
-  expect_clean_far_floor({{"type", "plane"}, {"point", {1e5, 0, -1e5}}, {"normal", {0.02, 1, 0.03}}},
-                         {0.02, 1, 0.03});
+  expect_clean_far_floor(
+      {{"type", "plane"}, {"point", {1e5, 0, -1e5}}, {"normal", {0.02, 1, 0.03}}}, {0.02, 1, 0.03});
   // The top of a huge box: triangles, intersected by Embree in single precision.
-  expect_clean_far_floor({{"type", "box"}, {"min", {0, -1, -2e5}}, {"max", {2e5, 0, 0}}}, {0, 1, 0});
+  expect_clean_far_floor({{"type", "box"}, {"min", {0, -1, -2e5}}, {"max", {2e5, 0, 0}}},
+                         {0, 1, 0});
 }
 
 TEST(Geometry, CheckerOnACellBoundaryHasNoSpeckle) {
@@ -115,14 +125,18 @@ TEST(Geometry, CheckerOnACellBoundaryHasNoSpeckle) {
   // straight above, pixel (i, j) hits x = ex + sx·h·tan(fov/2), z = ez - sy·h·tan(fov/2).
   const int size = 96;
   const double h = 6, ex = 0.37, ez = 0.21, fov = 60;
-  json scene = {{"image", {{"width", size}, {"height", size}}},
-                {"camera", {{"eye", {ex, h, ez}}, {"look_at", {ex, 0, ez}}, {"up", {0, 0, -1}},
-                            {"fov_y", fov}}},
-                {"ambient_light", 0},
-                {"lights", {{{"type", "directional"}, {"direction", {0, -1, 0}}}}},
-                {"objects", {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}},
-                              {"material", {{"ambient", 0}, {"diffuse", 0.8},
-                                            {"checker", {{"size", 1}, {"diffuse", 0.2}}}}}}}}};
+  json scene = {
+      {"image", {{"width", size}, {"height", size}}},
+      {"camera",
+       {{"eye", {ex, h, ez}}, {"look_at", {ex, 0, ez}}, {"up", {0, 0, -1}}, {"fov_y", fov}}},
+      {"ambient_light", 0},
+      {"lights", {{{"type", "directional"}, {"direction", {0, -1, 0}}}}},
+      {"objects",
+       {{{"type", "plane"},
+         {"point", {0, 0, 0}},
+         {"normal", {0, 1, 0}},
+         {"material",
+          {{"ambient", 0}, {"diffuse", 0.8}, {"checker", {{"size", 1}, {"diffuse", 0.2}}}}}}}}};
   const Image image = render_image(scene);
   const double half = h * std::tan(glm::radians(fov / 2));
   int checked = 0, wrong = 0;

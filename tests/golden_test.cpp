@@ -2,9 +2,9 @@
 // Regenerate after an intended change of the images with:
 //   TESSERA_UPDATE_GOLDEN=1 build/tests/tessera_tests --gtest_filter='Golden*'
 // then look at the new files before committing them.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <algorithm>
 #include <filesystem>
 #include <set>
 
@@ -51,8 +51,8 @@ TEST_P(Golden, MatchesReferenceImage) {
   document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
   const Image image = test::render_image(document, 2);
 
-  const fs::path golden = fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" /
-                          (GetParam().name + ".exr");
+  const fs::path golden =
+      fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" / (GetParam().name + ".exr");
   if (const char* update = std::getenv("TESSERA_UPDATE_GOLDEN"); update && *update == '1') {
     fs::create_directories(golden.parent_path());
     write_image(image, golden, OutputTransfer::linear);
@@ -75,8 +75,8 @@ TEST_P(Golden, MatchesReferenceImage) {
   const double fraction =
       static_cast<double>(mismatched) / (static_cast<double>(image.width()) * image.height());
   EXPECT_LE(fraction, kMaxMismatchFraction)
-      << mismatched << " pixels differ by more than " << kPixelTolerance
-      << " (largest difference " << max_difference << ")";
+      << mismatched << " pixels differ by more than " << kPixelTolerance << " (largest difference "
+      << max_difference << ")";
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, Golden, ::testing::ValuesIn(examples()),

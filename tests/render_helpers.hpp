@@ -16,9 +16,10 @@ using nlohmann::json;
 // no ambient light, black background. Tests add what they measure.
 inline json pinhole_scene(const Vec3& eye, const Vec3& look_at, const Vec3& up = {0, 1, 0}) {
   return {{"image", {{"width", 1}, {"height", 1}}},
-          {"camera", {{"eye", {eye.x, eye.y, eye.z}},
-                      {"look_at", {look_at.x, look_at.y, look_at.z}},
-                      {"up", {up.x, up.y, up.z}}}},
+          {"camera",
+           {{"eye", {eye.x, eye.y, eye.z}},
+            {"look_at", {look_at.x, look_at.y, look_at.z}},
+            {"up", {up.x, up.y, up.z}}}},
           {"background", 0},
           {"ambient_light", 0},
           {"lights", json::array()},

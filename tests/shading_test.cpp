@@ -39,9 +39,9 @@ json looking_down(const Vec3& at = {0, 0, 0}) {
 TEST(Shading, AmbientAndEmissionOnly) {
   json scene = pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["ambient_light"] = {0.5, 0.25, 1.0};
-  scene["objects"].push_back(sphere({0, 0, 0}, 1,
-                                    {{"ambient", {0.2, 0.4, 0.6}}, {"diffuse", 0.9},
-                                     {"emission", {0.01, 0.02, 0.03}}}));
+  scene["objects"].push_back(
+      sphere({0, 0, 0}, 1,
+             {{"ambient", {0.2, 0.4, 0.6}}, {"diffuse", 0.9}, {"emission", {0.01, 0.02, 0.03}}}));
   expect_color(render_pixel(scene), {0.01 + 0.1, 0.02 + 0.1, 0.03 + 0.6});
 }
 
@@ -54,8 +54,8 @@ TEST(Shading, MissShowsTheBackground) {
 TEST(Shading, DiffuseUnderDirectionalLight) {
   json scene = looking_down();
   scene["objects"].push_back(floor_plane(matte(0.6)));
-  scene["lights"].push_back({{"type", "directional"}, {"direction", {0, -1, -1}},
-                             {"intensity", {1.0, 0.5, 0.25}}});
+  scene["lights"].push_back(
+      {{"type", "directional"}, {"direction", {0, -1, -1}}, {"intensity", {1.0, 0.5, 0.25}}});
   // N·L = cos 45°.
   const double n_dot_l = 1.0 / std::sqrt(2.0);
   expect_color(render_pixel(scene), 0.6 * n_dot_l * Color(1.0, 0.5, 0.25));
@@ -72,7 +72,9 @@ TEST(Shading, PointLightAttenuationByEachCoefficient) {
   for (const auto& c : cases) {
     json scene = looking_down();
     scene["objects"].push_back(floor_plane(matte(0.6)));
-    scene["lights"].push_back({{"type", "point"}, {"position", {0, 3, 0}}, {"intensity", 1},
+    scene["lights"].push_back({{"type", "point"},
+                               {"position", {0, 3, 0}},
+                               {"intensity", 1},
                                {"attenuation", {c.kc, c.kl, c.kq}}});
     expect_color(render_pixel(scene), Color(0.6 / c.denominator));
   }
@@ -84,8 +86,11 @@ TEST(Shading, SpotConeEdgeAndExponent) {
   auto scene_with = [](double cutoff, double exponent) {
     json scene = looking_down({1, 0, 0});
     scene["objects"].push_back(floor_plane(matte(0.6)));
-    json spot = {{"type", "spot"}, {"position", {0, 4, 0}}, {"direction", {0, -1, 0}},
-                 {"intensity", 1}, {"attenuation", {1, 0, 0}}};
+    json spot = {{"type", "spot"},
+                 {"position", {0, 4, 0}},
+                 {"direction", {0, -1, 0}},
+                 {"intensity", 1},
+                 {"attenuation", {1, 0, 0}}};
     if (cutoff > 0) spot["cutoff"] = cutoff;
     if (exponent >= 0) spot["exponent"] = exponent;
     scene["lights"].push_back(spot);
@@ -104,8 +109,8 @@ TEST(Shading, SpecularHighlightExponent) {
     json scene = looking_down();
     scene["objects"].push_back(floor_plane(
         {{"ambient", 0}, {"diffuse", 0}, {"specular", 0.5}, {"shininess", n}, {"reflection", 0}}));
-    scene["lights"].push_back({{"type", "directional"},
-                               {"direction", {-0.5, -v_dot_r, 0}}, {"intensity", 2}});
+    scene["lights"].push_back(
+        {{"type", "directional"}, {"direction", {-0.5, -v_dot_r, 0}}, {"intensity", 2}});
     expect_color(render_pixel(scene), Color(0.5 * std::pow(v_dot_r, n) * 2));
   }
 }
@@ -152,10 +157,10 @@ TEST(Shading, MaxDepthCutsOffBetweenParallelMirrors) {
   for (int depth : {0, 1, 2, 5}) {
     json scene = pinhole_scene({0, 0, 0}, {1, 0, 0});
     const json mirror = {{"ambient", 0}, {"diffuse", 0}, {"emission", 0.1}, {"reflection", 0.5}};
-    scene["objects"].push_back({{"type", "plane"}, {"point", {1, 0, 0}}, {"normal", {-1, 0, 0}},
-                                {"material", mirror}});
-    scene["objects"].push_back({{"type", "plane"}, {"point", {-1, 0, 0}}, {"normal", {1, 0, 0}},
-                                {"material", mirror}});
+    scene["objects"].push_back(
+        {{"type", "plane"}, {"point", {1, 0, 0}}, {"normal", {-1, 0, 0}}, {"material", mirror}});
+    scene["objects"].push_back(
+        {{"type", "plane"}, {"point", {-1, 0, 0}}, {"normal", {1, 0, 0}}, {"material", mirror}});
     scene["render"]["max_depth"] = depth;
     double expected = 0;
     for (int k = 0; k <= depth; ++k) expected += 0.1 * std::pow(0.5, k);
@@ -177,7 +182,9 @@ TEST(Shading, RefractionThroughAGlassSlabShiftsTheRay) {
   const Vec3 target = exit + 3.0 * d;  // 0.33 off the unbent line, radius 0.1
   for (double ior : {1.5, 1.0}) {
     json scene = pinhole_scene(entry - 5.0 * d, entry);
-    scene["objects"].push_back({{"type", "box"}, {"min", {-10, -10, -0.5}}, {"max", {10, 10, 0.5}},
+    scene["objects"].push_back({{"type", "box"},
+                                {"min", {-10, -10, -0.5}},
+                                {"max", {10, 10, 0.5}},
                                 {"material", glass(0.8, ior)}});
     scene["objects"].push_back(sphere(target, 0.1, emitter(1)));
     // Two surfaces crossed, K_T each; without bending (ior 1) the ray misses.
@@ -224,7 +231,9 @@ TEST(Shading, TotalInternalReflectionFollowsTheMirrorDirection) {
 
 TEST(Shading, ThinSurfaceLetsTheRayPassUnbent) {
   json scene = pinhole_scene({0, 0, 5}, {0, 0, 0});
-  scene["objects"].push_back({{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {1, 0, 1}},
+  scene["objects"].push_back({{"type", "plane"},
+                              {"point", {0, 0, 0}},
+                              {"normal", {1, 0, 1}},
                               {"material", glass(0.5, 1.5)}});
   scene["objects"].push_back(sphere({0, 0, -3}, 0.2, emitter(1)));
   expect_color(render_pixel(scene), Color(0.5));

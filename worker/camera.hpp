@@ -17,8 +17,8 @@ class PinholeCamera {
 
  private:
   Vec3 eye_;
-  Vec3 right_;     // scaled so that x = width maps to the right edge of the view
-  Vec3 up_;        // scaled likewise for y = 0 at the top
+  Vec3 right_;  // scaled so that x = width maps to the right edge of the view
+  Vec3 up_;     // scaled likewise for y = 0 at the top
   Vec3 forward_;
   double inv_width_;
   double inv_height_;

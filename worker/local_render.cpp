@@ -12,8 +12,8 @@ namespace tessera {
 
 LocalRenderResult render_local(const Renderer& renderer, int threads, int tile_size) {
   const Scene& scene = renderer.scene();
-  const std::vector<TileRect> tiles =
-      split_into_tiles(scene.width, scene.height, tile_size > 0 ? tile_size : scene.render.tile_size);
+  const std::vector<TileRect> tiles = split_into_tiles(
+      scene.width, scene.height, tile_size > 0 ? tile_size : scene.render.tile_size);
   LocalRenderResult result{Image(scene.width, scene.height), {}};
   std::mutex counts_mutex;
 

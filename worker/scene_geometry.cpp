@@ -79,16 +79,17 @@ void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std:
 
 void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object) {
   const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
-  planes_.push_back(std::make_unique<PreparedPlane>(PreparedPlane{
-      Vec3(transform * glm::dvec4(plane.point, 1.0)), glm::normalize(normal_matrix * plane.normal)}));
+  planes_.push_back(
+      std::make_unique<PreparedPlane>(PreparedPlane{Vec3(transform * glm::dvec4(plane.point, 1.0)),
+                                                    glm::normalize(normal_matrix * plane.normal)}));
   add_user_geometry(Kind::plane, static_cast<std::uint32_t>(planes_.size() - 1), object);
 }
 
 void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object) {
   RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-      triangles.positions.size()));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               triangles.positions.size()));
   auto* indices = static_cast<unsigned*>(
       rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                               3 * sizeof(unsigned), triangles.triangles.size()));
@@ -96,7 +97,8 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
   for (std::size_t i = 0; i < triangles.positions.size(); ++i)
     for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(triangles.positions[i][k]);
   static_assert(sizeof(triangles.triangles[0]) == 3 * sizeof(unsigned));
-  std::memcpy(indices, triangles.triangles.data(), triangles.triangles.size() * 3 * sizeof(unsigned));
+  std::memcpy(indices, triangles.triangles.data(),
+              triangles.triangles.size() * 3 * sizeof(unsigned));
   rtcCommitGeometry(geometry);
   const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
   rtcReleaseGeometry(geometry);
@@ -152,12 +154,14 @@ SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) co
   switch (record.kind) {
     case Kind::sphere: {
       const PreparedSphere& sphere = *spheres_[record.index];
-      hit.t = intersect_sphere(sphere, ray.origin, ray.direction, 0.0, inf).value_or(rayhit.ray.tfar);
+      hit.t =
+          intersect_sphere(sphere, ray.origin, ray.direction, 0.0, inf).value_or(rayhit.ray.tfar);
       const Vec3 o = Vec3(sphere.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
       const Vec3 d = glm::dmat3(sphere.world_to_object) * Vec3(ray.direction);
       const Vec3 n = glm::normalize(o + hit.t * d - sphere.center);
       // Snapping the point onto the surface removes the error that o + t·d accumulates.
-      hit.position = Vec3(sphere.object_to_world * glm::dvec4(sphere.center + sphere.radius * n, 1.0));
+      hit.position =
+          Vec3(sphere.object_to_world * glm::dvec4(sphere.center + sphere.radius * n, 1.0));
       hit.normal = glm::normalize(glm::transpose(glm::dmat3(sphere.world_to_object)) * n);
       hit.shading_normal = hit.normal;
       break;
@@ -177,8 +181,9 @@ SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) co
       const Vec3& v0 = set.positions[tri[0]];
       const Vec3& v1 = set.positions[tri[1]];
       const Vec3& v2 = set.positions[tri[2]];
-      const TriangleHit th = intersect_triangle(v0, v1, v2, ray).value_or(
-          TriangleHit{rayhit.ray.tfar, rayhit.hit.u, rayhit.hit.v});
+      const TriangleHit th =
+          intersect_triangle(v0, v1, v2, ray)
+              .value_or(TriangleHit{rayhit.ray.tfar, rayhit.hit.u, rayhit.hit.v});
       hit.t = th.t;
       // Barycentric reconstruction keeps the point on the triangle's own plane.
       hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;

@@ -71,7 +71,8 @@ Tracer::LightSample Tracer::sample_light(const Light& light, const Vec3& point) 
   if (sample.distance == 0.0) return sample;  // a light inside the surface lights nothing
   sample.to_light = offset / sample.distance;
   if (const auto* point_light = std::get_if<PointLight>(&light)) {
-    sample.intensity = point_light->intensity / attenuate(point_light->attenuation, sample.distance);
+    sample.intensity =
+        point_light->intensity / attenuate(point_light->attenuation, sample.distance);
     return sample;
   }
   const auto& spot = std::get<SpotLight>(light);
@@ -88,8 +89,8 @@ Color Tracer::shadow_factor(const SurfaceHit& hit, const LightSample& light,
   const bool finite = std::isfinite(light.distance);
   auto reach = [&](const Ray& from) {
     if (!finite) return kInfinity;
-    return kShadowReach * static_cast<float>(glm::length(hit.position + light.distance *
-                                                         light.to_light - Vec3(from.origin)));
+    return kShadowReach * static_cast<float>(glm::length(
+                              hit.position + light.distance * light.to_light - Vec3(from.origin)));
   };
   if (!any_transmissive_) {
     counts.shadow += 1;

@@ -34,9 +34,9 @@ class Tracer {
 
  private:
   struct LightSample {
-    Vec3 to_light{0.0};   // unit, from the surface point towards the light
-    double distance = 0;  // to the light; infinite for directional lights
-    Color intensity{0.0}; // I_L at the point, before shadowing
+    Vec3 to_light{0.0};    // unit, from the surface point towards the light
+    double distance = 0;   // to the light; infinite for directional lights
+    Color intensity{0.0};  // I_L at the point, before shadowing
   };
 
   Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
@@ -48,7 +48,7 @@ class Tracer {
 
   const Scene& scene_;
   const SceneGeometry& geometry_;
-  std::vector<bool> solid_;    // by object
+  std::vector<bool> solid_;  // by object
   bool any_transmissive_ = false;
 };
 

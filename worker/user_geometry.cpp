@@ -100,8 +100,8 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   for (int corner = 0; corner < 8; ++corner) {
     const Vec3 offset((corner & 1) ? 1.0 : -1.0, (corner & 2) ? 1.0 : -1.0,
                       (corner & 4) ? 1.0 : -1.0);
-    const Vec3 p = Vec3(sphere.object_to_world *
-                        glm::dvec4(sphere.center + sphere.radius * offset, 1.0));
+    const Vec3 p =
+        Vec3(sphere.object_to_world * glm::dvec4(sphere.center + sphere.radius * offset, 1.0));
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
@@ -109,9 +109,9 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const Vec3 pad = 1e-6 * (glm::abs(lo) + glm::abs(hi)) + 1e-9;
   lo -= pad;
   hi += pad;
-  *args->bounds_o = {static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z),
-                     0.0f, static_cast<float>(hi.x), static_cast<float>(hi.y),
-                     static_cast<float>(hi.z), 0.0f};
+  *args->bounds_o = {
+      static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
+      static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
 }
 
 void plane_bounds(const RTCBoundsFunctionArguments* args) {
