@@ -19,7 +19,7 @@ struct SurfaceHit {
   double t = 0.0;
   Vec3 position{0.0};
   Vec3 normal{0.0};          // geometric, unit: outward for solids, as built for thin shapes
-  Vec3 shading_normal{0.0};  // unit, on the same side as `normal`
+  Vec3 shading_normal{0.0};  // unit; interpolated on smooth meshes, else `normal`
   std::uint32_t object = 0;  // index into Scene::objects
 };
 
