@@ -3,9 +3,11 @@
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
 
-function(expect condition message)
-  if(NOT ${condition})
-    message(FATAL_ERROR "${message}")
+# expect(<if() condition words...> MESSAGE <text>): fails the test unless the condition holds.
+function(expect)
+  cmake_parse_arguments(PARSE_ARGV 0 arg "" "MESSAGE" "")
+  if(NOT (${arg_UNPARSED_ARGUMENTS}))
+    message(FATAL_ERROR "${arg_MESSAGE}")
   endif()
 endfunction()
 
@@ -14,20 +16,20 @@ execute_process(
   COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/showcase.json" -o "${WORK_DIR}/out.png"
           --width 64 --height 48 --spp 1 --threads 2
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-expect("code EQUAL 0" "render failed (${code}): ${out} ${err}")
-expect("EXISTS ${WORK_DIR}/out.png" "no image written")
+expect(code EQUAL 0 MESSAGE "render failed (${code}): ${out} ${err}")
+expect(EXISTS ${WORK_DIR}/out.png MESSAGE "no image written")
 string(FIND "${out}" "Mrays/s" found)
-expect("NOT found EQUAL -1" "no ray rate printed: ${out}")
+expect(NOT found EQUAL -1 MESSAGE "no ray rate printed: ${out}")
 string(FIND "${out}" "rays: " found)
-expect("NOT found EQUAL -1" "no ray count printed: ${out}")
+expect(NOT found EQUAL -1 MESSAGE "no ray count printed: ${out}")
 
 # EXR output by extension.
 execute_process(
   COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/showcase.json" -o "${WORK_DIR}/out.exr"
           --width 32 --height 24 --spp 1
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-expect("code EQUAL 0" "exr render failed (${code}): ${err}")
-expect("EXISTS ${WORK_DIR}/out.exr" "no exr written")
+expect(code EQUAL 0 MESSAGE "exr render failed (${code}): ${err}")
+expect(EXISTS ${WORK_DIR}/out.exr MESSAGE "no exr written")
 
 # A broken scene: non-zero exit, the JSON Pointer in the message, no image.
 file(WRITE "${WORK_DIR}/bad.json" [=[{"image": {"width": 8, "height": 8},
@@ -36,27 +38,27 @@ file(WRITE "${WORK_DIR}/bad.json" [=[{"image": {"width": 8, "height": 8},
 execute_process(
   COMMAND "${TESSERA}" render "${WORK_DIR}/bad.json" -o "${WORK_DIR}/bad.png"
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-expect("NOT code EQUAL 0" "a broken scene exited 0")
+expect(NOT code EQUAL 0 MESSAGE "a broken scene exited 0")
 string(FIND "${err}" "/objects/0/radius" found)
-expect("NOT found EQUAL -1" "error does not name the JSON Pointer: ${err}")
-expect("NOT EXISTS ${WORK_DIR}/bad.png" "an image was written for a broken scene")
+expect(NOT found EQUAL -1 MESSAGE "error does not name the JSON Pointer: ${err}")
+expect(NOT EXISTS ${WORK_DIR}/bad.png MESSAGE "an image was written for a broken scene")
 
 # An override that breaks a limit is reported like a value in the file.
 execute_process(
   COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/showcase.json" -o "${WORK_DIR}/x.png"
           --width 20000
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-expect("NOT code EQUAL 0" "an over-limit width exited 0")
+expect(NOT code EQUAL 0 MESSAGE "an over-limit width exited 0")
 string(FIND "${err}" "/image/width" found)
-expect("NOT found EQUAL -1" "error does not name /image/width: ${err}")
+expect(NOT found EQUAL -1 MESSAGE "error does not name /image/width: ${err}")
 
 # Malformed JSON names line and column; a missing file is a clear error.
 file(WRITE "${WORK_DIR}/broken.json" "{\n  \"image\": {\"width\": 8,,}\n}\n")
 execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/broken.json"
   RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
-expect("NOT code EQUAL 0" "malformed JSON exited 0")
+expect(NOT code EQUAL 0 MESSAGE "malformed JSON exited 0")
 string(FIND "${err}" "line 2" found)
-expect("NOT found EQUAL -1" "error does not name the line: ${err}")
+expect(NOT found EQUAL -1 MESSAGE "error does not name the line: ${err}")
 execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/missing.json"
   RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
-expect("NOT code EQUAL 0" "a missing file exited 0")
+expect(NOT code EQUAL 0 MESSAGE "a missing file exited 0")
