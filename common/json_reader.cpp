@@ -106,6 +106,9 @@ class ErrorLocator : public nlohmann::json_sax<nlohmann::json> {
   }
 };
 
+
+}  // namespace
+
 nlohmann::json parse_json_text(std::string_view text) {
   check_nesting(text);
   try {
@@ -120,8 +123,6 @@ nlohmann::json parse_json_text(std::string_view text) {
                              explanation(locator.what));
   }
 }
-
-}  // namespace
 
 Scene parse_scene_text(std::string_view text, const Limits& limits) {
   return parse_scene(parse_json_text(text), limits);

@@ -14,6 +14,10 @@ namespace tessera {
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits = {});
 
+// Parses JSON text; a syntax error or nesting deeper than 64 levels is a SceneError at ""
+// naming line and column.
+nlohmann::json parse_json_text(std::string_view text);
+
 // Parses JSON text first; a syntax error is a SceneError at "" naming line and column.
 Scene parse_scene_text(std::string_view text, const Limits& limits = {});
 

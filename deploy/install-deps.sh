@@ -7,7 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libboost-dev libboost-system-dev
   nlohmann-json3-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
-  libtbb-dev libsqlite3-dev libcli11-dev libspdlog-dev
+  libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev
 )
 

@@ -1,0 +1,242 @@
+#include "client/http_client.hpp"
+
+#include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdint>
+#include <limits>
+#include <optional>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+
+namespace tessera {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+using tcp = net::ip::tcp;
+using error_code = beast::error_code;
+
+namespace {
+
+// Beast 1.74 speaks boost::string_view.
+beast::string_view to_beast(std::string_view text) { return {text.data(), text.size()}; }
+
+std::string lower(beast::string_view text) {
+  std::string out(text);
+  std::transform(out.begin(), out.end(), out.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return out;
+}
+
+[[noreturn]] void bad_url(std::string_view url, std::string_view why) {
+  throw std::invalid_argument("invalid server URL \"" + std::string(url) + "\": " + std::string(why));
+}
+
+// The server closed a kept-alive connection before (or while) we reused it: harmless,
+// the request can go again on a new connection.
+bool is_closed_by_peer(const error_code& ec) {
+  return ec == http::error::end_of_stream || ec == net::error::eof ||
+         ec == net::error::connection_reset || ec == net::error::broken_pipe ||
+         ec == net::error::connection_aborted;
+}
+
+}  // namespace
+
+BaseUrl parse_base_url(std::string_view url) {
+  const std::size_t scheme_end = url.find("://");
+  if (scheme_end == std::string_view::npos) bad_url(url, "expected http://host[:port]");
+  const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
+  if (scheme == "https")
+    bad_url(url, "https is not supported; the coordinator speaks plain http:// (terminate TLS in a proxy)");
+  if (scheme != "http") bad_url(url, "expected http://host[:port]");
+
+  std::string_view authority = url.substr(scheme_end + 3);
+  const std::size_t slash = authority.find('/');
+  if (slash != std::string_view::npos) {
+    if (authority.substr(slash) != "/") bad_url(url, "a path is not allowed; expected http://host[:port]");
+    authority = authority.substr(0, slash);
+  }
+
+  BaseUrl result;
+  std::string_view port_text;
+  if (authority.starts_with('[')) {  // IPv6 literal
+    const std::size_t close = authority.find(']');
+    if (close == std::string_view::npos) bad_url(url, "unterminated [IPv6 address]");
+    result.host = std::string(authority.substr(1, close - 1));
+    const std::string_view after = authority.substr(close + 1);
+    if (!after.empty()) {
+      if (after.front() != ':') bad_url(url, "expected :port after ]");
+      port_text = after.substr(1);
+      if (port_text.empty()) bad_url(url, "empty port");
+    }
+  } else {
+    const std::size_t colon = authority.find(':');
+    result.host = std::string(authority.substr(0, colon));
+    if (colon != std::string_view::npos) {
+      port_text = authority.substr(colon + 1);
+      if (port_text.empty()) bad_url(url, "empty port");
+    }
+  }
+  if (result.host.empty()) bad_url(url, "no host");
+  if (result.host.find('@') != std::string::npos) bad_url(url, "user information is not supported");
+  if (!port_text.empty()) {
+    unsigned value = 0;
+    const auto [end, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), value);
+    if (ec != std::errc() || end != port_text.data() + port_text.size() || value == 0 || value > 65535)
+      bad_url(url, "the port must be a number from 1 to 65535");
+    result.port = static_cast<std::uint16_t>(value);
+  }
+  return result;
+}
+
+struct HttpClient::Connection {
+  Connection(BaseUrl base, std::chrono::milliseconds limit)
+      : url(std::move(base)), timeout(limit), stream(io) {
+    const bool v6 = url.host.find(':') != std::string::npos;
+    host_header = (v6 ? "[" + url.host + "]" : url.host) + ":" + std::to_string(url.port);
+  }
+
+  // Runs one asynchronous operation to completion on the private io_context: the
+  // asynchronous form is what gives tcp_stream its timeouts.
+  template <typename Start>
+  error_code run(Start start) {
+    error_code result;
+    start([&result](error_code ec, auto&&...) { result = ec; });
+    io.restart();
+    io.run();
+    return result;
+  }
+
+  std::string where() const { return "http://" + host_header; }
+
+  void connect() {
+    tcp::resolver resolver(io);
+    error_code ec;
+    const auto endpoints = resolver.resolve(url.host, std::to_string(url.port), ec);
+    if (ec) throw HttpError(HttpError::Kind::connect_failed, "cannot resolve " + url.host + ": " + ec.message());
+    stream.expires_after(timeout);
+    ec = run([&](auto handler) { stream.async_connect(endpoints, std::move(handler)); });
+    if (ec == beast::error::timeout)
+      throw HttpError(HttpError::Kind::timeout, "connecting to " + where() + " timed out after " +
+                                                    std::to_string(timeout.count()) + " ms");
+    if (ec) throw HttpError(HttpError::Kind::connect_failed, "cannot connect to " + where() + ": " + ec.message());
+    stream.socket().set_option(tcp::no_delay(true), ec);
+    buffer.clear();
+    open = true;
+  }
+
+  void close() {
+    error_code ignored;
+    stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
+    stream.close();
+    buffer.clear();
+    open = false;
+  }
+
+  struct Outcome {
+    std::optional<HttpResult> result;
+    error_code error;
+    bool got_some = false;  // some of an answer arrived before the error
+  };
+
+  Outcome exchange(const http::request<http::string_body>& request) {
+    Outcome outcome;
+    stream.expires_after(timeout);  // covers the write and the read together
+    const error_code write_error =
+        run([&](auto handler) { http::async_write(stream, request, std::move(handler)); });
+    if (write_error == beast::error::timeout) {
+      outcome.error = write_error;
+      return outcome;
+    }
+    // Even when the write failed, the server may have answered first (a 413 sent before
+    // the whole body arrived), so read what is there.
+    http::response_parser<http::string_body> parser;
+    // Not boost::none: Beast 1.74 compares a Content-Length with an empty limit as exceeding it.
+    parser.body_limit(std::numeric_limits<std::uint64_t>::max());
+    parser.header_limit(64 * 1024);
+    if (request.method() == http::verb::head) parser.skip(true);
+    const error_code read_error =
+        run([&](auto handler) { http::async_read(stream, buffer, parser, std::move(handler)); });
+    if (read_error) {
+      outcome.error = write_error ? write_error : read_error;
+      if (read_error == beast::error::timeout) outcome.error = read_error;
+      outcome.got_some = parser.got_some();
+      return outcome;
+    }
+    auto& response = parser.get();
+    HttpResult result;
+    result.status = static_cast<int>(response.result_int());
+    for (const auto& field : response) {
+      auto [it, inserted] = result.headers.try_emplace(lower(field.name_string()), field.value());
+      if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
+    }
+    result.body = std::move(response.body());
+    if (write_error || !response.keep_alive()) close();
+    outcome.result = std::move(result);
+    return outcome;
+  }
+
+  BaseUrl url;
+  std::string host_header;
+  std::chrono::milliseconds timeout;
+  net::io_context io;
+  beast::tcp_stream stream;  // after io, which it uses
+  beast::flat_buffer buffer;
+  bool open = false;
+};
+
+HttpClient::HttpClient(std::string base_url, std::chrono::milliseconds timeout)
+    : base_url_(std::move(base_url)),
+      connection_(std::make_unique<Connection>(parse_base_url(base_url_), timeout)) {}
+
+HttpClient::~HttpClient() = default;
+HttpClient::HttpClient(HttpClient&&) noexcept = default;
+HttpClient& HttpClient::operator=(HttpClient&&) noexcept = default;
+
+void HttpClient::set_timeout(std::chrono::milliseconds timeout) { connection_->timeout = timeout; }
+
+HttpResult HttpClient::request(std::string_view method, std::string_view target, std::string body,
+                               std::string_view content_type, const Headers& headers) {
+  Connection& c = *connection_;
+  http::request<http::string_body> message;
+  message.version(11);
+  const http::verb verb = http::string_to_verb(to_beast(method));
+  if (verb == http::verb::unknown)
+    message.method_string(to_beast(method));
+  else
+    message.method(verb);
+  message.target(to_beast(target));
+  message.set(http::field::host, c.host_header);
+  message.set(http::field::user_agent, "tessera");
+  if (!body.empty() && !content_type.empty()) message.set(http::field::content_type, to_beast(content_type));
+  for (const auto& [name, value] : headers) message.set(name, value);
+  message.body() = std::move(body);
+  message.prepare_payload();
+
+  for (int attempt = 0;; ++attempt) {
+    const bool reused = c.open;
+    if (!c.open) c.connect();
+    Connection::Outcome outcome = c.exchange(message);
+    if (outcome.result) return std::move(*outcome.result);
+    c.close();
+    if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) continue;
+
+    const std::string what = std::string(method) + " " + std::string(target) + " on " + c.where();
+    if (outcome.error == beast::error::timeout)
+      throw HttpError(HttpError::Kind::timeout, what + ": no answer within " +
+                                                    std::to_string(c.timeout.count()) + " ms");
+    if (outcome.error.category() == http::make_error_code(http::error::end_of_stream).category() &&
+        outcome.error != http::error::end_of_stream && outcome.error != http::error::partial_message)
+      throw HttpError(HttpError::Kind::protocol, what + ": malformed answer: " + outcome.error.message());
+    throw HttpError(HttpError::Kind::protocol, what + ": connection failed: " + outcome.error.message());
+  }
+}
+
+}  // namespace tessera

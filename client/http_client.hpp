@@ -1,0 +1,77 @@
+// A small synchronous HTTP/1.1 client for talking to the coordinator: the CLI, the worker
+// daemon and the tests. One connection, kept alive between requests. Not thread-safe: use
+// one client per thread. No Asio or Beast in this header; they stay in http_client.cpp.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace tessera {
+
+struct HttpResult {
+  int status = 0;
+  std::map<std::string, std::string> headers;  // lower-case names; repeats joined with ", "
+  std::string body;
+};
+
+// A request that got no HTTP answer. An answer with an error status is not an HttpError:
+// it is an HttpResult whose status says so.
+class HttpError : public std::runtime_error {
+ public:
+  enum class Kind {
+    connect_failed,  // no connection could be made (refused, unreachable, unknown host)
+    timeout,         // no complete answer within the client's timeout
+    protocol,        // the connection failed or the answer was not valid HTTP
+  };
+  HttpError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
+  Kind kind() const noexcept { return kind_; }
+
+ private:
+  Kind kind_;
+};
+
+struct BaseUrl {
+  std::string host;  // without brackets for an IPv6 literal
+  std::uint16_t port = 80;
+};
+
+// "http://host[:port][/]". Throws std::invalid_argument for anything else, https included.
+BaseUrl parse_base_url(std::string_view url);
+
+class HttpClient {
+ public:
+  using Headers = std::vector<std::pair<std::string, std::string>>;
+
+  // Throws std::invalid_argument for a bad URL; connects on the first request. `timeout`
+  // bounds connecting, and separately each whole request: sending it and reading the answer.
+  HttpClient(std::string base_url, std::chrono::milliseconds timeout);
+  ~HttpClient();
+  HttpClient(HttpClient&&) noexcept;
+  HttpClient& operator=(HttpClient&&) noexcept;
+
+  // `target` is the path and query, e.g. "/v1/jobs?state=running". Content-Type is sent
+  // only with a non-empty body. Throws HttpError when no answer arrives. When the kept-alive
+  // connection turns out to have been closed by the server before it answered, the request
+  // is sent once more on a new connection.
+  HttpResult request(std::string_view method, std::string_view target, std::string body = {},
+                     std::string_view content_type = "application/json",
+                     const Headers& headers = {});
+
+  // For requests that may legitimately take long, such as a long-polled claim.
+  void set_timeout(std::chrono::milliseconds timeout);
+  const std::string& base_url() const { return base_url_; }
+
+ private:
+  struct Connection;
+  std::string base_url_;
+  std::unique_ptr<Connection> connection_;
+};
+
+}  // namespace tessera

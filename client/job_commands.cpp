@@ -1,0 +1,287 @@
+#include "client/job_commands.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <thread>
+#include <unistd.h>
+
+#include "client/api_client.hpp"
+#include "common/scene_parser.hpp"
+
+namespace tessera {
+namespace {
+
+using nlohmann::json;
+
+struct Options {
+  std::string server;
+  bool json_output = false;
+  // submit
+  std::string scene_path;
+  std::string name;
+  int priority = 50;
+  bool wait = false;
+  std::string output;
+  // others
+  std::string job;
+  std::string state;
+  int limit = 20;
+  bool partial = false;
+};
+
+std::string server_url(const Options& options) {
+  if (!options.server.empty()) return options.server;
+  if (const char* env = std::getenv("TESSERA_SERVER"); env && *env) return env;
+  return "http://127.0.0.1:8640";
+}
+
+struct CommandFailed {
+  int code;
+};
+
+[[noreturn]] void fail(int code, const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  throw CommandFailed{code};
+}
+
+std::string format_duration(double seconds) {
+  const long s = std::lround(seconds);
+  char text[32];
+  if (s >= 3600)
+    std::snprintf(text, sizeof text, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
+  else
+    std::snprintf(text, sizeof text, "%ld:%02ld", s / 60, s % 60);
+  return text;
+}
+
+void print_status(const json& job) {
+  std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
+              job["id"].get<std::string>().c_str(), job["state"].get<std::string>().c_str(),
+              job["name"].get<std::string>().c_str(),
+              static_cast<int>(job["progress"].get<double>() * 100), job["tiles"]["done"].get<int>(),
+              job["tiles"]["total"].get<int>(), job["priority"].get<int>(), job["width"].get<int>(),
+              job["height"].get<int>());
+  if (!job["error"].is_null()) std::printf("  error: %s\n", job["error"].get<std::string>().c_str());
+}
+
+bool finished(const json& job) {
+  const std::string state = job["state"];
+  return state == "completed" || state == "failed" || state == "canceled";
+}
+
+std::string progress_line(const json& job, bool bar) {
+  const double progress = job["progress"];
+  const double rays_per_s = job["stats"]["rays_per_s"];
+  std::string eta = job["eta_s"].is_null() ? "--:--" : format_duration(job["eta_s"].get<double>());
+  char text[256];
+  std::string drawn;
+  if (bar) {
+    constexpr int kWidth = 30;
+    const int filled = static_cast<int>(progress * kWidth);
+    drawn = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] ";
+  }
+  std::snprintf(text, sizeof text, "%s%s %d/%d tiles %5.1f%%  elapsed %s  eta %s  %.2f Mrays/s",
+                drawn.c_str(), job["state"].get<std::string>().c_str(),
+                job["tiles"]["done"].get<int>(), job["tiles"]["total"].get<int>(), progress * 100,
+                format_duration(job["elapsed_s"].get<double>()).c_str(), eta.c_str(),
+                rays_per_s / 1e6);
+  return text;
+}
+
+// Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise.
+json watch(ApiClient& api, const std::string& id) {
+  const bool tty = ::isatty(STDOUT_FILENO);
+  const auto interval = tty ? std::chrono::milliseconds(250) : std::chrono::milliseconds(1000);
+  std::string last;
+  while (true) {
+    const json job = api.job(id);
+    const std::string line = progress_line(job, tty);
+    if (tty) {
+      std::printf("\r%s\033[K", line.c_str());
+    } else if (line != last) {
+      std::printf("%s\n", line.c_str());
+    }
+    std::fflush(stdout);
+    last = line;
+    if (finished(job)) {
+      if (tty) std::printf("\n");
+      return job;
+    }
+    std::this_thread::sleep_for(interval);
+  }
+}
+
+int job_exit_code(const json& job) {
+  if (job["state"] == "completed") return kExitOk;
+  if (!job["error"].is_null())
+    std::fprintf(stderr, "job %s %s: %s\n", job["id"].get<std::string>().c_str(),
+                 job["state"].get<std::string>().c_str(), job["error"].get<std::string>().c_str());
+  else
+    std::fprintf(stderr, "job %s %s\n", job["id"].get<std::string>().c_str(),
+                 job["state"].get<std::string>().c_str());
+  return kExitJobFailed;
+}
+
+void save_image(ApiClient& api, const std::string& id, const std::string& output, bool partial) {
+  std::string format = std::filesystem::path(output).extension().string();
+  if (!format.empty()) format.erase(0, 1);
+  if (format == "jpeg") format = "jpg";
+  if (format == "tiff") format = "tif";
+  if (format != "png" && format != "exr" && format != "jpg" && format != "tif")
+    fail(kExitUsage, output + ": unknown image extension (use .png, .exr, .jpg or .tif)");
+  const std::string bytes = api.image(id, format, partial);
+  const std::filesystem::path temp = output + ".part";
+  {
+    std::ofstream out(temp, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out) fail(kExitJobFailed, "cannot write " + output);
+  }
+  std::filesystem::rename(temp, output);
+  std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
+}
+
+int submit(const Options& options, ApiClient& api) {
+  json scene;
+  try {
+    scene = read_json_file(options.scene_path);
+    parse_scene(scene);  // report mistakes with their JSON Pointer before sending anything
+  } catch (const SceneError& e) {
+    fail(kExitUsage, options.scene_path + ": " + e.what());
+  } catch (const std::exception& e) {
+    fail(kExitUsage, e.what());
+  }
+  const std::string name =
+      options.name.empty() ? std::filesystem::path(options.scene_path).stem().string() : options.name;
+  const json job = api.submit(name, options.priority, scene);
+  const std::string id = job["id"];
+  if (options.json_output && !options.wait)
+    std::printf("%s\n", job.dump(2).c_str());
+  else
+    std::printf("submitted %s (%s)\n", id.c_str(), name.c_str());
+  if (!options.wait) return kExitOk;
+  const json final_job = watch(api, id);
+  if (options.json_output) std::printf("%s\n", final_job.dump(2).c_str());
+  const int code = job_exit_code(final_job);
+  if (code == kExitOk && !options.output.empty()) save_image(api, id, options.output, false);
+  return code;
+}
+
+// Runs one command, turning transport and API errors into messages and exit codes.
+int run(const std::function<int(ApiClient&)>& command, const Options& options) {
+  try {
+    ApiClient api(server_url(options));
+    return command(api);
+  } catch (const CommandFailed& failed) {
+    return failed.code;
+  } catch (const HttpError& e) {
+    std::fprintf(stderr, "error: cannot reach the server at %s: %s\n", server_url(options).c_str(),
+                 e.what());
+    return kExitUnreachable;
+  } catch (const ApiError& e) {
+    std::fprintf(stderr, "error: %s%s\n", e.what(),
+                 e.path().empty() || std::string(e.what()).find(e.path()) != std::string::npos
+                     ? ""
+                     : (" (at " + e.path() + ")").c_str());
+    return e.status() == 400 || e.status() == 422 ? kExitUsage : kExitJobFailed;
+  }
+}
+
+}  // namespace
+
+void add_job_commands(CLI::App& app) {
+  auto options = std::make_shared<Options>();
+  app.add_option("--server", options->server,
+                 "Coordinator URL (default: $TESSERA_SERVER or http://127.0.0.1:8640)");
+  app.add_flag("--json", options->json_output, "Print the server's JSON");
+
+  auto on = [&app, options](const char* name, const char* help,
+                            std::function<int(const Options&, ApiClient&)> command) {
+    CLI::App* sub = app.add_subcommand(name, help);
+    sub->final_callback([options, command] {
+      const int code = run([&](ApiClient& api) { return command(*options, api); }, *options);
+      if (code != 0) throw CLI::RuntimeError(code);
+    });
+    return sub;
+  };
+
+  CLI::App* submit_cmd = on("submit", "Submit a scene as a render job", submit);
+  submit_cmd->add_option("scene", options->scene_path, "Scene file (JSON)")->required();
+  submit_cmd->add_option("--name", options->name, "Job name (default: the file's name)");
+  submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
+      ->check(CLI::Range(0, 100));
+  submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
+  submit_cmd->add_option("-o,--output", options->output, "With --wait: save the image here");
+
+  CLI::App* status_cmd = on("status", "Show a job's status", [](const Options& o, ApiClient& api) {
+    const json job = api.job(o.job);
+    if (o.json_output)
+      std::printf("%s\n", job.dump(2).c_str());
+    else
+      print_status(job);
+    return kExitOk;
+  });
+  status_cmd->add_option("job", options->job, "Job id")->required();
+
+  CLI::App* watch_cmd = on("watch", "Follow a job's progress until it finishes",
+                           [](const Options& o, ApiClient& api) { return job_exit_code(watch(api, o.job)); });
+  watch_cmd->add_option("job", options->job, "Job id")->required();
+
+  CLI::App* list_cmd = on("list", "List jobs, newest first", [](const Options& o, ApiClient& api) {
+    const json reply = api.jobs(o.state, o.limit);
+    if (o.json_output) {
+      std::printf("%s\n", reply.dump(2).c_str());
+    } else {
+      for (const json& job : reply["jobs"]) print_status(job);
+    }
+    return kExitOk;
+  });
+  list_cmd->add_option("--state", options->state, "Only jobs in this state");
+  list_cmd->add_option("--limit", options->limit, "At most this many")->check(CLI::Range(1, 1000));
+
+  CLI::App* get_cmd = on("get", "Download a job's image", [](const Options& o, ApiClient& api) {
+    save_image(api, o.job, o.output, o.partial);
+    return kExitOk;
+  });
+  get_cmd->add_option("job", options->job, "Job id")->required();
+  get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
+  get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
+
+  CLI::App* cancel_cmd = on("cancel", "Cancel a job", [](const Options& o, ApiClient& api) {
+    const json job = api.cancel(o.job);
+    if (o.json_output)
+      std::printf("%s\n", job.dump(2).c_str());
+    else
+      print_status(job);
+    return kExitOk;
+  });
+  cancel_cmd->add_option("job", options->job, "Job id")->required();
+
+  CLI::App* rm_cmd = on("rm", "Remove a finished job and its files", [](const Options& o, ApiClient& api) {
+    api.remove(o.job);
+    if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
+    return kExitOk;
+  });
+  rm_cmd->add_option("job", options->job, "Job id")->required();
+
+  on("workers", "List the workers", [](const Options& o, ApiClient& api) {
+    const json reply = api.workers();
+    if (o.json_output) {
+      std::printf("%s\n", reply.dump(2).c_str());
+      return kExitOk;
+    }
+    for (const json& w : reply["workers"])
+      std::printf("%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n",
+                  w["id"].get<std::string>().c_str(), w["name"].get<std::string>().c_str(),
+                  w["host"].get<std::string>().c_str(), w["state"].get<std::string>().c_str(),
+                  w["threads"].get<int>(),
+                  static_cast<unsigned long long>(w["tiles_rendered"].get<std::uint64_t>()),
+                  w["current_job"].is_null() ? "" : w["current_job"].get<std::string>().c_str());
+    return kExitOk;
+  });
+}
+
+}  // namespace tessera

@@ -1,0 +1,86 @@
+#include "server/api_json.hpp"
+
+#include <cstdio>
+#include <ctime>
+
+namespace tessera {
+
+std::string format_timestamp(std::int64_t ms) {
+  const std::time_t seconds = static_cast<std::time_t>(ms / 1000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[80];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900,
+                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
+                static_cast<int>(ms % 1000));
+  return text;
+}
+
+namespace {
+
+nlohmann::json timestamp_or_null(std::int64_t ms) {
+  return ms > 0 ? nlohmann::json(format_timestamp(ms)) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+nlohmann::json to_json(const JobStatus& job, std::int64_t now_ms) {
+  const double progress =
+      job.tiles_total > 0 ? static_cast<double>(job.tiles_done) / job.tiles_total : 0.0;
+  double elapsed_s = 0.0;
+  if (job.started_at_ms > 0)
+    elapsed_s = ((job.finished_at_ms > 0 ? job.finished_at_ms : now_ms) - job.started_at_ms) / 1e3;
+  // The remaining tiles at the rate seen so far; unknown before the first tile is done.
+  nlohmann::json eta = nullptr;
+  if (job.state == JobState::completed) {
+    eta = 0.0;
+  } else if (!is_finished(job.state) && job.tiles_done > 0 && elapsed_s > 0) {
+    eta = elapsed_s * (job.tiles_total - job.tiles_done) / job.tiles_done;
+  }
+  return {{"id", job.id},
+          {"name", job.name},
+          {"state", to_string(job.state)},
+          {"priority", job.priority},
+          {"width", job.width},
+          {"height", job.height},
+          {"tiles",
+           {{"total", job.tiles_total}, {"done", job.tiles_done}, {"rendering", job.tiles_rendering}}},
+          {"progress", progress},
+          {"created_at", format_timestamp(job.created_at_ms)},
+          {"started_at", timestamp_or_null(job.started_at_ms)},
+          {"finished_at", timestamp_or_null(job.finished_at_ms)},
+          {"elapsed_s", elapsed_s},
+          {"eta_s", eta},
+          {"error", job.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(job.error)},
+          {"stats",
+           {{"rays", job.rays}, {"rays_per_s", elapsed_s > 0 ? job.rays / elapsed_s : 0.0}}}};
+}
+
+nlohmann::json to_json(const WorkerInfo& worker) {
+  return {{"id", worker.id},
+          {"name", worker.name},
+          {"host", worker.host},
+          {"threads", worker.threads},
+          {"state", worker.state},
+          {"current_job", worker.current_job.empty() ? nlohmann::json(nullptr)
+                                                     : nlohmann::json(worker.current_job)},
+          {"current_tile",
+           worker.current_tile >= 0 ? nlohmann::json(worker.current_tile) : nlohmann::json(nullptr)},
+          {"tiles_rendered", worker.tiles_rendered},
+          {"last_seen", format_timestamp(worker.last_seen_ms)}};
+}
+
+nlohmann::json to_json(const Lease& lease, std::int64_t now_ms) {
+  return {{"id", lease.id},
+          {"job_id", lease.job_id},
+          {"scene_digest", lease.scene_digest},
+          {"tile",
+           {{"index", lease.tile_index},
+            {"x", lease.rect.x},
+            {"y", lease.rect.y},
+            {"width", lease.rect.width},
+            {"height", lease.rect.height}}},
+          {"expires_in_s", std::max<std::int64_t>(0, lease.expires_at_ms - now_ms) / 1e3}};
+}
+
+}  // namespace tessera

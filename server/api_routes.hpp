@@ -1,0 +1,28 @@
+// The public API of docs/openapi.yaml, as route handlers over the Scheduler.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+
+#include "common/scene.hpp"
+#include "server/claim_waiters.hpp"
+#include "server/clock.hpp"
+#include "server/router.hpp"
+#include "server/scheduler.hpp"
+
+namespace tessera {
+
+struct ApiContext {
+  Scheduler& scheduler;
+  const Clock& clock;
+  ClaimWaiters& waiters;
+  Limits limits;
+  std::size_t max_job_body_bytes = 64 << 20;
+  std::filesystem::path temp_dir;  // where images are encoded before they are sent
+};
+
+void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
+void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers, scenes, leases
+void add_health_routes(Router& router);                       // /healthz
+
+}  // namespace tessera

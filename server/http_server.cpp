@@ -1,0 +1,47 @@
+#include "server/http_server.hpp"
+
+#include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
+
+#include <stdexcept>
+
+#include <boost/asio/ip/address.hpp>
+
+#include "server/http_session.hpp"
+#include "server/listener.hpp"
+
+namespace tessera {
+
+namespace net = boost::asio;
+
+namespace {
+
+net::ip::address parse_address(const std::string& text) {
+  boost::system::error_code ec;
+  const auto address = net::ip::make_address(text, ec);
+  if (ec) throw std::invalid_argument("listen address \"" + text + "\" is not an IP address");
+  return address;
+}
+
+}  // namespace
+
+HttpServer::HttpServer(net::io_context& io, const Router& router, HttpServerOptions options)
+    : shared_(std::make_shared<ServerShared>(io, router, std::move(options))) {
+  const net::ip::tcp::endpoint endpoint(parse_address(shared_->options.address),
+                                        shared_->options.port);
+  listener_ = std::make_shared<Listener>(io, endpoint, shared_);
+  port_ = listener_->port();
+  listener_->start();
+}
+
+HttpServer::~HttpServer() { stop(); }
+
+void HttpServer::stop() {
+  // Once is enough; the flag also tells sessions that start from now on to close.
+  if (shared_->stopping.exchange(true)) return;
+  listener_->stop();
+  shut_down_sessions(*shared_);
+}
+
+std::size_t HttpServer::connection_count() const { return shared_->connection_count.load(); }
+
+}  // namespace tessera

@@ -1,0 +1,80 @@
+// The coordinator's HTTP/1.1 server: accepts connections and serves each on its own strand,
+// handing requests to the Router's handlers. No Asio or Beast in this header, so that
+// main and the tests include it cheaply.
+//
+// Typical use (the io_context may be run by several threads):
+//
+//   boost::asio::io_context io;
+//   HttpServer server(io, router, options);  // bound and accepting from here on
+//   boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+//   signals.async_wait([&](const boost::system::error_code& ec, int) {
+//     if (ec) return;
+//     claim_waiters.close();  // long-polls must answer for the drain to end
+//     server.stop();
+//   });
+//   io.run();  // returns once stopped and every in-flight request has been answered
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace boost::asio {
+class io_context;
+}
+
+namespace tessera {
+
+class Listener;
+class Router;
+struct ServerShared;
+
+struct HttpServerOptions {
+  std::string address = "127.0.0.1";  // an IP address; "0.0.0.0" or "::" for every interface
+  std::uint16_t port = 8640;           // 0: any free port; see HttpServer::port()
+  // From a request's first byte until its header is complete. A new connection must also
+  // send its first byte within this.
+  std::chrono::milliseconds header_timeout{10'000};
+  // For the whole body, so that a client dribbling bytes cannot hold a connection forever.
+  std::chrono::milliseconds body_timeout{30'000};
+  // For writing a whole response to a slow reader.
+  std::chrono::milliseconds write_timeout{30'000};
+  // How long a kept-alive connection may wait for its next request.
+  std::chrono::milliseconds idle_timeout{60'000};
+  std::uint32_t max_header_bytes = 16 * 1024;  // larger: 431
+  std::size_t default_body_limit = 1 << 20;    // for routes added without a limit; larger: 413
+};
+
+class HttpServer {
+ public:
+  // Binds and listens (throws boost::system::system_error when it cannot, or
+  // std::invalid_argument for a bad address) and starts accepting on `io`. `router` must
+  // not change from here on, and must outlive every connection: keep it until io.run()
+  // has returned.
+  HttpServer(boost::asio::io_context& io, const Router& router, HttpServerOptions options);
+  // Stops accepting; connections still open finish as after stop().
+  ~HttpServer();
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  // The port actually bound (the chosen one when options.port was 0).
+  std::uint16_t port() const { return port_; }
+
+  // Graceful: stops accepting, closes connections waiting for a request, and lets every
+  // request already begun finish; those connections then close. Safe from any thread,
+  // idempotent. io.run() returns once all that is done (and nothing else keeps it busy).
+  void stop();
+
+  // Open connections, idle ones included.
+  std::size_t connection_count() const;
+
+ private:
+  std::shared_ptr<ServerShared> shared_;
+  // Shared with its own pending accept, as Asio's completion handlers require.
+  std::shared_ptr<Listener> listener_;
+  std::uint16_t port_ = 0;
+};
+
+}  // namespace tessera

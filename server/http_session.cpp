@@ -1,0 +1,375 @@
+#include "server/http_session.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <chrono>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <boost/asio/dispatch.hpp>
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <spdlog/spdlog.h>
+
+#include "server/router.hpp"
+
+namespace tessera {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+using tcp = net::ip::tcp;
+using error_code = beast::error_code;
+
+namespace {
+
+// After a response that ends the connection, how long unread request bytes are drained
+// so that closing does not reset the connection before the client has read the answer.
+constexpr std::chrono::seconds kLingerTime{2};
+
+bool has_no_body(int status) { return status < 200 || status == 204 || status == 304; }
+
+std::string lower(beast::string_view text) {
+  std::string out(text);
+  std::transform(out.begin(), out.end(), out.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return out;
+}
+
+std::string format_endpoint(const tcp::endpoint& endpoint) {
+  const auto address = endpoint.address();
+  const std::string ip = address.is_v6() ? "[" + address.to_string() + "]" : address.to_string();
+  return ip + ":" + std::to_string(endpoint.port());
+}
+
+}  // namespace
+
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket&& socket, std::shared_ptr<ServerShared> shared)
+      : stream_(std::move(socket)), shared_(std::move(shared)) {
+    ++shared_->connection_count;
+  }
+
+  ~HttpSession() {
+    {
+      std::lock_guard lock(shared_->mutex);
+      shared_->sessions.erase(this);
+    }
+    --shared_->connection_count;
+  }
+
+  void start() {
+    error_code ec;
+    const auto endpoint = stream_.socket().remote_endpoint(ec);
+    if (!ec) remote_address_ = format_endpoint(endpoint);
+    // Small requests and answers: do not let Nagle hold back the last segment.
+    stream_.socket().set_option(tcp::no_delay(true), ec);
+    {
+      std::lock_guard lock(shared_->mutex);
+      shared_->sessions.emplace(this, weak_from_this());
+    }
+    net::dispatch(stream_.get_executor(),
+                  [self = shared_from_this()] { self->do_wait_for_request(); });
+  }
+
+  // From any thread.
+  void shut_down() {
+    net::post(stream_.get_executor(), [self = shared_from_this()] { self->on_shut_down(); });
+  }
+
+  // Delivers a handler's answer, from any thread.
+  void deliver(HttpResponse response) {
+    net::post(stream_.get_executor(),
+              [self = shared_from_this(), response = std::move(response)]() mutable {
+                self->send(std::move(response), !self->keep_alive_);
+              });
+  }
+
+ private:
+  enum class Phase { idle, header, body, handler, writing, closing, closed };
+
+  bool stopping() const { return shared_->stopping.load(); }
+
+  // Waiting for a request's first byte is kept apart from reading its header, so that an
+  // idle keep-alive connection has its own timeout and stop() can tell it is idle.
+  void do_wait_for_request() {
+    if (stopping()) return close();
+    if (buffer_.size() > 0) return do_read_header();  // pipelined: already here
+    phase_ = Phase::idle;
+    stream_.expires_after(first_request_ ? shared_->options.header_timeout
+                                         : shared_->options.idle_timeout);
+    stream_.async_read_some(buffer_.prepare(4096), beast::bind_front_handler(
+                                                       &HttpSession::on_wait_for_request,
+                                                       shared_from_this()));
+  }
+
+  void on_wait_for_request(error_code ec, std::size_t bytes) {
+    if (ec) return close();  // the client went away, timed out, or stop() closed us
+    buffer_.commit(bytes);
+    do_read_header();
+  }
+
+  void do_read_header() {
+    phase_ = Phase::header;
+    parser_.emplace();
+    parser_->header_limit(shared_->options.max_header_bytes);
+    // The route's limit is applied once the header says which route it is. (Not
+    // boost::none: Beast 1.74 compares a Content-Length with an empty limit as exceeding it.)
+    parser_->body_limit(std::numeric_limits<std::uint64_t>::max());
+    stream_.expires_after(shared_->options.header_timeout);
+    http::async_read_header(
+        stream_, buffer_, *parser_,
+        beast::bind_front_handler(&HttpSession::on_read_header, shared_from_this()));
+  }
+
+  void on_read_header(error_code ec, std::size_t) {
+    if (ec) return on_read_error(ec, "header");
+    first_request_ = false;
+    auto& request = parser_->get();
+    keep_alive_ = request.keep_alive();
+    const bool body_follows = !parser_->is_done();
+
+    const std::string_view target(request.target().data(), request.target().size());
+    const std::size_t question = target.find('?');
+    path_ = std::string(target.substr(0, question));
+    route_ = shared_->router.match(
+        std::string_view(request.method_string().data(), request.method_string().size()), path_);
+    if (!route_.handler) return send(std::move(route_.error), body_follows || !keep_alive_);
+
+    auto query = parse_query(question == std::string_view::npos ? std::string_view()
+                                                                : target.substr(question + 1));
+    if (!query)
+      return send(error_response(400, "bad_request", "the query string is not valid percent-encoding"),
+                  body_follows || !keep_alive_);
+    query_ = std::move(*query);
+
+    const std::size_t limit = route_.body_limit.value_or(shared_->options.default_body_limit);
+    if (const auto length = parser_->content_length(); length && *length > limit)
+      return send(too_large(limit), true);
+    parser_->body_limit(limit);  // also caps a chunked body, whose size is not announced
+
+    if (!body_follows) return dispatch();
+    if (beast::iequals(request[http::field::expect], "100-continue")) return do_continue();
+    do_read_body();
+  }
+
+  // The client waits for this before sending a body it announced with Expect.
+  void do_continue() {
+    static constexpr std::string_view kContinue = "HTTP/1.1 100 Continue\r\n\r\n";
+    phase_ = Phase::writing;
+    stream_.expires_after(shared_->options.write_timeout);
+    net::async_write(stream_, net::buffer(kContinue.data(), kContinue.size()),
+                     [self = shared_from_this()](error_code ec, std::size_t) {
+                       if (ec) return self->close();
+                       self->do_read_body();
+                     });
+  }
+
+  void do_read_body() {
+    phase_ = Phase::body;
+    stream_.expires_after(shared_->options.body_timeout);
+    http::async_read(stream_, buffer_, *parser_,
+                     beast::bind_front_handler(&HttpSession::on_read_body, shared_from_this()));
+  }
+
+  void on_read_body(error_code ec, std::size_t) {
+    if (ec == http::error::body_limit)
+      return send(too_large(route_.body_limit.value_or(shared_->options.default_body_limit)), true);
+    if (ec) return on_read_error(ec, "body");
+    dispatch();
+  }
+
+  void on_read_error(error_code ec, const char* what) {
+    if (ec == http::error::header_limit)
+      return send(error_response(431, "header_too_large",
+                                 "the request header exceeds " +
+                                     std::to_string(shared_->options.max_header_bytes) + " bytes"),
+                  true);
+    // A message that does not parse: say so, then close, since where the next one would
+    // begin is unknown. Anything else (timeouts, resets, end of stream) leaves no one to tell.
+    if (ec.category() == http::make_error_code(http::error::end_of_stream).category() &&
+        ec != http::error::end_of_stream && ec != http::error::partial_message)
+      return send(error_response(400, "bad_request", "malformed HTTP request: " + ec.message()), true);
+    spdlog::debug("http {}: reading the {} failed: {}", remote_address_, what, ec.message());
+    close();
+  }
+
+  static HttpResponse too_large(std::size_t limit) {
+    return error_response(413, "body_too_large",
+                          "the request body exceeds this route's limit of " + std::to_string(limit) +
+                              " bytes");
+  }
+
+  void dispatch();
+
+  void send(HttpResponse response, bool close_after) {
+    if (phase_ == Phase::closed || phase_ == Phase::closing) return;
+    close_after = close_after || stopping();
+    if (response.status < 100 || response.status > 599) {
+      spdlog::error("http {} {}: handler answered with status {}", route_.pattern, path_, response.status);
+      response = error_response(500, "internal_error", "the handler answered an invalid status");
+    }
+    response_.emplace();
+    auto& message = *response_;
+    message.version(11);
+    message.result(static_cast<unsigned>(response.status));
+    message.set(http::field::server, "tessera");
+    if (!response.content_type.empty() && !has_no_body(response.status))
+      message.set(http::field::content_type, response.content_type);
+    for (auto& [name, value] : response.headers) message.insert(name, value);
+    if (!has_no_body(response.status)) {
+      message.body() = std::move(response.body);
+      message.prepare_payload();
+    }
+    message.keep_alive(!close_after);
+
+    phase_ = Phase::writing;
+    stream_.expires_after(shared_->options.write_timeout);
+    http::async_write(stream_, message,
+                      beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), close_after));
+  }
+
+  void on_write(bool close_after, error_code ec, std::size_t) {
+    response_.reset();
+    if (ec) {
+      spdlog::debug("http {}: writing the response failed: {}", remote_address_, ec.message());
+      return close();
+    }
+    if (close_after) return linger();
+    do_wait_for_request();
+  }
+
+  void on_shut_down() {
+    if (phase_ == Phase::idle) close();
+    // Otherwise the current request finishes, and stopping() ends the connection after it.
+  }
+
+  // Half-closes, then discards what the client still sends until it closes too: closing
+  // with unread bytes would make the kernel send a reset, which can destroy the response
+  // before the client has read it (a 413 sent while the client is still uploading).
+  void linger() {
+    phase_ = Phase::closing;
+    error_code ec;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
+    if (ec) return close();
+    stream_.expires_after(kLingerTime);
+    do_drain();
+  }
+
+  void do_drain() {
+    stream_.async_read_some(net::buffer(drain_), [self = shared_from_this()](error_code ec, std::size_t) {
+      if (ec) return self->close();
+      self->do_drain();
+    });
+  }
+
+  void close() {
+    phase_ = Phase::closed;
+    error_code ec;
+    stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
+    stream_.close();
+  }
+
+  beast::tcp_stream stream_;
+  std::shared_ptr<ServerShared> shared_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::optional<http::response<http::string_body>> response_;  // alive while being written
+  std::array<char, 4096> drain_{};
+  std::string remote_address_;
+  Phase phase_ = Phase::idle;
+  bool first_request_ = true;
+  bool keep_alive_ = true;
+  // The request being served.
+  std::string path_;
+  std::map<std::string, std::string> query_;
+  RouteMatch route_;
+
+};
+
+namespace {
+
+// A request's answer-to-be, shared by every copy of its Respond. It keeps the io_context
+// running while a handler works elsewhere (a long-poll must not let io.run() return), and
+// answers 500 if the last copy disappears unanswered, so a buggy handler cannot leave a
+// client waiting forever.
+class PendingResponse {
+ public:
+  PendingResponse(std::shared_ptr<HttpSession> session, net::io_context& io)
+      : session_(std::move(session)), work_(net::make_work_guard(io)) {}
+
+  ~PendingResponse() {
+    if (!answered_.exchange(true))
+      session_->deliver(error_response(500, "internal_error", "the request was never answered"));
+  }
+
+  PendingResponse(const PendingResponse&) = delete;
+  PendingResponse& operator=(const PendingResponse&) = delete;
+
+  void answer(HttpResponse response) {
+    if (answered_.exchange(true)) {
+      spdlog::warn("a request was answered twice; the second answer is dropped");
+      return;
+    }
+    session_->deliver(std::move(response));
+  }
+
+ private:
+  std::shared_ptr<HttpSession> session_;
+  net::executor_work_guard<net::io_context::executor_type> work_;
+  std::atomic<bool> answered_{false};
+};
+
+}  // namespace
+
+void HttpSession::dispatch() {
+  phase_ = Phase::handler;
+  auto& message = parser_->get();
+  HttpRequest request;
+  request.method = std::string(message.method_string());
+  request.path = std::move(path_);
+  request.query = std::move(query_);
+  request.params = std::move(route_.params);
+  for (const auto& field : message) {
+    auto [it, inserted] = request.headers.try_emplace(lower(field.name_string()), field.value());
+    if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
+  }
+  request.body = std::move(message.body());
+  request.remote_address = remote_address_;
+  parser_.reset();
+
+  auto pending = std::make_shared<PendingResponse>(shared_from_this(), shared_->io);
+  Respond respond = [pending](HttpResponse response) { pending->answer(std::move(response)); };
+  try {
+    (*route_.handler)(std::move(request), std::move(respond));
+  } catch (const std::exception& e) {
+    spdlog::error("http {}: handler threw: {}", route_.pattern, e.what());
+    pending->answer(error_response(500, "internal_error", "internal error"));
+  }
+}
+
+void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {
+  std::make_shared<HttpSession>(std::move(socket), std::move(shared))->start();
+}
+
+void shut_down_sessions(ServerShared& shared) {
+  // Collected first and told outside the lock: dropping what may be the last reference
+  // runs a session's destructor, which takes the lock.
+  std::vector<std::shared_ptr<HttpSession>> open;
+  {
+    std::lock_guard lock(shared.mutex);
+    for (auto& [raw, weak] : shared.sessions)
+      if (auto session = weak.lock()) open.push_back(std::move(session));
+  }
+  for (const auto& session : open) session->shut_down();
+}
+
+}  // namespace tessera

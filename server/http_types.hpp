@@ -1,0 +1,53 @@
+// What a route handler sees of HTTP: plain structs, no Beast, so that the many handler
+// files compile quickly and can be unit-tested without a socket.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace tessera {
+
+struct HttpRequest {
+  std::string method;  // as sent, e.g. "GET"
+  std::string path;    // percent-encoded, as sent, without the query
+  std::map<std::string, std::string> query;    // decoded; a repeated key keeps its last value
+  std::map<std::string, std::string> params;   // decoded, from the route pattern's {names}
+  std::map<std::string, std::string> headers;  // lower-case names; repeats joined with ", "
+  std::string body;
+  std::string remote_address;  // "ip:port" of the peer
+};
+
+struct HttpResponse {
+  int status = 200;
+  std::string content_type = "application/json";  // empty: no Content-Type header
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  // added as given
+};
+
+// Answers a request. May be called later and from any thread, but exactly once: a second
+// call is ignored, and dropping every copy without calling it answers 500.
+using Respond = std::function<void(HttpResponse)>;
+using Handler = std::function<void(HttpRequest&&, Respond)>;
+
+inline HttpResponse json_response(int status, const nlohmann::json& body) {
+  // Replace rather than throw on invalid UTF-8: a response must always be producible,
+  // even when it echoes bytes a client sent.
+  return HttpResponse{status, "application/json",
+                      body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), {}};
+}
+
+// The body every error has: {"error": {"code", "message", "path"?}}. `path` is a JSON
+// Pointer into the request body, for errors about one of its values.
+inline HttpResponse error_response(int status, std::string code, std::string message,
+                                   std::string path = "") {
+  nlohmann::json error = {{"code", std::move(code)}, {"message", std::move(message)}};
+  if (!path.empty()) error["path"] = std::move(path);
+  return json_response(status, {{"error", std::move(error)}});
+}
+
+}  // namespace tessera

@@ -1,0 +1,17 @@
+// Random identifiers and content digests for the coordinator.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace tessera {
+
+// `chars` lowercase hex digits from the OS's cryptographic generator: lease ids are
+// fencing tokens, so they must not be guessable from earlier ones.
+std::string random_hex(std::size_t chars);
+
+// Lowercase hex SHA-256 of `data`.
+std::string sha256_hex(std::string_view data);
+
+}  // namespace tessera

@@ -1,0 +1,184 @@
+#include <fstream>
+#include <sstream>
+
+#include "common/image_io.hpp"
+#include "common/scene_parser.hpp"
+#include "server/api_json.hpp"
+#include "server/api_routes.hpp"
+
+namespace tessera {
+namespace {
+
+using nlohmann::json;
+
+HttpResponse not_found(const std::string& id) {
+  return error_response(404, "not_found", "no job " + id);
+}
+
+// The submission envelope around the scene: {"name", "priority", "scene"}.
+HttpResponse submit(ApiContext& context, const HttpRequest& request) {
+  json body;
+  try {
+    body = parse_json_text(request.body);
+  } catch (const SceneError& e) {
+    return error_response(400, "malformed_json", e.detail());
+  }
+  if (!body.is_object()) return error_response(400, "invalid_request", "the body must be a JSON object");
+  for (const auto& [key, value] : body.items())
+    if (key != "name" && key != "priority" && key != "scene")
+      return error_response(400, "invalid_request",
+                            "unknown key \"" + key + "\" (expected name, priority, scene)", "/" + key);
+  std::string name = "job";
+  if (body.contains("name")) {
+    if (!body["name"].is_string())
+      return error_response(400, "invalid_request", "must be a string", "/name");
+    name = body["name"].get<std::string>();
+  }
+  int priority = 50;
+  if (body.contains("priority")) {
+    const json& p = body["priority"];
+    if (!p.is_number_integer() || p.get<std::int64_t>() < 0 || p.get<std::int64_t>() > 100)
+      return error_response(400, "invalid_request", "must be an integer from 0 to 100, got " + p.dump(),
+                            "/priority");
+    priority = p.get<int>();
+  }
+  if (!body.contains("scene")) return error_response(400, "invalid_request", "required", "/scene");
+  Scene scene;
+  try {
+    scene = parse_scene(body["scene"], context.limits);
+  } catch (const SceneError& e) {
+    const std::string path = "/scene" + e.pointer();
+    return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+  }
+  const JobStatus job = context.scheduler.submit(name, priority, scene, body["scene"].dump());
+  HttpResponse response = json_response(201, to_json(job, context.clock.now_ms()));
+  response.headers.emplace_back("Location", "/v1/jobs/" + job.id);
+  return response;
+}
+
+HttpResponse list(ApiContext& context, const HttpRequest& request) {
+  std::optional<JobState> state;
+  if (auto it = request.query.find("state"); it != request.query.end()) {
+    state = job_state_from_string(it->second);
+    if (!state)
+      return error_response(400, "invalid_request",
+                            "state must be queued, running, completed, failed or canceled");
+  }
+  std::size_t limit = 100;
+  if (auto it = request.query.find("limit"); it != request.query.end()) {
+    try {
+      std::size_t used = 0;
+      const long value = std::stol(it->second, &used);
+      if (used != it->second.size() || value < 1 || value > 1000) throw std::out_of_range("");
+      limit = static_cast<std::size_t>(value);
+    } catch (const std::exception&) {
+      return error_response(400, "invalid_request", "limit must be an integer from 1 to 1000");
+    }
+  }
+  json jobs = json::array();
+  const std::int64_t now = context.clock.now_ms();
+  for (const JobStatus& job : context.scheduler.jobs(state, limit)) jobs.push_back(to_json(job, now));
+  return json_response(200, {{"jobs", std::move(jobs)}});
+}
+
+struct ImageFormat {
+  std::string extension;
+  std::string content_type;
+};
+
+std::optional<ImageFormat> image_format(const std::string& name) {
+  if (name == "png") return ImageFormat{".png", "image/png"};
+  if (name == "exr") return ImageFormat{".exr", "image/x-exr"};
+  if (name == "jpg") return ImageFormat{".jpg", "image/jpeg"};
+  if (name == "tif") return ImageFormat{".tif", "image/tiff"};
+  return std::nullopt;
+}
+
+OutputTransfer transfer_of(const std::string& scene_json) {
+  const json scene = json::parse(scene_json);
+  const auto render = scene.find("render");
+  if (render != scene.end() && render->contains("output_transfer") &&
+      (*render)["output_transfer"] == "linear")
+    return OutputTransfer::linear;
+  return OutputTransfer::srgb;
+}
+
+HttpResponse image(ApiContext& context, const HttpRequest& request) {
+  const std::string& id = request.params.at("id");
+  const auto query_value = [&](const char* key, const char* fallback) {
+    auto it = request.query.find(key);
+    return it == request.query.end() ? std::string(fallback) : it->second;
+  };
+  const auto format = image_format(query_value("format", "png"));
+  if (!format) return error_response(400, "invalid_request", "format must be png, exr, jpg or tif");
+  const std::string partial = query_value("partial", "0");
+  if (partial != "0" && partial != "1")
+    return error_response(400, "invalid_request", "partial must be 0 or 1");
+  const auto job = context.scheduler.job(id);
+  if (!job) return not_found(id);
+  if (job->state != JobState::completed && partial != "1")
+    return error_response(409, "not_ready",
+                          "job " + id + " is " + to_string(job->state) +
+                              "; add ?partial=1 for the tiles rendered so far");
+  const auto assembled = context.scheduler.assemble(id);
+  const auto scene_json = context.scheduler.scene_json(job->scene_digest);
+  if (!assembled || !scene_json) return not_found(id);
+
+  // OpenImageIO writes files; encode into a private temporary one and send its bytes.
+  std::filesystem::create_directories(context.temp_dir);
+  static std::atomic<unsigned> counter{0};
+  const auto path = context.temp_dir / (id + "-" + std::to_string(counter++) + format->extension);
+  write_image(*assembled, path, transfer_of(*scene_json));
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  std::error_code ignored;
+  std::filesystem::remove(path, ignored);
+  HttpResponse response{200, format->content_type, bytes.str(), {}};
+  return response;
+}
+
+}  // namespace
+
+void add_job_routes(Router& router, ApiContext& context) {
+  router.add("POST", "/v1/jobs",
+             [&context](HttpRequest&& request, Respond respond) { respond(submit(context, request)); },
+             context.max_job_body_bytes);
+  router.add("GET", "/v1/jobs",
+             [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); });
+  router.add("GET", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    const auto job = context.scheduler.job(id);
+    respond(job ? json_response(200, to_json(*job, context.clock.now_ms())) : not_found(id));
+  });
+  router.add("DELETE", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    switch (context.scheduler.remove(id)) {
+      case RemoveOutcome::removed: return respond(HttpResponse{204, "", "", {}});
+      case RemoveOutcome::not_found: return respond(not_found(id));
+      case RemoveOutcome::not_finished:
+        return respond(error_response(409, "not_finished",
+                                      "job " + id + " is still active; cancel it first"));
+    }
+  });
+  router.add("GET", "/v1/jobs/{id}/image",
+             [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); });
+  router.add("POST", "/v1/jobs/{id}/cancel", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    switch (context.scheduler.cancel(id)) {
+      case CancelOutcome::canceled:
+        return respond(json_response(200, to_json(*context.scheduler.job(id), context.clock.now_ms())));
+      case CancelOutcome::not_found: return respond(not_found(id));
+      case CancelOutcome::already_finished:
+        return respond(error_response(409, "already_finished", "job " + id + " has already finished"));
+    }
+  });
+}
+
+void add_health_routes(Router& router) {
+  router.add("GET", "/healthz", [](HttpRequest&&, Respond respond) {
+    respond(json_response(200, {{"status", "ok"}}));
+  });
+}
+
+}  // namespace tessera

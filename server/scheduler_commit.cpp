@@ -1,0 +1,95 @@
+// The Scheduler's bookkeeping: how staged changes reach the store and then memory, and
+// the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
+// every tile and job change.
+#include "server/scheduler.hpp"
+#include "server/scheduler_entries.hpp"
+#include "server/tile_order.hpp"
+
+namespace tessera {
+
+void Scheduler::commit(StagedChange& change) {
+  {
+    Transaction tx = store_.transaction();
+    for (const auto& [job, status] : change.jobs) store_.update_job(job_row(status));
+    for (const auto& [key, tile] : change.tiles) {
+      const auto& [job, index] = key;
+      const TileRow row = tile_row(job->status.id, index, tile);
+      if (change.pixels && change.pixels->job == job && change.pixels->tile_index == index)
+        store_.store_tile_result(row, change.pixels->pixels);
+      else
+        store_.update_tile(row);
+    }
+    for (const auto& [worker, staged] : change.workers) store_.upsert_worker(worker_row(staged));
+    tx.commit();
+  }
+  // Jobs before tiles: apply_job keeps the tile counters, which apply_tile then moves.
+  for (auto& [job, status] : change.jobs) apply_job(*job, status);
+  for (auto& [key, tile] : change.tiles) apply_tile(*key.first, key.second, std::move(tile));
+  for (auto& [worker, staged] : change.workers) {
+    *worker = std::move(staged);
+    worker->persisted_seen_ms = worker->info.last_seen_ms;
+  }
+  change = StagedChange{};
+}
+
+void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
+  const JobStatus& s = job.status;
+  active_.erase({-s.priority, s.created_at_ms, s.id});
+  JobStatus updated = next;
+  updated.tiles_total = s.tiles_total;
+  updated.tiles_done = s.tiles_done;
+  updated.tiles_rendering = s.tiles_rendering;
+  job.status = std::move(updated);
+  if (!is_finished(job.status.state))
+    active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
+}
+
+void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {
+  track_tile(job, index, -1);
+  job.tiles[index] = std::move(next);
+  track_tile(job, index, +1);
+}
+
+void Scheduler::track_tile(JobEntry& job, int index, int sign) {
+  const TileSlot& tile = job.tiles[index];
+  const int position = job.rank[index];
+  if (tile.state == TileState::pending) {
+    if (sign > 0)
+      job.pending.insert(position);
+    else
+      job.pending.erase(position);
+  }
+  if (tile.state == TileState::done) job.status.tiles_done += sign;
+  if (!tile.lease_id.empty()) {
+    job.status.tiles_rendering += sign;
+    if (sign > 0)
+      leases_[tile.lease_id] = {job.status.id, index};
+    else
+      leases_.erase(tile.lease_id);
+  }
+  if (!tile.result_lease_id.empty()) {
+    if (sign > 0)
+      delivered_[tile.result_lease_id] = {job.status.id, index};
+    else
+      delivered_.erase(tile.result_lease_id);
+  }
+}
+
+void Scheduler::index_tiles(JobEntry& job) {
+  std::vector<TileRect> rects;
+  rects.reserve(job.tiles.size());
+  for (const TileSlot& tile : job.tiles) rects.push_back(tile.rect);
+  job.order = centre_first_order(rects, job.status.width, job.status.height);
+  job.rank.assign(job.order.size(), 0);
+  for (std::size_t position = 0; position < job.order.size(); ++position)
+    job.rank[job.order[position]] = static_cast<int>(position);
+  job.pending.clear();
+  job.status.tiles_total = static_cast<int>(job.tiles.size());
+  job.status.tiles_done = 0;
+  job.status.tiles_rendering = 0;
+  for (int index = 0; index < job.status.tiles_total; ++index) track_tile(job, index, +1);
+  if (!is_finished(job.status.state))
+    active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
+}
+
+}  // namespace tessera

@@ -1,0 +1,74 @@
+#include "server/scheduler_entries.hpp"
+
+#include <array>
+
+namespace tessera {
+namespace {
+
+constexpr std::array<std::pair<TileState, const char*>, 3> tile_state_names{{
+    {TileState::pending, "pending"},
+    {TileState::leased, "leased"},
+    {TileState::done, "done"},
+}};
+
+}  // namespace
+
+const char* to_string(TileState state) {
+  for (const auto& [value, name] : tile_state_names)
+    if (value == state) return name;
+  return "unknown";
+}
+
+std::optional<TileState> tile_state_from_string(std::string_view text) {
+  for (const auto& [value, name] : tile_state_names)
+    if (text == name) return value;
+  return std::nullopt;
+}
+
+TileSlot& StagedChange::tile(JobEntry& job, int index) {
+  const auto key = std::make_pair(&job, index);
+  auto it = tiles.find(key);
+  if (it == tiles.end()) it = tiles.emplace(key, job.tiles.at(index)).first;
+  return it->second;
+}
+
+JobStatus& StagedChange::job(JobEntry& entry) {
+  auto it = jobs.find(&entry);
+  if (it == jobs.end()) it = jobs.emplace(&entry, entry.status).first;
+  return it->second;
+}
+
+WorkerEntry& StagedChange::worker(WorkerEntry& entry) {
+  auto it = workers.find(&entry);
+  if (it == workers.end()) it = workers.emplace(&entry, entry).first;
+  return it->second;
+}
+
+JobRow job_row(const JobStatus& s) {
+  return {
+      s.id,        s.name,         s.priority,      to_string(s.state), s.width,          s.height,
+      s.tile_size, s.scene_digest, s.created_at_ms, s.started_at_ms,    s.finished_at_ms, s.error,
+      s.rays};
+}
+
+TileRow tile_row(const std::string& job_id, int index, const TileSlot& t) {
+  TileRow row;
+  row.job_id = job_id;
+  row.tile_index = index;
+  row.rect = t.rect;
+  row.state = to_string(t.state);
+  row.lease_id = t.lease_id;
+  row.worker_id = t.worker_id;
+  row.lease_expires_ms = t.lease_expires_ms;
+  row.attempts = t.attempts;
+  row.rays = t.rays;
+  row.result_lease_id = t.result_lease_id;
+  return row;
+}
+
+WorkerRow worker_row(const WorkerEntry& w) {
+  return {w.info.id,    w.info.name,           w.info.host,        w.info.threads,
+          w.info.state, w.info.tiles_rendered, w.info.last_seen_ms};
+}
+
+}  // namespace tessera

@@ -1,0 +1,78 @@
+// The Scheduler's in-memory records and the staged changes that move them. Private to
+// the scheduler's sources.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "server/scheduler.hpp"
+#include "server/store.hpp"
+
+namespace tessera {
+
+enum class TileState { pending, leased, done };
+const char* to_string(TileState state);
+std::optional<TileState> tile_state_from_string(std::string_view text);
+
+inline constexpr const char* worker_idle = "idle";
+inline constexpr const char* worker_rendering = "rendering";
+inline constexpr const char* worker_gone = "gone";
+
+struct TileSlot {
+  TileRect rect;
+  TileState state = TileState::pending;
+  std::string lease_id;   // the live lease; "" when none
+  std::string worker_id;  // the lease holder, or who rendered a done tile
+  std::int64_t lease_expires_ms = 0;
+  int attempts = 0;  // leases that expired on this tile
+  std::uint64_t rays = 0;
+  std::string result_lease_id;  // the lease whose pixels are stored
+};
+
+struct JobEntry {
+  JobStatus status;  // tiles_total/done/rendering are kept current by Scheduler::track_tile
+  std::vector<TileSlot> tiles;
+  std::vector<int> order;  // position in hand-out order -> tile index (centre-first)
+  std::vector<int> rank;   // tile index -> position
+  std::set<int> pending;   // positions of pending tiles; begin() is handed out next
+};
+
+struct WorkerEntry {
+  WorkerInfo info;                     // current_job/current_tile mirror lease_id
+  std::string lease_id;                // the live lease it holds; "" when none
+  std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store
+};
+
+// New values for records, gathered by one operation. Scheduler::commit writes them in one
+// transaction and only then applies them, so memory never runs ahead of the database.
+// Staging a record again returns the same copy.
+struct StagedChange {
+  struct Pixels {
+    const JobEntry* job = nullptr;
+    int tile_index = 0;
+    std::span<const float> pixels;
+  };
+
+  TileSlot& tile(JobEntry& job, int index);
+  JobStatus& job(JobEntry& job);
+  WorkerEntry& worker(WorkerEntry& worker);
+  bool empty() const { return tiles.empty() && jobs.empty() && workers.empty(); }
+
+  std::map<std::pair<JobEntry*, int>, TileSlot> tiles;
+  std::map<JobEntry*, JobStatus> jobs;
+  std::map<WorkerEntry*, WorkerEntry> workers;
+  std::optional<Pixels> pixels;  // stored with the tile they belong to
+};
+
+JobRow job_row(const JobStatus& status);
+TileRow tile_row(const std::string& job_id, int index, const TileSlot& tile);
+WorkerRow worker_row(const WorkerEntry& worker);
+
+}  // namespace tessera

@@ -1,0 +1,181 @@
+// Start-up: the Scheduler's memory is rebuilt from the Store and made consistent again,
+// whatever point of an operation the previous process stopped at. Afterwards every job
+// that is not finished has a tile that is pending or under a lease that will expire, so
+// no job can be stuck.
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+
+#include "server/scheduler.hpp"
+#include "server/scheduler_entries.hpp"
+
+namespace tessera {
+namespace {
+
+void clear_lease(TileSlot& tile) {
+  tile.lease_id.clear();
+  tile.worker_id.clear();
+  tile.lease_expires_ms = 0;
+}
+
+}  // namespace
+
+void Scheduler::load_and_reconcile() {
+  StoredState stored = store_.load();
+  const std::int64_t now = clock_.now_ms();
+
+  for (WorkerRow& row : stored.workers) {
+    auto worker = std::make_unique<WorkerEntry>();
+    worker->info.id = row.id;
+    worker->info.name = std::move(row.name);
+    worker->info.host = std::move(row.host);
+    worker->info.threads = row.threads;
+    worker->info.state = std::move(row.state);
+    worker->info.tiles_rendered = row.tiles_rendered;
+    worker->info.last_seen_ms = row.last_seen_ms;
+    worker->persisted_seen_ms = row.last_seen_ms;
+    workers_.emplace(row.id, std::move(worker));
+  }
+
+  std::set<std::string> unknown_state;
+  for (JobRow& row : stored.jobs) {
+    auto job = std::make_unique<JobEntry>();
+    JobStatus& s = job->status;
+    s.id = row.id;
+    s.name = std::move(row.name);
+    const std::optional<JobState> state = job_state_from_string(row.state);
+    if (!state) unknown_state.insert(row.id);
+    s.state = state.value_or(JobState::failed);
+    s.priority = row.priority;
+    s.width = row.width;
+    s.height = row.height;
+    s.tile_size = row.tile_size;
+    s.created_at_ms = row.created_at_ms;
+    s.started_at_ms = row.started_at_ms;
+    s.finished_at_ms = row.finished_at_ms;
+    s.error = std::move(row.error);
+    s.rays = row.rays;
+    s.scene_digest = std::move(row.scene_digest);
+    jobs_.emplace(row.id, std::move(job));
+  }
+
+  // Done tiles whose pixels are missing or cut short cannot be assembled: render again.
+  std::set<std::pair<JobEntry*, int>> bad_pixels;
+  for (TileRow& row : stored.tiles) {
+    JobEntry* job = find_job(row.job_id);
+    if (!job) continue;  // the foreign key rules this out
+    if (row.tile_index != static_cast<int>(job->tiles.size()))
+      throw std::runtime_error("store: job " + row.job_id + " lacks tile " +
+                               std::to_string(job->tiles.size()));
+    TileSlot& tile = job->tiles.emplace_back();
+    tile.rect = row.rect;
+    tile.state = tile_state_from_string(row.state).value_or(TileState::pending);
+    tile.lease_id = std::move(row.lease_id);
+    tile.worker_id = std::move(row.worker_id);
+    tile.lease_expires_ms = row.lease_expires_ms;
+    tile.attempts = row.attempts;
+    tile.rays = row.rays;
+    tile.result_lease_id = std::move(row.result_lease_id);
+    const auto expected_bytes =
+        static_cast<std::int64_t>(row.rect.pixel_count() * 3 * sizeof(float));
+    if (tile.state == TileState::done && row.pixel_bytes != expected_bytes)
+      bad_pixels.insert({job, row.tile_index});
+  }
+  for (auto& [id, job] : jobs_) index_tiles(*job);
+
+  StagedChange change;
+  std::set<WorkerEntry*> holders;
+  for (auto& [id, job_ptr] : jobs_) {
+    JobEntry& job = *job_ptr;
+    if (unknown_state.contains(id)) change.job(job).error = "unknown state in the database";
+    for (int index = 0; index < job.status.tiles_total; ++index) {
+      const TileSlot& tile = job.tiles[index];
+      if (bad_pixels.contains({&job, index})) {
+        TileSlot& reset = change.tile(job, index);
+        reset.state = TileState::pending;
+        clear_lease(reset);
+        change.job(job).rays -= std::min(change.job(job).rays, reset.rays);
+        reset.rays = 0;
+        reset.result_lease_id.clear();
+        continue;
+      }
+      if (tile.state != TileState::leased) {
+        if (!tile.lease_id.empty()) clear_lease(change.tile(job, index));
+        continue;
+      }
+      WorkerEntry* worker = find_worker(tile.worker_id);
+      if (tile.lease_id.empty() || is_finished(job.status.state) || !worker ||
+          holders.contains(worker)) {
+        TileSlot& reset = change.tile(job, index);
+        reset.state = TileState::pending;
+        clear_lease(reset);
+        continue;
+      }
+      // The lease stands: its worker re-claims and gets it back, or it expires as usual.
+      // Its clock restarts, since no heartbeat could reach a coordinator that was down.
+      holders.insert(worker);
+      if (tile.lease_expires_ms < now + config_.lease_timeout_ms)
+        change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
+      WorkerEntry& staged = change.worker(*worker);
+      staged.lease_id = tile.lease_id;
+      staged.info.state = worker_rendering;
+      staged.info.current_job = job.status.id;
+      staged.info.current_tile = index;
+    }
+  }
+  // Without a lease we know nothing of a worker until it talks to us again.
+  for (auto& [id, worker] : workers_)
+    if (!holders.contains(worker.get()) && worker->info.state != worker_gone)
+      change.worker(*worker).info.state = worker_gone;
+
+  std::vector<JobEntry*> needs_image;
+  for (auto& [id, job_ptr] : jobs_) {
+    JobEntry& job = *job_ptr;
+    int done = 0;
+    bool touched = false;
+    for (int index = 0; index < job.status.tiles_total; ++index) {
+      const auto staged = change.tiles.find({&job, index});
+      const TileState state =
+          staged != change.tiles.end() ? staged->second.state : job.tiles[index].state;
+      done += state == TileState::done;
+      touched = touched || state != TileState::pending;
+    }
+    const JobState state = job.status.state;
+    if (!is_finished(state)) {
+      if (job.status.tiles_total == 0) {
+        JobStatus& s = change.job(job);
+        s.state = JobState::failed;
+        s.error = "the job has no tiles";
+        s.finished_at_ms = now;
+      } else if (done == job.status.tiles_total) {
+        JobStatus& s = change.job(job);
+        s.state = JobState::completed;
+        if (s.finished_at_ms == 0) s.finished_at_ms = now;
+        needs_image.push_back(&job);
+      } else if (state == JobState::queued && touched) {
+        JobStatus& s = change.job(job);
+        s.state = JobState::running;
+        if (s.started_at_ms == 0) s.started_at_ms = now;
+      }
+    } else if (state == JobState::completed) {
+      if (done != job.status.tiles_total) {
+        JobStatus& s = change.job(job);
+        s.state = JobState::running;
+        s.finished_at_ms = 0;
+        if (s.started_at_ms == 0) s.started_at_ms = now;
+      } else if (!store_.has_image(id)) {
+        needs_image.push_back(&job);  // the process stopped between commit and write
+      }
+    }
+  }
+  if (!change.empty()) commit(change);
+
+  for (JobEntry* job : needs_image)
+    if (job->status.state == JobState::completed) finish_image(*job);
+  store_.prune_images([this](const std::string& job_id) {
+    const JobEntry* job = find_job(job_id);
+    return job && job->status.state == JobState::completed;
+  });
+}
+
+}  // namespace tessera

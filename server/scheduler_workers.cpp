@@ -1,0 +1,101 @@
+// Workers: registration, liveness and departure.
+#include <algorithm>
+
+#include "server/ids.hpp"
+#include "server/scheduler.hpp"
+#include "server/scheduler_entries.hpp"
+
+namespace tessera {
+namespace {
+
+// Heartbeats and polls arrive every few seconds from every worker; last_seen is for
+// display, so the database hears about it at most this often per worker.
+constexpr std::int64_t seen_write_interval_ms = 1000;
+
+}  // namespace
+
+WorkerInfo Scheduler::register_worker(const std::string& name, const std::string& host,
+                                      int threads) {
+  std::lock_guard lock(mutex_);
+  auto worker = std::make_unique<WorkerEntry>();
+  WorkerInfo& info = worker->info;
+  do {
+    info.id = "w-" + random_hex(12);
+  } while (workers_.contains(info.id));
+  info.name = name;
+  info.host = host;
+  info.threads = threads;
+  info.state = worker_idle;
+  info.last_seen_ms = clock_.now_ms();
+  store_.upsert_worker(worker_row(*worker));
+  worker->persisted_seen_ms = info.last_seen_ms;
+  const WorkerInfo result = info;
+  workers_.emplace(result.id, std::move(worker));
+  return result;
+}
+
+bool Scheduler::worker_known(const std::string& worker_id) const {
+  std::lock_guard lock(mutex_);
+  return workers_.contains(worker_id);
+}
+
+void Scheduler::touch_worker(const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  WorkerEntry* worker = find_worker(worker_id);
+  if (!worker) return;
+  const std::int64_t now = clock_.now_ms();
+  if (worker->info.state != worker_gone) {
+    note_seen(*worker, now);
+    return;
+  }
+  // Marked gone (it left, or the coordinator restarted) but talking again.
+  StagedChange change;
+  WorkerEntry& staged = change.worker(*worker);
+  staged.info.state = worker_idle;
+  staged.info.last_seen_ms = now;
+  commit(change);
+}
+
+void Scheduler::worker_left(const std::string& worker_id) {
+  Callbacks notify;
+  {
+    std::lock_guard lock(mutex_);
+    WorkerEntry* worker = find_worker(worker_id);
+    if (!worker) return;
+    StagedChange change;
+    if (!worker->lease_id.empty()) {
+      stage_lease_end(change, worker->lease_id, false);
+      notify = callbacks_;
+    }
+    WorkerEntry& staged = change.worker(*worker);
+    staged.info.state = worker_gone;
+    staged.info.last_seen_ms = clock_.now_ms();
+    commit(change);
+  }
+  for (const auto& callback : notify) callback();
+}
+
+std::vector<WorkerInfo> Scheduler::workers() const {
+  std::lock_guard lock(mutex_);
+  std::vector<WorkerInfo> result;
+  result.reserve(workers_.size());
+  for (const auto& [id, worker] : workers_) result.push_back(worker->info);
+  std::sort(result.begin(), result.end(), [](const WorkerInfo& a, const WorkerInfo& b) {
+    return a.name != b.name ? a.name < b.name : a.id < b.id;
+  });
+  return result;
+}
+
+void Scheduler::on_work_available(std::function<void()> callback) {
+  std::lock_guard lock(mutex_);
+  callbacks_.push_back(std::move(callback));
+}
+
+void Scheduler::note_seen(WorkerEntry& worker, std::int64_t now) {
+  worker.info.last_seen_ms = now;
+  if (now - worker.persisted_seen_ms < seen_write_interval_ms) return;
+  store_.update_worker_seen(worker.info.id, now);
+  worker.persisted_seen_ms = now;
+}
+
+}  // namespace tessera

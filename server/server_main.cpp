@@ -1,0 +1,163 @@
+// tessera-server: the coordinator.
+#include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
+
+#include <csignal>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "server/api_routes.hpp"
+#include "server/http_server.hpp"
+#include "server/local_workers.hpp"
+
+namespace {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:8640";
+  std::string data_dir = "./tessera-data";
+  int local_workers = static_cast<int>(std::thread::hardware_concurrency());
+  int worker_threads = 1;
+  double lease_timeout_s = 30;
+  double heartbeat_interval_s = 5;
+  std::string log_level = "info";
+  std::string port_file;
+};
+
+// "HOST:PORT" or "[IPv6]:PORT".
+std::pair<std::string, std::uint16_t> split_listen(const std::string& listen) {
+  const auto colon = listen.rfind(':');
+  if (colon == std::string::npos) throw CLI::ValidationError("--listen", "expected HOST:PORT");
+  std::string host = listen.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const int port = std::stoi(listen.substr(colon + 1));
+  if (port < 0 || port > 65535) throw CLI::ValidationError("--listen", "port out of range");
+  return {host, static_cast<std::uint16_t>(port)};
+}
+
+// Returns expired leases' tiles to the queue, once a second.
+void schedule_expiry(boost::asio::steady_timer& timer, tessera::Scheduler& scheduler) {
+  timer.expires_after(std::chrono::seconds(1));
+  timer.async_wait([&timer, &scheduler](const boost::system::error_code& ec) {
+    if (ec) return;
+    scheduler.expire_leases();
+    schedule_expiry(timer, scheduler);
+  });
+}
+
+int run(const ServerOptions& options) {
+  using namespace tessera;
+  const auto [host, port] = split_listen(options.listen);
+
+  Store store(options.data_dir);
+  SystemClock clock;
+  SchedulerConfig config;
+  config.lease_timeout_ms = static_cast<std::int64_t>(options.lease_timeout_s * 1000);
+  config.heartbeat_interval_ms = static_cast<std::int64_t>(options.heartbeat_interval_s * 1000);
+  Scheduler scheduler(store, clock, config);
+
+  boost::asio::io_context io;
+  ClaimWaiters waiters(io);
+  scheduler.on_work_available([&waiters] { waiters.notify(); });
+
+  Router router;
+  ApiContext context{scheduler, clock, waiters, Limits{}, 64 << 20,
+                     std::filesystem::path(options.data_dir) / "tmp"};
+  add_health_routes(router);
+  add_job_routes(router, context);
+  add_worker_routes(router, context);
+
+  HttpServerOptions http;
+  http.address = host;
+  http.port = port;
+  HttpServer server(io, router, http);
+  spdlog::info("listening on http://{}:{} with data in {}", host, server.port(), options.data_dir);
+  if (!options.port_file.empty()) {
+    // Written whole, then renamed: a reader never sees a half-written port.
+    const std::filesystem::path temp = options.port_file + ".tmp";
+    std::ofstream(temp) << server.port() << '\n';
+    std::filesystem::rename(temp, options.port_file);
+  }
+
+  boost::asio::steady_timer expiry(io);
+  schedule_expiry(expiry, scheduler);
+
+  std::unique_ptr<LocalWorkers> workers;
+  if (options.local_workers > 0)
+    workers = std::make_unique<LocalWorkers>(
+        sibling_worker_binary(),
+        "http://" + std::string(host == "0.0.0.0" || host == "::" ? "127.0.0.1" : host) + ":" +
+            std::to_string(server.port()),
+        options.local_workers, options.worker_threads);
+
+  // Shutdown: local workers first (they finish or release their tiles while the server
+  // still answers), then the server drains its in-flight requests and io.run() returns.
+  std::thread stopper;
+  boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code& ec, int signal) {
+    if (ec) return;
+    spdlog::info("signal {}: shutting down", signal);
+    stopper = std::thread([&] {
+      if (workers) workers->signal_stop();
+      waiters.close();  // parked claims answer now; the workers see their signal and leave
+      if (workers) workers->stop();
+      boost::asio::post(io, [&expiry] { expiry.cancel(); });  // timers belong to the io threads
+      server.stop();
+    });
+  });
+
+  const unsigned io_threads = std::max(2u, std::thread::hardware_concurrency());
+  std::vector<std::thread> threads;
+  for (unsigned i = 1; i < io_threads; ++i) threads.emplace_back([&io] { io.run(); });
+  io.run();
+  for (auto& thread : threads) thread.join();
+  if (stopper.joinable()) stopper.join();
+  spdlog::info("stopped");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ServerOptions options;
+  CLI::App app{"tessera-server: the Tessera coordinator"};
+  app.add_option("--listen", options.listen, "HOST:PORT to serve on")->capture_default_str();
+  app.add_option("--data-dir", options.data_dir, "Where jobs, tiles and images are kept")
+      ->capture_default_str();
+  app.add_option("--local-workers", options.local_workers,
+                 "tessera-worker processes to start on this machine (0: coordinator only)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--worker-threads", options.worker_threads, "Threads of each local worker")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--lease-timeout", options.lease_timeout_s,
+                 "Seconds without a heartbeat before a tile goes back to the queue")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--heartbeat-interval", options.heartbeat_interval_s,
+                 "Seconds between a worker's heartbeats")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
+  app.add_option("--port-file", options.port_file,
+                 "Write the bound port here once listening (useful with --listen HOST:0)");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(options.log_level));
+  try {
+    return run(options);
+  } catch (const CLI::Error& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+}

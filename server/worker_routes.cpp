@@ -1,0 +1,151 @@
+#include <bit>
+#include <cstring>
+
+#include "common/scene_parser.hpp"
+#include "server/api_json.hpp"
+#include "server/api_routes.hpp"
+
+namespace tessera {
+namespace {
+
+using nlohmann::json;
+
+static_assert(std::endian::native == std::endian::little,
+              "tile pixels travel as little-endian float32");
+
+// The largest tile a scene may ask for, as float32 RGB.
+constexpr std::size_t max_tile_bytes(const Limits& limits) {
+  return static_cast<std::size_t>(limits.max_tile_size) * limits.max_tile_size * 3 * sizeof(float);
+}
+
+HttpResponse lease_lost(const std::string& id) {
+  return error_response(410, "lease_lost",
+                        "lease " + id + " is no longer held: it expired, was reassigned or its job ended");
+}
+
+HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
+  json body;
+  try {
+    body = parse_json_text(request.body);
+  } catch (const SceneError& e) {
+    return error_response(400, "malformed_json", e.detail());
+  }
+  if (!body.is_object() || !body.contains("name") || !body["name"].is_string())
+    return error_response(400, "invalid_request", "name is required and must be a string", "/name");
+  std::string host = request.remote_address;
+  if (body.contains("host")) {
+    if (!body["host"].is_string())
+      return error_response(400, "invalid_request", "must be a string", "/host");
+    host = body["host"].get<std::string>();
+  }
+  int threads = 1;
+  if (body.contains("threads")) {
+    if (!body["threads"].is_number_integer() || body["threads"].get<int>() < 1)
+      return error_response(400, "invalid_request", "must be a positive integer", "/threads");
+    threads = body["threads"].get<int>();
+  }
+  const WorkerInfo worker =
+      context.scheduler.register_worker(body["name"].get<std::string>(), host, threads);
+  const SchedulerConfig& config = context.scheduler.config();
+  return json_response(201, {{"id", worker.id},
+                             {"heartbeat_interval_s", config.heartbeat_interval_ms / 1e3},
+                             {"lease_timeout_s", config.lease_timeout_ms / 1e3}});
+}
+
+void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
+  const std::string worker = request.params.at("id");
+  if (!context.scheduler.worker_known(worker))
+    return respond(error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
+  double wait_s = 20;
+  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
+    try {
+      wait_s = std::stod(it->second);
+    } catch (const std::exception&) {
+      wait_s = -1;
+    }
+    if (!(wait_s >= 0 && wait_s <= 60))
+      return respond(error_response(400, "invalid_request", "wait_s must be a number from 0 to 60"));
+  }
+  context.scheduler.touch_worker(worker);
+  // Shared by the attempt and the timeout, which between them call it exactly once.
+  auto shared_respond = std::make_shared<Respond>(std::move(respond));
+  context.waiters.wait(
+      std::chrono::milliseconds(static_cast<long>(wait_s * 1000)),
+      [&context, worker, shared_respond] {
+        const auto lease = context.scheduler.claim(worker);
+        if (!lease) return false;
+        (*shared_respond)(json_response(200, to_json(*lease, context.clock.now_ms())));
+        return true;
+      },
+      [shared_respond] { (*shared_respond)(HttpResponse{204, "", "", {}}); });
+}
+
+HttpResponse upload(ApiContext& context, const HttpRequest& request) {
+  const std::string& id = request.params.at("id");
+  if (request.body.size() % (3 * sizeof(float)) != 0)
+    return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
+  std::uint64_t rays = 0;
+  if (auto it = request.headers.find("x-tessera-rays"); it != request.headers.end()) {
+    try {
+      rays = std::stoull(it->second);
+    } catch (const std::exception&) {
+      return error_response(400, "invalid_request", "X-Tessera-Rays must be a whole number");
+    }
+  }
+  std::vector<float> pixels(request.body.size() / sizeof(float));
+  std::memcpy(pixels.data(), request.body.data(), request.body.size());
+  switch (context.scheduler.complete(id, pixels, rays)) {
+    case ResultOutcome::accepted: return json_response(200, {{"status", "accepted"}});
+    case ResultOutcome::duplicate: return json_response(200, {{"status", "duplicate"}});
+    case ResultOutcome::stale:
+      return error_response(409, "lease_lost",
+                            "lease " + id + " is no longer held; the result was refused");
+    case ResultOutcome::wrong_size:
+      return error_response(400, "wrong_size", "the pixel count does not match the tile");
+  }
+  return error_response(500, "internal", "unexpected result outcome");
+}
+
+}  // namespace
+
+void add_worker_routes(Router& router, ApiContext& context) {
+  router.add("GET", "/v1/workers", [&context](HttpRequest&&, Respond respond) {
+    json workers = json::array();
+    for (const WorkerInfo& worker : context.scheduler.workers()) workers.push_back(to_json(worker));
+    respond(json_response(200, {{"workers", std::move(workers)}}));
+  });
+  router.add("POST", "/v1/workers", [&context](HttpRequest&& request, Respond respond) {
+    respond(register_worker(context, request));
+  });
+  router.add("DELETE", "/v1/workers/{id}", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    if (!context.scheduler.worker_known(id))
+      return respond(error_response(404, "unknown_worker", "no worker " + id));
+    context.scheduler.worker_left(id);
+    respond(HttpResponse{204, "", "", {}});
+  });
+  router.add("POST", "/v1/workers/{id}/claim", [&context](HttpRequest&& request, Respond respond) {
+    claim(context, request, std::move(respond));
+  });
+  router.add("GET", "/v1/scenes/{digest}", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& digest = request.params.at("digest");
+    const auto scene = context.scheduler.scene_json(digest);
+    respond(scene ? HttpResponse{200, "application/json", *scene, {}}
+                  : error_response(404, "not_found", "no scene " + digest));
+  });
+  router.add("POST", "/v1/leases/{id}/heartbeat", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    const auto lease = context.scheduler.heartbeat(id);
+    if (lease) context.scheduler.touch_worker(lease->worker_id);
+    respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
+  });
+  router.add("PUT", "/v1/leases/{id}/result",
+             [&context](HttpRequest&& request, Respond respond) { respond(upload(context, request)); },
+             max_tile_bytes(context.limits));
+  router.add("POST", "/v1/leases/{id}/release", [&context](HttpRequest&& request, Respond respond) {
+    context.scheduler.release(request.params.at("id"));
+    respond(HttpResponse{204, "", "", {}});
+  });
+}
+
+}  // namespace tessera

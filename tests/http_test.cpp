@@ -1,0 +1,622 @@
+// The HTTP layer against real sockets: the server on 127.0.0.1 with an ephemeral port,
+// driven by HttpClient and, where a well-behaved client cannot misbehave enough, by raw
+// POSIX sockets.
+#include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <boost/asio/io_context.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "client/http_client.hpp"
+#include "server/http_server.hpp"
+#include "server/router.hpp"
+
+namespace tessera {
+namespace {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+// Polls `condition` until it holds or `limit` passes; the limit is generous, the test
+// normally moves on as soon as the condition holds.
+template <typename Condition>
+bool eventually(Condition condition, std::chrono::milliseconds limit = 10s) {
+  const auto deadline = Clock::now() + limit;
+  while (!condition()) {
+    if (Clock::now() > deadline) return false;
+    std::this_thread::sleep_for(2ms);
+  }
+  return true;
+}
+
+// Handlers that do not answer at once: they park their Respond for the test to call.
+class Parking {
+ public:
+  void park(Respond respond) {
+    std::lock_guard lock(mutex_);
+    parked_.push_back(std::move(respond));
+    ++total_;
+    changed_.notify_all();
+  }
+
+  // Waits until `count` requests have been parked in all.
+  bool wait_for_total(std::size_t count, std::chrono::milliseconds limit = 10s) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, limit, [&] { return total_ >= count; });
+  }
+
+  Respond take() {
+    std::lock_guard lock(mutex_);
+    if (parked_.empty()) throw std::logic_error("nothing parked");
+    Respond respond = std::move(parked_.front());
+    parked_.pop_front();
+    return respond;
+  }
+
+  void answer_all() {
+    std::deque<Respond> all;
+    {
+      std::lock_guard lock(mutex_);
+      all.swap(parked_);
+    }
+    for (Respond& respond : all) respond(json_response(200, {{"late", true}}));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Respond> parked_;
+  std::size_t total_ = 0;
+};
+
+// A client that can do what HttpClient never would: send half a request, garbage, or
+// nothing at all, and see exactly when the server hangs up.
+class RawConnection {
+ public:
+  explicit RawConnection(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    if (fd_ < 0) throw std::runtime_error("socket failed");
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0)
+      throw std::runtime_error("connect failed");
+  }
+  ~RawConnection() { ::close(fd_); }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+
+  void send(std::string_view data) {
+    while (!data.empty()) {
+      const ssize_t sent = ::send(fd_, data.data(), data.size(), MSG_NOSIGNAL);
+      if (sent <= 0) throw std::runtime_error("send failed");
+      data.remove_prefix(static_cast<std::size_t>(sent));
+    }
+  }
+
+  // One response: the header, then as many body bytes as its Content-Length says.
+  std::string read_response(std::chrono::milliseconds limit = 10s) {
+    const auto deadline = Clock::now() + limit;
+    while (true) {
+      const std::size_t header_end = received_.find("\r\n\r\n");
+      if (header_end != std::string::npos) {
+        std::size_t length = 0;
+        const std::size_t at = lower(received_.substr(0, header_end)).find("content-length:");
+        if (at != std::string::npos) length = std::stoul(received_.substr(at + 15));
+        const std::size_t total = header_end + 4 + length;
+        if (received_.size() >= total) {
+          std::string response = received_.substr(0, total);
+          received_.erase(0, total);
+          return response;
+        }
+      }
+      if (!receive_some(deadline)) return std::exchange(received_, {});
+    }
+  }
+
+  // True when the server closes the connection within `limit`; what it sent is dropped.
+  bool closed_within(std::chrono::milliseconds limit) {
+    const auto deadline = Clock::now() + limit;
+    while (receive_some(deadline)) received_.clear();
+    return closed_;
+  }
+
+ private:
+  static std::string lower(std::string text) {
+    for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+  }
+
+  // False once the connection is closed or the deadline has passed.
+  bool receive_some(Clock::time_point deadline) {
+    if (closed_) return false;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left <= 0ms) return false;
+    pollfd entry{fd_, POLLIN, 0};
+    if (::poll(&entry, 1, static_cast<int>(left.count())) <= 0) return false;
+    char chunk[4096];
+    const ssize_t got = ::recv(fd_, chunk, sizeof chunk, 0);
+    if (got <= 0) {
+      closed_ = got == 0 || errno == ECONNRESET;
+      return false;
+    }
+    received_.append(chunk, static_cast<std::size_t>(got));
+    return true;
+  }
+
+  int fd_;
+  std::string received_;
+  bool closed_ = false;
+};
+
+int status_of(const std::string& raw_response) {
+  return raw_response.size() > 12 ? std::stoi(raw_response.substr(9, 3)) : 0;
+}
+
+json body_of(const std::string& raw_response) {
+  const std::size_t at = raw_response.find("\r\n\r\n");
+  return json::parse(raw_response.substr(at + 4));
+}
+
+// A port on which nothing listens: bound for a moment by us, then let go.
+std::uint16_t unused_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t size = sizeof address;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size);
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+class HttpTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    router_.add("GET", "/v1/jobs/{id}", [](HttpRequest&& request, Respond respond) {
+      respond(json_response(200, {{"route", "job"},
+                                  {"id", request.params.at("id")},
+                                  {"query", request.query},
+                                  {"path", request.path}}));
+    });
+    router_.add("DELETE", "/v1/jobs/{id}",
+                [](HttpRequest&&, Respond respond) { respond(HttpResponse{204, "", "", {}}); });
+    router_.add("GET", "/v1/jobs/stats", [](HttpRequest&&, Respond respond) {
+      respond(json_response(200, {{"route", "stats"}}));
+    });
+    router_.add("POST", "/upload", [](HttpRequest&& request, Respond respond) {
+      respond(json_response(200, {{"size", request.body.size()},
+                                  {"content_type", request.headers["content-type"]},
+                                  {"x_test", request.headers["x-test"]}}));
+    }, 16);
+    router_.add("GET", "/whoami", [](HttpRequest&& request, Respond respond) {
+      respond(json_response(200, {{"remote", request.remote_address}}));
+    });
+    router_.add("GET", "/wait", [this](HttpRequest&&, Respond respond) {
+      parking_.park(std::move(respond));
+    });
+    router_.add("GET", "/throw", [](HttpRequest&&, Respond) -> void {
+      throw std::runtime_error("handler failure");
+    });
+    router_.add("GET", "/forget", [](HttpRequest&&, Respond) {});
+  }
+
+  void start(HttpServerOptions options = {}) {
+    options.address = "127.0.0.1";
+    options.port = 0;
+    server_ = std::make_unique<HttpServer>(io_, router_, options);
+    // Two threads, so that the per-connection strands matter.
+    for (int i = 0; i < 2; ++i) threads_.emplace_back([this] { io_.run(); });
+  }
+
+  void TearDown() override {
+    if (!server_) return;
+    parking_.answer_all();
+    if (server_) server_->stop();
+    // io.run() returns once every connection has finished; bounded, so a bug fails the
+    // test instead of hanging it.
+    if (!eventually([&] { return io_.stopped(); }, 20s)) {
+      ADD_FAILURE() << "the server did not drain after stop()";
+      io_.stop();
+    }
+    for (std::thread& thread : threads_) thread.join();
+  }
+
+  std::string url() const { return "http://127.0.0.1:" + std::to_string(server_->port()); }
+
+  boost::asio::io_context io_;
+  Router router_;
+  Parking parking_;
+  std::unique_ptr<HttpServer> server_;
+  std::vector<std::thread> threads_;
+};
+
+// ---------------------------------------------------------------------------------------
+// The router alone.
+
+TEST(RouterTest, MatchesLiteralsAndParameters) {
+  Router router;
+  const Handler noop = [](HttpRequest&&, Respond) {};
+  router.add("GET", "/v1/jobs/{id}", noop);
+  router.add("GET", "/v1/jobs/{id}/image", noop, 123);
+  router.add("GET", "/v1/jobs/stats", noop);
+  router.add("DELETE", "/v1/jobs/{id}", noop);
+  router.add("GET", "/", noop);
+
+  auto m = router.match("GET", "/v1/jobs/j-1/image");
+  ASSERT_TRUE(m.handler);
+  EXPECT_EQ(m.pattern, "/v1/jobs/{id}/image");
+  EXPECT_EQ(m.params.at("id"), "j-1");
+  EXPECT_EQ(m.body_limit, 123u);
+
+  m = router.match("GET", "/v1/jobs/a%2Fb%20c");
+  ASSERT_TRUE(m.handler);
+  EXPECT_EQ(m.params.at("id"), "a/b c");  // decoded after splitting: %2F stays in the segment
+  EXPECT_FALSE(m.body_limit);
+
+  m = router.match("GET", "/v1/jobs/stats");  // the literal beats the parameter
+  ASSERT_TRUE(m.handler);
+  EXPECT_EQ(m.pattern, "/v1/jobs/stats");
+  EXPECT_TRUE(m.params.empty());
+
+  EXPECT_TRUE(router.match("GET", "/").handler);
+  EXPECT_EQ(router.match("GET", "/v1/jobs/").error.status, 404);  // empty parameter
+  EXPECT_EQ(router.match("GET", "/v1/jobs/x/y").error.status, 404);
+  EXPECT_EQ(router.match("GET", "/v1/jobs/%zz").error.status, 400);
+
+  m = router.match("POST", "/v1/jobs/42");
+  EXPECT_FALSE(m.handler);
+  EXPECT_EQ(m.error.status, 405);
+  ASSERT_EQ(m.error.headers.size(), 1u);
+  EXPECT_EQ(m.error.headers[0].first, "Allow");
+  EXPECT_EQ(m.error.headers[0].second, "GET, DELETE");
+  EXPECT_EQ(json::parse(m.error.body)["error"]["code"], "method_not_allowed");
+  // The resource is the most specific pattern: its methods only.
+  EXPECT_EQ(router.match("DELETE", "/v1/jobs/stats").error.status, 405);
+
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"GET", "/v1/jobs/{id}"}, {"GET", "/v1/jobs/{id}/image"}, {"GET", "/v1/jobs/stats"},
+      {"DELETE", "/v1/jobs/{id}"}, {"GET", "/"}};
+  EXPECT_EQ(router.routes(), expected);
+}
+
+TEST(RouterTest, RejectsBadAndConflictingPatterns) {
+  Router router;
+  const Handler noop = [](HttpRequest&&, Respond) {};
+  router.add("GET", "/a/{id}", noop);
+  EXPECT_THROW(router.add("GET", "/a/{id}", noop), std::logic_error);
+  EXPECT_THROW(router.add("PUT", "/a/{other}", noop), std::logic_error);
+  EXPECT_THROW(router.add("GET", "no-slash", noop), std::invalid_argument);
+  EXPECT_THROW(router.add("GET", "/a/x{id}", noop), std::invalid_argument);
+  EXPECT_THROW(router.add("GET", "/a/{}", noop), std::invalid_argument);
+  EXPECT_THROW(router.add("GET", "/b/{id}/{id}", noop), std::invalid_argument);
+  EXPECT_NO_THROW(router.add("PUT", "/a/{id}", noop));
+}
+
+TEST(RouterTest, ParsesQueryStrings) {
+  const auto query = parse_query("a=1&b=x%20y+z&flag&&c=%26%3D&a=2");
+  ASSERT_TRUE(query);
+  const std::map<std::string, std::string> expected = {
+      {"a", "2"}, {"b", "x y z"}, {"flag", ""}, {"c", "&="}};
+  EXPECT_EQ(*query, expected);
+  EXPECT_FALSE(parse_query("a=%4"));
+  EXPECT_FALSE(parse_query("a=%G0"));
+  EXPECT_EQ(percent_decode("a+b%2b", false), "a+b+");
+  EXPECT_EQ(percent_decode("a+b", true), "a b");
+}
+
+TEST(HttpTypesTest, ErrorBodies) {
+  const HttpResponse with_path = error_response(422, "invalid_scene", "bad radius", "/objects/0/radius");
+  EXPECT_EQ(with_path.status, 422);
+  EXPECT_EQ(with_path.content_type, "application/json");
+  EXPECT_EQ(json::parse(with_path.body),
+            json({{"error", {{"code", "invalid_scene"}, {"message", "bad radius"}, {"path", "/objects/0/radius"}}}}));
+  EXPECT_FALSE(json::parse(error_response(404, "not_found", "no").body)["error"].contains("path"));
+  // Invalid UTF-8 is replaced, not thrown on.
+  EXPECT_NO_THROW(json_response(200, {{"x", std::string("\xff\xfe")}}));
+}
+
+// ---------------------------------------------------------------------------------------
+// The server.
+
+TEST_F(HttpTest, RoutesWithParametersAndQuery) {
+  start();
+  HttpClient client(url(), 10s);
+  const HttpResult result = client.request("GET", "/v1/jobs/abc%20d?limit=5&state=a+b%26c&flag");
+  ASSERT_EQ(result.status, 200);
+  EXPECT_EQ(result.headers.at("content-type"), "application/json");
+  EXPECT_EQ(result.headers.at("content-length"), std::to_string(result.body.size()));
+  const json body = json::parse(result.body);
+  EXPECT_EQ(body["route"], "job");
+  EXPECT_EQ(body["id"], "abc d");
+  EXPECT_EQ(body["path"], "/v1/jobs/abc%20d");
+  EXPECT_EQ(body["query"], json({{"limit", "5"}, {"state", "a b&c"}, {"flag", ""}}));
+
+  EXPECT_EQ(json::parse(client.request("GET", "/v1/jobs/stats").body)["route"], "stats");
+
+  const HttpResult deleted = client.request("DELETE", "/v1/jobs/7");
+  EXPECT_EQ(deleted.status, 204);
+  EXPECT_TRUE(deleted.body.empty());
+  EXPECT_FALSE(deleted.headers.contains("content-type"));
+
+  const HttpResult upload = client.request("POST", "/upload", "0123456789", "text/plain", {{"X-Test", "yes"}});
+  ASSERT_EQ(upload.status, 200);
+  EXPECT_EQ(json::parse(upload.body), json({{"size", 10}, {"content_type", "text/plain"}, {"x_test", "yes"}}));
+}
+
+TEST_F(HttpTest, NotFoundAndMethodNotAllowedHaveJsonErrors) {
+  start();
+  HttpClient client(url(), 10s);
+  const HttpResult missing = client.request("GET", "/nowhere");
+  EXPECT_EQ(missing.status, 404);
+  EXPECT_EQ(json::parse(missing.body)["error"]["code"], "not_found");
+
+  const HttpResult wrong_method = client.request("PUT", "/v1/jobs/1", "{}");
+  EXPECT_EQ(wrong_method.status, 405);
+  EXPECT_EQ(wrong_method.headers.at("allow"), "GET, DELETE");
+  const json error = json::parse(wrong_method.body)["error"];
+  EXPECT_EQ(error["code"], "method_not_allowed");
+  EXPECT_TRUE(error["message"].is_string());
+
+  const HttpResult bad_query = client.request("GET", "/v1/jobs/1?x=%zz");
+  EXPECT_EQ(bad_query.status, 400);
+  EXPECT_EQ(json::parse(bad_query.body)["error"]["code"], "bad_request");
+
+  // The connection is still good after errors without a body.
+  EXPECT_EQ(client.request("GET", "/v1/jobs/2").status, 200);
+}
+
+TEST_F(HttpTest, OversizedBodyIsRefusedBeforeItIsSent) {
+  start();
+  RawConnection raw(server_->port());
+  // Only the header: the 413 must come without the server waiting for 10 GB.
+  raw.send("POST /upload HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\n"
+           "Content-Length: 10000000000\r\n\r\n");
+  const std::string response = raw.read_response();
+  ASSERT_EQ(status_of(response), 413) << response;
+  EXPECT_EQ(body_of(response)["error"]["code"], "body_too_large");
+  EXPECT_NE(response.find("Connection: close"), std::string::npos);
+  EXPECT_TRUE(raw.closed_within(10s));
+
+  // A chunked body announces no size: it is cut off at the limit as it arrives.
+  RawConnection chunked(server_->port());
+  chunked.send("POST /upload HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"
+               "10\r\n0123456789abcdef\r\n10\r\n0123456789abcdef\r\n0\r\n\r\n");
+  EXPECT_EQ(status_of(chunked.read_response()), 413);
+
+  // The limit is the route's: 16 bytes pass, 17 do not; the default limit is untouched.
+  HttpClient client(url(), 10s);
+  EXPECT_EQ(client.request("POST", "/upload", std::string(16, 'x')).status, 200);
+  EXPECT_EQ(client.request("POST", "/upload", std::string(17, 'x')).status, 413);
+  EXPECT_EQ(client.request("GET", "/v1/jobs/after").status, 200);  // reconnected
+}
+
+TEST_F(HttpTest, ExpectContinueGetsAnInterimAnswer) {
+  start();
+  RawConnection raw(server_->port());
+  raw.send("POST /upload HTTP/1.1\r\nHost: x\r\nContent-Length: 4\r\nExpect: 100-continue\r\n\r\n");
+  EXPECT_EQ(status_of(raw.read_response()), 100);
+  raw.send("abcd");
+  const std::string response = raw.read_response();
+  ASSERT_EQ(status_of(response), 200) << response;
+  EXPECT_EQ(body_of(response)["size"], 4);
+}
+
+TEST_F(HttpTest, LateAnswerFromAnotherThreadWhileOthersAreServed) {
+  start();
+  auto waiting = std::async(std::launch::async, [&] {
+    HttpClient client(url(), 20s);
+    return client.request("GET", "/wait");
+  });
+  ASSERT_TRUE(parking_.wait_for_total(1));
+
+  // Other connections are served while the long-poll is parked.
+  HttpClient other(url(), 10s);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(other.request("GET", "/v1/jobs/" + std::to_string(i)).status, 200);
+  EXPECT_EQ(waiting.wait_for(0s), std::future_status::timeout);
+
+  std::thread answerer([respond = parking_.take()] {
+    respond(json_response(200, {{"late", true}}));
+    respond(json_response(500, {{"twice", true}}));  // ignored
+  });
+  answerer.join();
+  const HttpResult result = waiting.get();
+  EXPECT_EQ(result.status, 200);
+  EXPECT_EQ(json::parse(result.body), json({{"late", true}}));
+}
+
+TEST_F(HttpTest, HandlerFailuresBecome500) {
+  start();
+  HttpClient client(url(), 10s);
+  const HttpResult thrown = client.request("GET", "/throw");
+  EXPECT_EQ(thrown.status, 500);
+  EXPECT_EQ(json::parse(thrown.body)["error"]["code"], "internal_error");
+  EXPECT_EQ(client.request("GET", "/forget").status, 500);  // Respond dropped unanswered
+  EXPECT_EQ(client.request("GET", "/v1/jobs/1").status, 200);
+}
+
+TEST_F(HttpTest, KeepAliveServesTwoRequestsOnOneConnection) {
+  start();
+  HttpClient client(url(), 10s);
+  const HttpResult first = client.request("GET", "/whoami");
+  const HttpResult second = client.request("GET", "/whoami");
+  ASSERT_EQ(first.status, 200);
+  ASSERT_EQ(second.status, 200);
+  // Same client port: the same connection.
+  EXPECT_EQ(json::parse(first.body)["remote"], json::parse(second.body)["remote"]);
+  EXPECT_EQ(server_->connection_count(), 1u);
+
+  // Pipelined on a raw connection: both answered, in order.
+  RawConnection raw(server_->port());
+  raw.send("GET /v1/jobs/p1 HTTP/1.1\r\nHost: x\r\n\r\nGET /v1/jobs/p2 HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(body_of(raw.read_response())["id"], "p1");
+  EXPECT_EQ(body_of(raw.read_response())["id"], "p2");
+}
+
+TEST_F(HttpTest, MalformedRequestGets400AndClose) {
+  start();
+  RawConnection garbage(server_->port());
+  garbage.send("THIS IS NOT HTTP\r\n\r\n");
+  const std::string response = garbage.read_response();
+  ASSERT_EQ(status_of(response), 400) << response;
+  EXPECT_EQ(body_of(response)["error"]["code"], "bad_request");
+  EXPECT_TRUE(garbage.closed_within(10s));
+
+  RawConnection bad_length(server_->port());
+  bad_length.send("POST /upload HTTP/1.1\r\nHost: x\r\nContent-Length: banana\r\n\r\n");
+  EXPECT_EQ(status_of(bad_length.read_response()), 400);
+
+  RawConnection huge_header(server_->port());
+  huge_header.send("GET /v1/jobs/1 HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(64 * 1024, 'a') + "\r\n\r\n");
+  EXPECT_EQ(status_of(huge_header.read_response()), 431);
+
+  HttpClient client(url(), 10s);
+  EXPECT_EQ(client.request("GET", "/v1/jobs/1").status, 200);
+}
+
+TEST_F(HttpTest, SlowAndIdleClientsAreDisconnected) {
+  HttpServerOptions options;
+  options.header_timeout = 300ms;
+  options.body_timeout = 300ms;
+  options.idle_timeout = 300ms;
+  start(options);
+
+  RawConnection silent(server_->port());
+  RawConnection half_header(server_->port());
+  half_header.send("GET /v1/jobs/1 HTTP/1.1\r\nHost: x\r\n");
+  RawConnection dribbling(server_->port());
+  dribbling.send("POST /upload HTTP/1.1\r\nHost: x\r\nContent-Length: 10\r\n\r\nabc");
+
+  // While those hang, others are served, over and over.
+  HttpClient client(url(), 10s);
+  std::atomic<bool> done{false};
+  std::atomic<int> served{0};
+  std::thread busy([&] {
+    while (!done) {
+      if (client.request("GET", "/v1/jobs/busy").status == 200) ++served;
+    }
+  });
+  EXPECT_TRUE(silent.closed_within(10s));
+  EXPECT_TRUE(half_header.closed_within(10s));
+  EXPECT_TRUE(dribbling.closed_within(10s));
+  done = true;
+  busy.join();
+  EXPECT_GT(served.load(), 0);
+}
+
+TEST_F(HttpTest, ClientReconnectsWhenTheServerClosedAnIdleConnection) {
+  HttpServerOptions options;
+  options.idle_timeout = 100ms;
+  start(options);
+  HttpClient client(url(), 10s);
+  EXPECT_EQ(client.request("GET", "/v1/jobs/1").status, 200);
+  ASSERT_TRUE(eventually([&] { return server_->connection_count() == 0; }));
+  EXPECT_EQ(client.request("GET", "/v1/jobs/2").status, 200);
+}
+
+TEST_F(HttpTest, GracefulStopFinishesInFlightRequests) {
+  start();
+  auto in_flight = std::async(std::launch::async, [&] {
+    HttpClient client(url(), 20s);
+    return client.request("GET", "/wait");
+  });
+  ASSERT_TRUE(parking_.wait_for_total(1));
+  HttpClient idle(url(), 10s);
+  ASSERT_EQ(idle.request("GET", "/v1/jobs/1").status, 200);
+  ASSERT_TRUE(eventually([&] { return server_->connection_count() == 2; }));
+
+  server_->stop();
+  // The idle connection goes; the one with a request in flight stays.
+  EXPECT_TRUE(eventually([&] { return server_->connection_count() == 1; }));
+  // No new connections once the acceptor has closed.
+  EXPECT_TRUE(eventually([&] {
+    try {
+      HttpClient(url(), 2s).request("GET", "/v1/jobs/1");
+      return false;
+    } catch (const HttpError& e) {
+      return e.kind() == HttpError::Kind::connect_failed;
+    }
+  }));
+  EXPECT_EQ(in_flight.wait_for(0s), std::future_status::timeout);
+  EXPECT_FALSE(io_.stopped());
+
+  parking_.take()(json_response(200, {{"finished", true}}));
+  const HttpResult result = in_flight.get();
+  EXPECT_EQ(result.status, 200);
+  EXPECT_EQ(json::parse(result.body)["finished"], true);
+  EXPECT_EQ(result.headers.at("connection"), "close");
+  // With the last request answered, the io_context runs out of work by itself.
+  EXPECT_TRUE(eventually([&] { return io_.stopped(); }));
+  EXPECT_EQ(server_->connection_count(), 0u);
+}
+
+TEST_F(HttpTest, ClientTimesOutOnASlowAnswer) {
+  start();
+  HttpClient client(url(), 200ms);
+  try {
+    client.request("GET", "/wait");
+    FAIL() << "expected a timeout";
+  } catch (const HttpError& e) {
+    EXPECT_EQ(e.kind(), HttpError::Kind::timeout) << e.what();
+  }
+  parking_.answer_all();
+  client.set_timeout(10s);
+  EXPECT_EQ(client.request("GET", "/v1/jobs/1").status, 200);  // a fresh connection
+}
+
+TEST(HttpClientTest, ConnectionRefusedIsConnectFailed) {
+  HttpClient client("http://127.0.0.1:" + std::to_string(unused_port()), 5s);
+  try {
+    client.request("GET", "/healthz");
+    FAIL() << "expected HttpError";
+  } catch (const HttpError& e) {
+    EXPECT_EQ(e.kind(), HttpError::Kind::connect_failed) << e.what();
+    EXPECT_NE(std::string(e.what()).find("127.0.0.1"), std::string::npos);
+  }
+}
+
+TEST(HttpClientTest, ParsesBaseUrls) {
+  EXPECT_EQ(parse_base_url("http://example.org").port, 80);
+  const BaseUrl local = parse_base_url("http://127.0.0.1:8640/");
+  EXPECT_EQ(local.host, "127.0.0.1");
+  EXPECT_EQ(local.port, 8640);
+  const BaseUrl v6 = parse_base_url("HTTP://[::1]:9000");
+  EXPECT_EQ(v6.host, "::1");
+  EXPECT_EQ(v6.port, 9000);
+  try {
+    parse_base_url("https://farm.example:443");
+    FAIL() << "https accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("https is not supported"), std::string::npos);
+  }
+  EXPECT_THROW(HttpClient("https://x", 1s), std::invalid_argument);
+  EXPECT_THROW(parse_base_url("127.0.0.1:8640"), std::invalid_argument);
+  EXPECT_THROW(parse_base_url("http://:80"), std::invalid_argument);
+  EXPECT_THROW(parse_base_url("http://host:0"), std::invalid_argument);
+  EXPECT_THROW(parse_base_url("http://host:99999"), std::invalid_argument);
+  EXPECT_THROW(parse_base_url("http://host:80/v1"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace tessera

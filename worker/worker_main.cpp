@@ -1,0 +1,40 @@
+// tessera-worker: renders tiles for a coordinator.
+#include <atomic>
+#include <csignal>
+#include <pthread.h>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "worker/worker_daemon.hpp"
+
+int main(int argc, char** argv) {
+  tessera::WorkerOptions options;
+  std::string log_level = "info";
+  CLI::App app{"tessera-worker: renders tiles for a Tessera coordinator"};
+  app.add_option("--server", options.server_url, "Coordinator URL")->capture_default_str();
+  app.add_option("--threads", options.threads, "Rendering threads (default: one per core)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--name", options.name, "Name shown in `tessera workers` (default: host name)");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  // Signals go to one thread that turns them into a flag: the loop finishes its tile.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::atomic<bool> stop{false};
+  std::thread([&signals, &stop] {
+    int signal = 0;
+    sigwait(&signals, &signal);
+    spdlog::info("signal {}: finishing the current tile, then exiting", signal);
+    stop = true;
+  }).detach();
+
+  tessera::WorkerDaemon daemon(options, stop);
+  return daemon.run();
+}
