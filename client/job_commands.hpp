@@ -4,7 +4,7 @@
 
 namespace tessera {
 
-// Exit codes of every command, as documented in docs/cli.md.
+// Exit codes of every command, as documented in README.md.
 enum ExitCode : int {
   kExitOk = 0,
   kExitJobFailed = 1,  // the job failed or was canceled (or another server-side refusal)

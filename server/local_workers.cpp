@@ -21,7 +21,8 @@ std::filesystem::path sibling_worker_binary() {
 }
 
 LocalWorkers::LocalWorkers(const std::filesystem::path& worker_binary,
-                           const std::string& server_url, int count, int threads_each) {
+                           const std::string& server_url, int count, int threads_each,
+                           const std::string& log_level) {
   for (int i = 0; i < count; ++i) {
     const std::string name = "local-" + std::to_string(i + 1);
     const std::string threads = std::to_string(threads_each);
@@ -31,7 +32,8 @@ LocalWorkers::LocalWorkers(const std::filesystem::path& worker_binary,
       // The child dies with the server even if the server is killed outright.
       ::prctl(PR_SET_PDEATHSIG, SIGTERM);
       ::execl(worker_binary.c_str(), "tessera-worker", "--server", server_url.c_str(), "--name",
-              name.c_str(), "--threads", threads.c_str(), static_cast<char*>(nullptr));
+              name.c_str(), "--threads", threads.c_str(), "--log-level", log_level.c_str(),
+              static_cast<char*>(nullptr));
       std::fprintf(stderr, "cannot start %s: %s\n", worker_binary.c_str(), std::strerror(errno));
       ::_exit(127);
     }

@@ -11,9 +11,10 @@ namespace tessera {
 
 class LocalWorkers {
  public:
-  // Starts `count` workers of `threads_each` threads against `server_url`.
+  // Starts `count` workers of `threads_each` threads against `server_url`, logging at
+  // `log_level` like the server.
   LocalWorkers(const std::filesystem::path& worker_binary, const std::string& server_url,
-               int count, int threads_each);
+               int count, int threads_each, const std::string& log_level);
   // Stops any that still run.
   ~LocalWorkers();
   LocalWorkers(const LocalWorkers&) = delete;

@@ -1,6 +1,8 @@
 // The Scheduler's job side: submitting, listing, canceling, removing and assembling jobs.
 // Leases are in scheduler_leases.cpp, workers in scheduler_workers.cpp, start-up in
 // scheduler_load.cpp and the bookkeeping every change goes through in scheduler_commit.cpp.
+#include <spdlog/spdlog.h>
+
 #include "server/scheduler.hpp"
 
 #include <algorithm>
@@ -69,6 +71,8 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
     result = entry.status;
     notify = callbacks_;
   }
+  spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", result.id, result.name,
+               result.width, result.height, result.tiles_total, result.priority);
   for (const auto& callback : notify) callback();
   return result;
 }

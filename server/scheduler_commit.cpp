@@ -1,6 +1,8 @@
 // The Scheduler's bookkeeping: how staged changes reach the store and then memory, and
 // the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
 // every tile and job change.
+#include <spdlog/spdlog.h>
+
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
 #include "server/tile_order.hpp"
@@ -34,6 +36,14 @@ void Scheduler::commit(StagedChange& change) {
 
 void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   const JobStatus& s = job.status;
+  // Every job state change passes here: one log line each.
+  if (next.state != s.state) {
+    if (next.error.empty())
+      spdlog::info("job {} ({}): {} -> {}", s.id, s.name, to_string(s.state), to_string(next.state));
+    else
+      spdlog::info("job {} ({}): {} -> {}: {}", s.id, s.name, to_string(s.state),
+                   to_string(next.state), next.error);
+  }
   active_.erase({-s.priority, s.created_at_ms, s.id});
   JobStatus updated = next;
   updated.tiles_total = s.tiles_total;

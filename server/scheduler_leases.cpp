@@ -11,6 +11,8 @@
 #include <algorithm>
 
 #include "server/ids.hpp"
+#include <spdlog/spdlog.h>
+
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
 
@@ -177,7 +179,10 @@ bool Scheduler::expire_locked(std::int64_t now) {
       expired.push_back(lease_id);
   if (expired.empty()) return false;
   StagedChange change;
-  for (const std::string& lease_id : expired) stage_lease_end(change, lease_id, true);
+  for (const std::string& lease_id : expired) {
+    spdlog::warn("lease {} expired without a heartbeat; its tile goes back to the queue", lease_id);
+    stage_lease_end(change, lease_id, true);
+  }
   commit(change);
   return true;
 }

@@ -2,6 +2,8 @@
 #include <algorithm>
 
 #include "server/ids.hpp"
+#include <spdlog/spdlog.h>
+
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
 
@@ -31,6 +33,7 @@ WorkerInfo Scheduler::register_worker(const std::string& name, const std::string
   worker->persisted_seen_ms = info.last_seen_ms;
   const WorkerInfo result = info;
   workers_.emplace(result.id, std::move(worker));
+  spdlog::info("worker {} joined: {} on {}, {} thread(s)", result.id, name, host, threads);
   return result;
 }
 
@@ -71,6 +74,7 @@ void Scheduler::worker_left(const std::string& worker_id) {
     staged.info.state = worker_gone;
     staged.info.last_seen_ms = clock_.now_ms();
     commit(change);
+    spdlog::info("worker {} ({}) left", worker_id, worker->info.name);
   }
   for (const auto& callback : notify) callback();
 }

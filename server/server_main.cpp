@@ -95,7 +95,7 @@ int run(const ServerOptions& options) {
         sibling_worker_binary(),
         "http://" + std::string(host == "0.0.0.0" || host == "::" ? "127.0.0.1" : host) + ":" +
             std::to_string(server.port()),
-        options.local_workers, options.worker_threads);
+        options.local_workers, options.worker_threads, options.log_level);
 
   // Shutdown: local workers first (they finish or release their tiles while the server
   // still answers), then the server drains its in-flight requests and io.run() returns.

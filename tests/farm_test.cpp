@@ -6,10 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "client/api_client.hpp"
-#include "common/image_io.hpp"
-#include "tests/process.hpp"
-#include "tests/render_helpers.hpp"
+#include "tests/farm_fixture.hpp"
 
 namespace tessera {
 namespace {
@@ -18,73 +15,9 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using nlohmann::json;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tessera-farm-" + std::to_string(::getpid()) + "-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-// A coordinator with `workers` local worker processes on an ephemeral port.
-class Farm {
- public:
-  Farm(const std::string& name, int workers, const std::vector<std::string>& extra = {})
-      : dir_(fresh_dir(name)) {
-    std::vector<std::string> args{"--listen", "127.0.0.1:0", "--data-dir", (dir_ / "data").string(),
-                                  "--local-workers", std::to_string(workers), "--port-file",
-                                  (dir_ / "port").string(), "--log-level", "warn"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    server_ = std::make_unique<test::Process>(TESSERA_SERVER_BIN, args, dir_ / "server.log");
-    const bool up = test::eventually([&] { return fs::exists(dir_ / "port"); }, 20s);
-    if (!up) throw std::runtime_error("server did not start; see " + (dir_ / "server.log").string());
-    std::ifstream(dir_ / "port") >> port_;
-    api_ = std::make_unique<ApiClient>(url());
-  }
-  ~Farm() {
-    if (server_) {
-      server_->signal(SIGTERM);
-      server_->wait_for(20s);
-    }
-  }
-
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
-  ApiClient& api() { return *api_; }
-  test::Process& server() { return *server_; }
-  const fs::path& dir() const { return dir_; }
-
-  json wait_finished(const std::string& id, std::chrono::milliseconds limit = 60s) {
-    json job;
-    test::eventually(
-        [&] {
-          job = api_->job(id);
-          const std::string state = job["state"];
-          return state == "completed" || state == "failed" || state == "canceled";
-        },
-        limit);
-    return job;
-  }
-
- private:
-  fs::path dir_;
-  int port_ = 0;
-  std::unique_ptr<test::Process> server_;
-  std::unique_ptr<ApiClient> api_;
-};
-
-json small_showcase(int tile_size) {
-  json scene = read_json_file(fs::path(TESSERA_SOURCE_DIR) / "examples" / "showcase.json");
-  scene["image"] = {{"width", 120}, {"height", 90}};
-  scene["render"]["samples_per_pixel"] = 2;
-  scene["render"]["tile_size"] = tile_size;
-  return scene;
-}
-
-Image farm_image(Farm& farm, const std::string& id) {
-  const fs::path path = farm.dir() / (id + ".exr");
-  const std::string bytes = farm.api().image(id, "exr", false);
-  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  return read_image(path);
-}
+using test::Farm;
+using test::farm_image;
+using test::small_showcase;
 
 TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
   const struct {
