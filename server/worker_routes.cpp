@@ -32,7 +32,8 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
   }
   if (!body.is_object() || !body.contains("name") || !body["name"].is_string())
     return error_response(400, "invalid_request", "name is required and must be a string", "/name");
-  std::string host = request.remote_address;
+  // The peer's address without its port: "10.0.0.7:51234" -> "10.0.0.7".
+  std::string host = request.remote_address.substr(0, request.remote_address.rfind(':'));
   if (body.contains("host")) {
     if (!body["host"].is_string())
       return error_response(400, "invalid_request", "must be a string", "/host");

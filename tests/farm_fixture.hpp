@@ -102,7 +102,8 @@ class Farm {
 
   // The worker of that name in GET /v1/workers, if there is one.
   std::optional<nlohmann::json> worker_named(const std::string& worker_name) {
-    for (const nlohmann::json& worker : api_->workers()["workers"])
+    const nlohmann::json reply = api_->workers();  // named: a range-for would not extend its life
+    for (const nlohmann::json& worker : reply["workers"])
       if (worker["name"] == worker_name) return worker;
     return std::nullopt;
   }

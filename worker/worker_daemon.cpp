@@ -36,26 +36,34 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
+  arena_ = std::make_unique<tbb::task_arena>(options_.threads);
+}
+
+void WorkerDaemon::report_reachable(bool reachable, const char* what, const std::string& error) {
+  std::lock_guard lock(report_mutex_);
+  if (reachable && unreachable_reported_)
+    spdlog::info("coordinator {} reachable again", options_.server_url);
+  if (!reachable && !unreachable_reported_)
+    spdlog::warn("cannot reach the coordinator at {} ({}: {}); retrying with backoff",
+                 options_.server_url, what, error);
+  unreachable_reported_ = !reachable;
 }
 
 template <typename F>
 auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decltype(attempt())> {
+  // At least one try even when stopping: a stopping worker still delivers its last tile.
   auto backoff = 100ms;
-  while (!stop_) {
+  do {
     try {
       auto result = attempt();
-      if (unreachable_reported_) spdlog::info("coordinator {} reachable again", options_.server_url);
-      unreachable_reported_ = false;
+      report_reachable(true, what, "");
       return result;
     } catch (const HttpError& e) {
-      if (!unreachable_reported_)
-        spdlog::warn("cannot reach the coordinator at {} ({}: {}); retrying with backoff",
-                     options_.server_url, what, e.what());
-      unreachable_reported_ = true;
+      report_reachable(false, what, e.what());
       for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms) std::this_thread::sleep_for(50ms);
       backoff = std::min<std::chrono::milliseconds>(backoff * 2, 5s);
     }
-  }
+  } while (!stop_);
   return std::nullopt;
 }
 
@@ -135,8 +143,7 @@ std::optional<std::vector<float>> WorkerDaemon::render(const Claimed& tile, std:
   // with one tile per thread, and every pixel is computed the same way either way.
   std::vector<float> pixels(tile.rect.pixel_count() * 3);
   std::atomic<std::uint64_t> ray_count{0};
-  tbb::task_arena arena(options_.threads);
-  arena.execute([&] {
+  arena_->execute([&] {
     tbb::parallel_for(0, tile.rect.height, [&](int row) {
       if (lost) return;
       const TileRect line{tile.rect.x, tile.rect.y + row, tile.rect.width, 1};
@@ -161,11 +168,12 @@ std::optional<std::vector<float>> WorkerDaemon::render(const Claimed& tile, std:
   return pixels;
 }
 
-void WorkerDaemon::upload(const Claimed& tile, const std::vector<float>& pixels, std::uint64_t rays) {
-  const std::string body(reinterpret_cast<const char*>(pixels.data()), pixels.size() * sizeof(float));
+void WorkerDaemon::upload(HttpClient& client, const FinishedTile& tile) {
+  const std::string body(reinterpret_cast<const char*>(tile.pixels.data()),
+                         tile.pixels.size() * sizeof(float));
   const auto result = with_retry("upload", [&] {
-    return client_.request("PUT", "/v1/leases/" + tile.lease_id + "/result", body,
-                           "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
+    return client.request("PUT", "/v1/leases/" + tile.lease_id + "/result", body,
+                          "application/octet-stream", {{"X-Tessera-Rays", std::to_string(tile.rays)}});
   });
   if (result && result->status != 200)
     spdlog::info("result for lease {} refused ({}): {}", tile.lease_id, result->status, result->body);
@@ -181,20 +189,25 @@ void WorkerDaemon::release(const Claimed& tile) {
 
 int WorkerDaemon::run() {
   if (!register_self()) return stop_ ? 0 : 1;
-  while (!stop_) {
-    const auto tile = claim();
-    if (!tile) continue;
-    if (stop_) {  // asked to stop while waiting: give the tile straight back
-      release(*tile);
-      break;
+  {
+    HttpClient upload_client(options_.server_url, 60s);
+    TileUploader uploader([&](const FinishedTile& tile) { upload(upload_client, tile); });
+    while (!stop_) {
+      const auto tile = claim();
+      if (!tile) continue;
+      if (stop_) {  // asked to stop while waiting: give the tile straight back
+        release(*tile);
+        break;
+      }
+      std::uint64_t rays = 0;
+      try {
+        if (auto pixels = render(*tile, rays)) uploader.push({tile->lease_id, std::move(*pixels), rays});
+      } catch (const std::exception& e) {
+        spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
+        release(*tile);
+      }
     }
-    std::uint64_t rays = 0;
-    try {
-      if (const auto pixels = render(*tile, rays)) upload(*tile, *pixels, rays);
-    } catch (const std::exception& e) {
-      spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
-      release(*tile);
-    }
+    uploader.drain();  // a stopping worker still delivers what it rendered
   }
   try {
     client_.request("DELETE", "/v1/workers/" + worker_id_);

@@ -5,14 +5,17 @@
 
 #include <atomic>
 #include <map>
+#include <mutex>
 #include <memory>
 #include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
 
 #include "client/http_client.hpp"
 #include "worker/renderer.hpp"
+#include "worker/tile_uploader.hpp"
 
 namespace tessera {
 
@@ -43,12 +46,14 @@ class WorkerDaemon {
   // the coordinator cannot be reached, and saying so once rather than on every try.
   template <typename F>
   auto with_retry(const char* what, F attempt) -> std::optional<decltype(attempt())>;
+  void report_reachable(bool reachable, const char* what, const std::string& error);
   bool register_self();
   std::optional<Claimed> claim();
   const Renderer& renderer_for(const std::string& digest);
   // Renders while heartbeating; empty when the lease was lost on the way.
   std::optional<std::vector<float>> render(const Claimed& tile, std::uint64_t& rays);
-  void upload(const Claimed& tile, const std::vector<float>& pixels, std::uint64_t rays);
+  // Runs on the uploader's thread, with a connection of its own.
+  void upload(HttpClient& client, const FinishedTile& tile);
   void release(const Claimed& tile);
 
   WorkerOptions options_;
@@ -56,9 +61,11 @@ class WorkerDaemon {
   HttpClient client_;
   std::string worker_id_;
   double heartbeat_interval_s_ = 5;
+  std::mutex report_mutex_;  // the uploader thread retries too
   bool unreachable_reported_ = false;
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
+  std::unique_ptr<tbb::task_arena> arena_;  // made once: a new arena per tile costs a lot
 };
 
 }  // namespace tessera

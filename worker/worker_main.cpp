@@ -5,6 +5,7 @@
 #include <thread>
 
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
 #include <spdlog/spdlog.h>
 
 #include "worker/worker_daemon.hpp"
@@ -35,6 +36,11 @@ int main(int argc, char** argv) {
     stop = true;
   }).detach();
 
+  // TBB (ours and Embree's) may use exactly the threads asked for: idle pool threads
+  // spinning for work would take CPU from the renderers and from workers beside this one.
+  if (options.threads <= 0) options.threads = static_cast<int>(std::thread::hardware_concurrency());
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                  static_cast<std::size_t>(options.threads));
   tessera::WorkerDaemon daemon(options, stop);
   return daemon.run();
 }

@@ -1,0 +1,415 @@
+// The worker protocol and the error contract of docs/api.md, spoken raw over HTTP to a real
+// tessera-server with no workers of its own: the test plays the worker, so it can do what a
+// real worker only does by accident (stop heartbeating, upload late, upload twice, upload
+// the wrong size) and check that the coordinator fences every such result out.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <future>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/farm_fixture.hpp"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using nlohmann::json;
+using test::Farm;
+
+using Clock = std::chrono::steady_clock;
+
+// One tile: the whole 16x16 image.
+json one_tile_scene() { return test::showcase(16, 16, 1, 16); }
+
+// `width * height` pixels of float32 RGB, every channel `value`, as the upload body.
+std::string tile_body(int width, int height, float value) {
+  const std::vector<float> pixels(static_cast<std::size_t>(width) * height * 3, value);
+  return std::string(reinterpret_cast<const char*>(pixels.data()), pixels.size() * sizeof(float));
+}
+
+// Checks the one error shape of docs/api.md: the status and {"error": {"code", "message"}}.
+::testing::AssertionResult is_error(const HttpResult& result, int status, const std::string& code) {
+  if (result.status != status)
+    return ::testing::AssertionFailure() << "status " << result.status << " instead of " << status
+                                         << ": " << result.body;
+  const auto type = result.headers.find("content-type");
+  if (type == result.headers.end() || type->second.find("application/json") == std::string::npos)
+    return ::testing::AssertionFailure() << "error answer " << status << " is not JSON";
+  const json body = json::parse(result.body, nullptr, false);
+  if (body.is_discarded() || !body.is_object() || !body.contains("error") || !body["error"].is_object())
+    return ::testing::AssertionFailure() << "no {\"error\": {...}} body: " << result.body;
+  const json& error = body["error"];
+  if (!error.contains("code") || !error["code"].is_string() || error["code"] != code)
+    return ::testing::AssertionFailure() << "code is not \"" << code << "\": " << result.body;
+  if (!error.contains("message") || !error["message"].is_string() ||
+      error["message"].get<std::string>().empty())
+    return ::testing::AssertionFailure() << "no message: " << result.body;
+  return ::testing::AssertionSuccess();
+}
+
+// The test's own worker: registered on construction, one keep-alive connection.
+class RawWorker {
+ public:
+  RawWorker(const std::string& url, const std::string& name) : url_(url), http_(url, 30s) {
+    const HttpResult reply =
+        http_.request("POST", "/v1/workers", json{{"name", name}, {"host", "test"}, {"threads", 1}}.dump());
+    if (reply.status != 201) throw std::runtime_error("register answered " + reply.body);
+    registration_ = json::parse(reply.body);
+    id_ = registration_["id"];
+  }
+
+  const std::string& id() const { return id_; }
+  const json& registration() const { return registration_; }
+
+  HttpResult claim(double wait_s) {
+    return http_.request("POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s));
+  }
+  HttpResult heartbeat(const std::string& lease) {
+    return http_.request("POST", "/v1/leases/" + lease + "/heartbeat");
+  }
+  HttpResult upload(const std::string& lease, std::string body, std::uint64_t rays = 100) {
+    return http_.request("PUT", "/v1/leases/" + lease + "/result", std::move(body),
+                         "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
+  }
+  // A new connection, as after a network blip: the worker id is all that carries over.
+  void reconnect() { http_ = HttpClient(url_, 30s); }
+
+ private:
+  std::string url_;
+  HttpClient http_;
+  json registration_;
+  std::string id_;
+};
+
+// The job's image so far as EXR bytes; partial, so it is served before completion too.
+std::string exr_bytes(HttpClient& http, const std::string& job) {
+  const HttpResult reply = http.request("GET", "/v1/jobs/" + job + "/image?format=exr&partial=1");
+  EXPECT_EQ(reply.status, 200) << reply.body;
+  return reply.body;
+}
+
+Image decode_exr(const Farm& farm, const std::string& bytes) {
+  static int counter = 0;
+  const fs::path path = farm.dir() / ("decoded-" + std::to_string(++counter) + ".exr");
+  test::write_text(path, bytes);
+  return read_image(path);
+}
+
+bool all_pixels_are(const Image& image, float value) {
+  for (const float channel : image.pixels())
+    if (channel != value) return false;
+  return !image.pixels().empty();
+}
+
+json worker_info(Farm& farm, const std::string& id) {
+  const json reply = farm.api().workers();
+  for (const json& worker : reply["workers"])
+    if (worker["id"] == id) return worker;
+  return nullptr;
+}
+
+TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
+  Farm farm("proto-basic", 0);
+  HttpClient http(farm.url(), 10s);
+  RawWorker worker(farm.url(), "raw");
+  EXPECT_EQ(worker.registration()["heartbeat_interval_s"], 5.0);  // the documented defaults
+  EXPECT_EQ(worker.registration()["lease_timeout_s"], 30.0);
+
+  // Nothing queued: the long poll holds the request for wait_s, then says 204.
+  const auto poll_start = Clock::now();
+  EXPECT_EQ(worker.claim(0.2).status, 204);
+  const auto polled = Clock::now() - poll_start;
+  EXPECT_GE(polled, 190ms);
+  EXPECT_LT(polled, 5s);
+
+  const json job = farm.api().submit("one tile", 50, one_tile_scene());
+  const std::string job_id = job["id"];
+  const HttpResult claimed = worker.claim(5);
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const json lease = json::parse(claimed.body);
+  const std::string lease_id = lease["id"];
+  EXPECT_FALSE(lease_id.empty());
+  EXPECT_EQ(lease["job_id"], job_id);
+  EXPECT_EQ(lease["tile"], (json{{"index", 0}, {"x", 0}, {"y", 0}, {"width", 16}, {"height", 16}}));
+  EXPECT_GT(lease["expires_in_s"].get<double>(), 0);
+  EXPECT_LE(lease["expires_in_s"].get<double>(), 30);
+  // The scene a worker renders is the one submitted, fetched by its digest.
+  const HttpResult scene = http.request("GET", "/v1/scenes/" + lease["scene_digest"].get<std::string>());
+  ASSERT_EQ(scene.status, 200);
+  EXPECT_EQ(json::parse(scene.body), one_tile_scene());
+  const json info = worker_info(farm, worker.id());
+  EXPECT_EQ(info["state"], "rendering");
+  EXPECT_EQ(info["current_job"], job_id);
+  EXPECT_EQ(farm.api().job(job_id)["state"], "running");
+
+  const HttpResult beat = worker.heartbeat(lease_id);
+  ASSERT_EQ(beat.status, 200) << beat.body;
+  EXPECT_EQ(json::parse(beat.body)["id"], lease_id);
+
+  // After a reconnect the worker asks again while still holding its lease: it gets the
+  // same lease back, not a second tile and not a new fencing token.
+  worker.reconnect();
+  const HttpResult again = worker.claim(0);
+  ASSERT_EQ(again.status, 200) << again.body;
+  EXPECT_EQ(json::parse(again.body)["id"], lease_id);
+
+  // Wrong sizes are refused and leave the lease live.
+  EXPECT_TRUE(is_error(worker.upload(lease_id, tile_body(16, 15, 0.5f)), 400, "wrong_size"));
+  EXPECT_TRUE(is_error(worker.upload(lease_id, tile_body(16, 16, 0.5f) + "x"), 400, "wrong_size"));
+  EXPECT_TRUE(is_error(worker.upload(lease_id, ""), 400, "wrong_size"));
+  EXPECT_EQ(worker.heartbeat(lease_id).status, 200);
+  EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 0);
+
+  const HttpResult accepted = worker.upload(lease_id, tile_body(16, 16, 0.5f), 1234);
+  ASSERT_EQ(accepted.status, 200) << accepted.body;
+  EXPECT_EQ(json::parse(accepted.body)["status"], "accepted");
+  const json done = farm.api().job(job_id);
+  EXPECT_EQ(done["state"], "completed");
+  EXPECT_EQ(done["stats"]["rays"], 1234);
+  const std::string image = exr_bytes(http, job_id);
+  EXPECT_TRUE(all_pixels_are(decode_exr(farm, image), 0.5f));
+  EXPECT_EQ(worker_info(farm, worker.id())["tiles_rendered"], 1);
+  EXPECT_EQ(worker_info(farm, worker.id())["state"], "idle");
+
+  // The same lease delivering again (a retried upload) changes nothing, even with other pixels.
+  const HttpResult duplicate = worker.upload(lease_id, tile_body(16, 16, 0.25f), 99);
+  ASSERT_EQ(duplicate.status, 200) << duplicate.body;
+  EXPECT_EQ(json::parse(duplicate.body)["status"], "duplicate");
+  EXPECT_EQ(exr_bytes(http, job_id), image);
+  EXPECT_EQ(farm.api().job(job_id)["stats"]["rays"], 1234);
+  EXPECT_EQ(worker_info(farm, worker.id())["tiles_rendered"], 1);
+  // A delivered lease is over.
+  EXPECT_TRUE(is_error(worker.heartbeat(lease_id), 410, "lease_lost"));
+}
+
+TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
+  Farm farm("proto-wake", 0);
+  RawWorker worker(farm.url(), "parked");
+  const auto start = Clock::now();
+  auto parked = std::async(std::launch::async, [&] { return worker.claim(20); });
+  // Submit only once the claim is parked, so the wake-up is what is measured.
+  ASSERT_EQ(parked.wait_for(300ms), std::future_status::timeout) << "the claim did not wait";
+  const json job = farm.api().submit("wake", 50, one_tile_scene());
+  const HttpResult claimed = parked.get();
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  EXPECT_EQ(json::parse(claimed.body)["job_id"], job["id"]);
+  EXPECT_LT(Clock::now() - start, 10s) << "the claim waited for its timeout instead of the job";
+}
+
+TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
+  Farm farm("proto-expiry", 0, {"--lease-timeout", "1", "--heartbeat-interval", "0.2"});
+  HttpClient http(farm.url(), 10s);
+  RawWorker slow(farm.url(), "slow");
+  RawWorker rescuer(farm.url(), "rescuer");
+  EXPECT_EQ(slow.registration()["heartbeat_interval_s"], 0.2);
+  EXPECT_EQ(slow.registration()["lease_timeout_s"], 1.0);
+
+  const std::string job_id = farm.api().submit("expiry", 50, one_tile_scene())["id"];
+  const HttpResult first = slow.claim(5);
+  ASSERT_EQ(first.status, 200) << first.body;
+  const auto granted = Clock::now();
+  const json slow_lease = json::parse(first.body);
+
+  // `slow` never heartbeats. The rescuer's claim waits until the lease times out and then
+  // gets the same tile under a new lease id, the fencing token that tells the two apart.
+  const HttpResult second = rescuer.claim(20);
+  ASSERT_EQ(second.status, 200) << second.body;
+  EXPECT_GE(Clock::now() - granted, 900ms) << "the tile was given away before its lease timed out";
+  const json rescuer_lease = json::parse(second.body);
+  EXPECT_NE(rescuer_lease["id"], slow_lease["id"]);
+  EXPECT_EQ(rescuer_lease["job_id"], job_id);
+  EXPECT_EQ(rescuer_lease["tile"], slow_lease["tile"]);
+  EXPECT_EQ(worker_info(farm, slow.id())["state"], "idle");
+
+  // The slow worker learns it lost the tile, and its late result is refused.
+  EXPECT_TRUE(is_error(slow.heartbeat(slow_lease["id"]), 410, "lease_lost"));
+  const std::string before = exr_bytes(http, job_id);
+  EXPECT_TRUE(is_error(slow.upload(slow_lease["id"], tile_body(16, 16, 1.0f)), 409, "lease_lost"));
+  EXPECT_EQ(exr_bytes(http, job_id), before);
+  EXPECT_TRUE(all_pixels_are(decode_exr(farm, before), 0.0f));
+  EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 0);
+
+  // The current holder delivers; the stale one still cannot overwrite it afterwards.
+  EXPECT_EQ(rescuer.heartbeat(rescuer_lease["id"]).status, 200);
+  const HttpResult accepted = rescuer.upload(rescuer_lease["id"], tile_body(16, 16, 0.25f));
+  ASSERT_EQ(accepted.status, 200) << accepted.body;
+  EXPECT_EQ(json::parse(accepted.body)["status"], "accepted");
+  const std::string delivered = exr_bytes(http, job_id);
+  EXPECT_TRUE(all_pixels_are(decode_exr(farm, delivered), 0.25f));
+  EXPECT_TRUE(is_error(slow.upload(slow_lease["id"], tile_body(16, 16, 1.0f)), 409, "lease_lost"));
+  EXPECT_EQ(exr_bytes(http, job_id), delivered);
+  EXPECT_EQ(farm.api().job(job_id)["state"], "completed");
+  EXPECT_EQ(worker_info(farm, slow.id())["tiles_rendered"], 0);
+  EXPECT_EQ(worker_info(farm, rescuer.id())["tiles_rendered"], 1);
+}
+
+TEST(FarmProtocol, CancelWithdrawsTheLease) {
+  Farm farm("proto-cancel", 0);
+  RawWorker worker(farm.url(), "canceled");
+  const std::string job_id = farm.api().submit("to cancel", 50, one_tile_scene())["id"];
+  const HttpResult claimed = worker.claim(5);
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const std::string lease_id = json::parse(claimed.body)["id"];
+  ASSERT_EQ(worker.heartbeat(lease_id).status, 200);
+
+  EXPECT_EQ(farm.api().cancel(job_id)["state"], "canceled");
+  EXPECT_TRUE(is_error(worker.heartbeat(lease_id), 410, "lease_lost"));
+  EXPECT_TRUE(is_error(worker.upload(lease_id, tile_body(16, 16, 0.5f)), 409, "lease_lost"));
+  EXPECT_EQ(worker_info(farm, worker.id())["state"], "idle");
+  EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 0);
+  // A canceled job's tiles are not handed out again.
+  EXPECT_EQ(worker.claim(0.2).status, 204);
+}
+
+// What a raw socket gets back: just enough HTTP/1.1 parsing for one answer.
+struct RawAnswer {
+  int status = 0;
+  std::map<std::string, std::string> headers;  // lower-case names
+  std::string body;
+};
+
+// Sends `head` (request line and headers, no body) and reads one answer. The server must
+// answer from the headers alone; a server that waited for the body would time out here.
+RawAnswer send_head_only(int port, const std::string& head) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw std::runtime_error("socket failed");
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  const timeval timeout{10, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &timeout, sizeof timeout);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0)
+    throw std::runtime_error("connect failed");
+  if (::send(fd, head.data(), head.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(head.size()))
+    throw std::runtime_error("send failed");
+
+  std::string received;
+  std::size_t header_end = std::string::npos;
+  std::size_t body_length = std::string::npos;
+  char buffer[4096];
+  while (true) {
+    if (header_end != std::string::npos && body_length != std::string::npos &&
+        received.size() >= header_end + 4 + body_length)
+      break;
+    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+    if (n <= 0) break;  // closed, or no answer within the timeout
+    received.append(buffer, static_cast<std::size_t>(n));
+    if (header_end == std::string::npos && (header_end = received.find("\r\n\r\n")) != std::string::npos) {
+      const std::string lower = [&] {
+        std::string text = received.substr(0, header_end);
+        for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        return text;
+      }();
+      const auto length = lower.find("\r\ncontent-length:");
+      if (length != std::string::npos) body_length = std::stoul(lower.substr(length + 17));
+    }
+  }
+  RawAnswer answer;
+  if (header_end == std::string::npos) return answer;
+  std::istringstream lines(received.substr(0, header_end));
+  std::string line;
+  std::getline(lines, line);
+  if (line.rfind("HTTP/1.1 ", 0) == 0) answer.status = std::stoi(line.substr(9, 3));
+  while (std::getline(lines, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::string value = line.substr(colon + 1);
+    while (!value.empty() && (value.front() == ' ')) value.erase(0, 1);
+    while (!value.empty() && (value.back() == '\r' || value.back() == ' ')) value.pop_back();
+    answer.headers[name] = value;
+  }
+  answer.body = received.substr(header_end + 4);
+  return answer;
+}
+
+TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
+  Farm farm("proto-errors", 0);
+  HttpClient http(farm.url(), 10s);
+
+  // 400
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", "{\"scene\": "), 400, "malformed_json"));
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", json{{"priority", 101}, {"scene", one_tile_scene()}}.dump()),
+                       400, "invalid_request"));
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers", "{\"threads\": 2}"), 400, "invalid_request"));
+  RawWorker worker(farm.url(), "errors");
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/" + worker.id() + "/claim?wait_s=soon"), 400,
+                       "invalid_request"));
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs?state=sleeping"), 400, "invalid_request"));
+
+  // 404
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/nothing"), 404, "not_found"));
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/j-missing"), 404, "not_found"));
+  EXPECT_TRUE(is_error(http.request("DELETE", "/v1/jobs/j-missing"), 404, "not_found"));
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/scenes/0123abcd"), 404, "not_found"));
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/w-missing/claim?wait_s=0"), 404, "unknown_worker"));
+
+  // 405, naming what is allowed
+  const HttpResult put_jobs = http.request("PUT", "/v1/jobs", "{}");
+  EXPECT_TRUE(is_error(put_jobs, 405, "method_not_allowed"));
+  ASSERT_TRUE(put_jobs.headers.contains("allow"));
+  EXPECT_NE(put_jobs.headers.at("allow").find("GET"), std::string::npos) << put_jobs.headers.at("allow");
+  EXPECT_NE(put_jobs.headers.at("allow").find("POST"), std::string::npos) << put_jobs.headers.at("allow");
+  const HttpResult delete_health = http.request("DELETE", "/healthz");
+  EXPECT_TRUE(is_error(delete_health, 405, "method_not_allowed"));
+  EXPECT_EQ(delete_health.headers.contains("allow") ? delete_health.headers.at("allow") : "", "GET");
+
+  // 409: the state is wrong for the request
+  const std::string job_id = farm.api().submit("queued", 50, one_tile_scene())["id"];
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/" + job_id + "/image?format=png"), 409, "not_ready"));
+  EXPECT_TRUE(is_error(http.request("DELETE", "/v1/jobs/" + job_id), 409, "not_finished"));
+  ASSERT_EQ(http.request("POST", "/v1/jobs/" + job_id + "/cancel").status, 200);
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs/" + job_id + "/cancel"), 409, "already_finished"));
+
+  // 410: no such lease (any more)
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/leases/l-missing/heartbeat"), 410, "lease_lost"));
+
+  // 413, answered from the headers: the bodies announced here are never sent.
+  for (const auto& [head, what] : {
+           std::pair{"POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
+                     "Content-Length: 1073741824\r\n\r\n",
+                     "a 1 GiB job over the 64 MiB limit"},
+           std::pair{"PUT /v1/leases/l-x/result HTTP/1.1\r\nHost: test\r\n"
+                     "Content-Type: application/octet-stream\r\nContent-Length: 1073741824\r\n\r\n",
+                     "a 1 GiB tile over the largest tile's size"},
+       }) {
+    SCOPED_TRACE(what);
+    const RawAnswer answer = send_head_only(farm.port(), head);
+    ASSERT_EQ(answer.status, 413) << answer.body;
+    HttpResult as_result{answer.status, answer.headers, answer.body};
+    EXPECT_TRUE(is_error(as_result, 413, "body_too_large"));
+  }
+  // Just over the job limit is refused too; the limit is 64 MiB, not some round number above it.
+  EXPECT_EQ(send_head_only(farm.port(),
+                           "POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
+                           "Content-Length: " + std::to_string((64 << 20) + 1) + "\r\n\r\n")
+                .status,
+            413);
+
+  // After all of that the server is healthy and still takes work.
+  HttpClient fresh(farm.url(), 10s);
+  const HttpResult health = fresh.request("GET", "/healthz");
+  EXPECT_EQ(health.status, 200);
+  EXPECT_EQ(json::parse(health.body)["status"], "ok");
+  EXPECT_EQ(farm.api().submit("after", 50, one_tile_scene())["state"], "queued");
+  EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+}
+
+}  // namespace
+}  // namespace tessera
