@@ -1,7 +1,6 @@
 #include "worker/worker_daemon.hpp"
 
 #include <chrono>
-#include <condition_variable>
 #include <cstring>
 #include <mutex>
 #include <thread>
@@ -79,7 +78,9 @@ bool WorkerDaemon::register_self() {
   }
   const json reply = json::parse(result->body);
   worker_id_ = reply.at("id").get<std::string>();
-  heartbeat_interval_s_ = reply.value("heartbeat_interval_s", 5.0);
+  const double interval_s = reply.value("heartbeat_interval_s", 5.0);
+  heartbeat_ = std::make_unique<LeaseHeartbeat>(
+      options_.server_url, std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
   spdlog::info("registered as {} ({}, {} threads)", worker_id_, options_.name, options_.threads);
   return true;
 }
@@ -116,53 +117,27 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
 
 std::optional<std::vector<float>> WorkerDaemon::render(const Claimed& tile, std::uint64_t& rays) {
   const Renderer& renderer = renderer_for(tile.scene_digest);
-  std::atomic<bool> lost{false};
-  std::mutex mutex;
-  std::condition_variable done_signal;
-  bool done = false;
-
-  // Heartbeats on their own connection, so they never wait behind an upload.
-  std::thread heartbeat([&] {
-    HttpClient heartbeat_client(options_.server_url, 10s);
-    const auto interval = std::chrono::milliseconds(static_cast<long>(heartbeat_interval_s_ * 1000));
-    std::unique_lock lock(mutex);
-    while (!done_signal.wait_for(lock, interval, [&] { return done; })) {
-      lock.unlock();
-      try {
-        const auto reply = heartbeat_client.request("POST", "/v1/leases/" + tile.lease_id + "/heartbeat");
-        if (reply.status == 410) lost = true;
-      } catch (const HttpError&) {
-        // Unreachable for now: the lease lives until its timeout; keep rendering.
-      }
-      lock.lock();
-      if (lost) break;
-    }
-  });
-
-  // All threads on one tile, a row each: the tile finishes (and is uploaded) sooner than
-  // with one tile per thread, and every pixel is computed the same way either way.
+  heartbeat_->begin(tile.lease_id);
   std::vector<float> pixels(tile.rect.pixel_count() * 3);
-  std::atomic<std::uint64_t> ray_count{0};
-  arena_->execute([&] {
-    tbb::parallel_for(0, tile.rect.height, [&](int row) {
-      if (lost) return;
-      const TileRect line{tile.rect.x, tile.rect.y + row, tile.rect.width, 1};
-      const RayCounts counts = renderer.render_tile(
-          line, std::span<float>(pixels).subspan(static_cast<std::size_t>(row) * tile.rect.width * 3,
-                                                 static_cast<std::size_t>(tile.rect.width) * 3));
-      ray_count += counts.total();
+  if (options_.threads == 1) {
+    rays = renderer.render_tile(tile.rect, pixels).total();
+  } else {
+    // All threads on one tile, a row each: the tile finishes (and is uploaded) sooner than
+    // with one tile per thread, and every pixel is computed the same way either way.
+    std::atomic<std::uint64_t> ray_count{0};
+    arena_->execute([&] {
+      tbb::parallel_for(0, tile.rect.height, [&](int row) {
+        if (heartbeat_->lost()) return;
+        const TileRect line{tile.rect.x, tile.rect.y + row, tile.rect.width, 1};
+        const std::size_t row_floats = static_cast<std::size_t>(tile.rect.width) * 3;
+        ray_count += renderer.render_tile(line, std::span<float>(pixels).subspan(row * row_floats, row_floats))
+                         .total();
+      });
     });
-  });
-  {
-    std::lock_guard lock(mutex);
-    done = true;
+    rays = ray_count;
   }
-  done_signal.notify_all();
-  heartbeat.join();
-  rays = ray_count;
-  if (lost) {
-    spdlog::info("lease {} was withdrawn; dropping tile {} of {}", tile.lease_id, tile.rect.x,
-                 tile.job_id);
+  if (!heartbeat_->end()) {
+    spdlog::info("lease {} was withdrawn; dropping the tile of job {}", tile.lease_id, tile.job_id);
     return std::nullopt;
   }
   return pixels;

@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include "client/http_client.hpp"
+#include "worker/lease_heartbeat.hpp"
 #include "worker/renderer.hpp"
 #include "worker/tile_uploader.hpp"
 
@@ -60,7 +61,7 @@ class WorkerDaemon {
   const std::atomic<bool>& stop_;
   HttpClient client_;
   std::string worker_id_;
-  double heartbeat_interval_s_ = 5;
+  std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
   std::mutex report_mutex_;  // the uploader thread retries too
   bool unreachable_reported_ = false;
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
