@@ -11,8 +11,11 @@ int main(int argc, char** argv) {
   tessera::add_job_commands(app);
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a command's own exit code, already reported
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int code = app.exit(e);  // prints the usage error, or the help asked for
+    return code == 0 ? 0 : 2;      // every usage error is exit code 2, as documented
   }
   return 0;
 }

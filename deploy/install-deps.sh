@@ -9,6 +9,7 @@ packages=(
   nlohmann-json3-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
   libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev
+  iproute2  # `ip netns`: the multi-host farm test (tests/farm_netns_test.cpp)
 )
 
 if [ "$(id -u)" -ne 0 ]; then

@@ -83,14 +83,23 @@ TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
   const int total = farm.api().job(id)["tiles"]["total"];
 
   auto first = farm.start_worker("first", 1);
-  // Stop it once it is well into the job, in the middle of a tile.
+  // Stop it once it is well into the job, in the middle of a tile: it has delivered one
+  // and has held its current tile for a while, so it is past claiming and rendering it.
   json seen;
+  json held;  // the (tile, tiles rendered) it is on, and since when
+  auto held_since = std::chrono::steady_clock::now();
   ASSERT_TRUE(test::eventually(
       [&] {
         const auto info = farm.worker_named("first");
         if (!info) return false;
         seen = *info;
-        return seen["state"] == "rendering" && seen["tiles_rendered"].get<int>() >= 1;
+        if (seen["state"] != "rendering" || seen["tiles_rendered"].get<int>() < 1) return false;
+        const json now_on = {seen["current_tile"], seen["tiles_rendered"]};
+        if (now_on != held) {
+          held = now_on;
+          held_since = std::chrono::steady_clock::now();
+        }
+        return std::chrono::steady_clock::now() - held_since >= 40ms;
       },
       30s))
       << seen.dump();
