@@ -1,6 +1,8 @@
 #include <bit>
 #include <cstring>
 
+#include <spdlog/spdlog.h>
+
 #include "common/scene_parser.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
@@ -97,7 +99,10 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
   std::memcpy(pixels.data(), request.body.data(), request.body.size());
   switch (context.scheduler.complete(id, pixels, rays)) {
     case ResultOutcome::accepted: return json_response(200, {{"status", "accepted"}});
-    case ResultOutcome::duplicate: return json_response(200, {{"status", "duplicate"}});
+    case ResultOutcome::duplicate:
+      // Harmless to the image, but a healthy worker never renders a tile twice.
+      spdlog::warn("duplicate result for lease {}: the tile was already delivered", id);
+      return json_response(200, {{"status", "duplicate"}});
     case ResultOutcome::stale:
       return error_response(409, "lease_lost",
                             "lease " + id + " is no longer held; the result was refused");

@@ -34,6 +34,9 @@ TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
     ASSERT_EQ(image.pixels().size(), local.pixels().size());
     EXPECT_EQ(std::memcmp(image.pixels().data(), local.pixels().data(), local.pixels().size_bytes()), 0)
         << c.workers << " workers, tile size " << c.tile_size;
+    // Every tile rendered once: a worker that renders a tile twice shows up as a duplicate.
+    EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("duplicate result"), std::string::npos)
+        << c.workers << " workers, tile size " << c.tile_size;
   }
 }
 
@@ -105,6 +108,58 @@ TEST(Farm, CliSubmitWaitWritesTheImage) {
   const auto offline_status = offline.wait_for(30s);
   ASSERT_TRUE(offline_status.has_value());
   EXPECT_EQ(WEXITSTATUS(*offline_status), 3);
+}
+
+TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
+  const fs::path dir = test::fresh_dir("restart");
+  const json scene = test::showcase(160, 120, 2, 16);  // 80 tiles
+  auto start_server = [&](const std::string& name) {
+    fs::remove(dir / "port");
+    auto server = std::make_unique<test::Process>(
+        TESSERA_SERVER_BIN,
+        std::vector<std::string>{"--listen", "127.0.0.1:0", "--data-dir", (dir / "data").string(),
+                                 "--local-workers", "0", "--port-file", (dir / "port").string(),
+                                 "--log-level", "info"},
+        dir / (name + ".log"));
+    EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s));
+    int port = 0;
+    std::ifstream(dir / "port") >> port;
+    return std::pair{std::move(server), "http://127.0.0.1:" + std::to_string(port)};
+  };
+  auto start_worker = [&](const std::string& url, const std::string& name) {
+    return std::make_unique<test::Process>(
+        TESSERA_WORKER_BIN, std::vector<std::string>{"--server", url, "--threads", "1", "--name", name},
+        dir / (name + ".log"));
+  };
+
+  auto [server, url] = start_server("first");
+  ApiClient api(url);
+  const std::string id = api.submit("restart", 50, scene)["id"];
+  auto worker = start_worker(url, "before");
+  ASSERT_TRUE(test::eventually([&] { return api.job(id)["tiles"]["done"].get<int>() >= 10; }, 60s));
+  worker->signal(SIGTERM);
+  ASSERT_TRUE(worker->wait_for(30s).has_value());
+  const int delivered = api.job(id)["tiles"]["done"];
+  ASSERT_LT(delivered, 80) << "the job finished before the restart; make it bigger";
+
+  server->signal(SIGTERM);
+  const auto status = server->wait_for(20s);
+  ASSERT_TRUE(status.has_value()) << "the server did not stop on SIGTERM";
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
+
+  auto [again, url2] = start_server("second");
+  ApiClient api2(url2);
+  const json resumed = api2.job(id);
+  EXPECT_EQ(resumed["tiles"]["done"], delivered) << "tiles delivered before the stop were lost";
+  auto finisher = start_worker(url2, "after");
+  ASSERT_TRUE(test::eventually([&] { return api2.job(id)["state"] == "completed"; }, 60s));
+  const fs::path exr = dir / "restart.exr";
+  test::write_text(exr, api2.image(id, "exr", false));
+  EXPECT_TRUE(test::same_pixels(read_image(exr), test::render_image(scene, 2)));
+  finisher->signal(SIGTERM);
+  finisher->wait_for(30s);
+  again->signal(SIGTERM);
+  again->wait_for(20s);
 }
 
 }  // namespace

@@ -164,25 +164,23 @@ void WorkerDaemon::release(const Claimed& tile) {
 
 int WorkerDaemon::run() {
   if (!register_self()) return stop_ ? 0 : 1;
-  {
-    HttpClient upload_client(options_.server_url, 60s);
-    TileUploader uploader([&](const FinishedTile& tile) { upload(upload_client, tile); });
-    while (!stop_) {
-      const auto tile = claim();
-      if (!tile) continue;
-      if (stop_) {  // asked to stop while waiting: give the tile straight back
-        release(*tile);
-        break;
-      }
-      std::uint64_t rays = 0;
-      try {
-        if (auto pixels = render(*tile, rays)) uploader.push({tile->lease_id, std::move(*pixels), rays});
-      } catch (const std::exception& e) {
-        spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
-        release(*tile);
-      }
+  while (!stop_) {
+    const auto tile = claim();
+    if (!tile) continue;
+    if (stop_) {  // asked to stop while waiting: give the tile straight back
+      release(*tile);
+      break;
     }
-    uploader.drain();  // a stopping worker still delivers what it rendered
+    std::uint64_t rays = 0;
+    try {
+      // The upload finishes before the next claim: while this worker still holds the
+      // tile's lease, a claim would hand the same lease back (that is how a reconnecting
+      // worker recovers its tile) and the tile would be rendered twice.
+      if (auto pixels = render(*tile, rays)) upload(client_, {tile->lease_id, std::move(*pixels), rays});
+    } catch (const std::exception& e) {
+      spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
+      release(*tile);
+    }
   }
   try {
     client_.request("DELETE", "/v1/workers/" + worker_id_);

@@ -16,7 +16,6 @@
 #include "client/http_client.hpp"
 #include "worker/lease_heartbeat.hpp"
 #include "worker/renderer.hpp"
-#include "worker/tile_uploader.hpp"
 
 namespace tessera {
 
@@ -53,7 +52,11 @@ class WorkerDaemon {
   const Renderer& renderer_for(const std::string& digest);
   // Renders while heartbeating; empty when the lease was lost on the way.
   std::optional<std::vector<float>> render(const Claimed& tile, std::uint64_t& rays);
-  // Runs on the uploader's thread, with a connection of its own.
+  struct FinishedTile {
+    std::string lease_id;
+    std::vector<float> pixels;
+    std::uint64_t rays = 0;
+  };
   void upload(HttpClient& client, const FinishedTile& tile);
   void release(const Claimed& tile);
 
@@ -62,7 +65,7 @@ class WorkerDaemon {
   HttpClient client_;
   std::string worker_id_;
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
-  std::mutex report_mutex_;  // the uploader thread retries too
+  std::mutex report_mutex_;
   bool unreachable_reported_ = false;
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
