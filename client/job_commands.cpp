@@ -92,26 +92,27 @@ std::string progress_line(const json& job, bool bar) {
   return text;
 }
 
-// Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise.
+// Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise (at
+// most one a second). Polls often, so that a finished job is noticed at once.
 json watch(ApiClient& api, const std::string& id) {
+  using clock = std::chrono::steady_clock;
   const bool tty = ::isatty(STDOUT_FILENO);
-  const auto interval = tty ? std::chrono::milliseconds(250) : std::chrono::milliseconds(1000);
   std::string last;
+  clock::time_point last_printed{};
   while (true) {
     const json job = api.job(id);
     const std::string line = progress_line(job, tty);
+    const bool done = finished(job);
     if (tty) {
-      std::printf("\r%s\033[K", line.c_str());
-    } else if (line != last) {
+      std::printf("\r%s\033[K%s", line.c_str(), done ? "\n" : "");
+    } else if (line != last && (done || clock::now() - last_printed >= std::chrono::seconds(1))) {
       std::printf("%s\n", line.c_str());
+      last = line;
+      last_printed = clock::now();
     }
     std::fflush(stdout);
-    last = line;
-    if (finished(job)) {
-      if (tty) std::printf("\n");
-      return job;
-    }
-    std::this_thread::sleep_for(interval);
+    if (done) return job;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
 }
 
