@@ -1,6 +1,7 @@
 // The public API of docs/openapi.yaml, as route handlers over the Scheduler.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <filesystem>
 
@@ -19,6 +20,7 @@ struct ApiContext {
   Limits limits;
   std::size_t max_job_body_bytes = 64 << 20;
   std::filesystem::path temp_dir;  // where images are encoded before they are sent
+  std::atomic<unsigned> temp_counter{0};  // unique temporary names under temp_dir
 };
 
 void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...

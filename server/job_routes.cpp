@@ -126,8 +126,8 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
 
   // OpenImageIO writes files; encode into a private temporary one and send its bytes.
   std::filesystem::create_directories(context.temp_dir);
-  static std::atomic<unsigned> counter{0};
-  const auto path = context.temp_dir / (id + "-" + std::to_string(counter++) + format->extension);
+  const auto path =
+      context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) + format->extension);
   write_image(*assembled, path, transfer_of(*scene_json));
   std::ifstream in(path, std::ios::binary);
   std::ostringstream bytes;
