@@ -127,7 +127,8 @@ std::string SqliteDb::query_text(std::string_view sql) {
   return statement.step() ? statement.column_text(0) : std::string();
 }
 
-Transaction::Transaction(SqliteDb& db) : db_(db) { db_.exec("SAVEPOINT tessera_tx"); }
+// SAVEPOINT and RELEASE run on every state change: prepared once, not compiled each time.
+Transaction::Transaction(SqliteDb& db) : db_(db) { db_.statement("SAVEPOINT tessera_tx")->step(); }
 
 Transaction::~Transaction() {
   if (!open_) return;
@@ -140,7 +141,7 @@ Transaction::~Transaction() {
 }
 
 void Transaction::commit() {
-  db_.exec("RELEASE tessera_tx");
+  db_.statement("RELEASE tessera_tx")->step();
   open_ = false;
 }
 
