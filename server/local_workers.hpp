@@ -1,8 +1,9 @@
 // `--local-workers N`: tessera-worker child processes on this machine, connected over
-// loopback, started with the server and stopped with it.
+// loopback, started with the server, restarted if one dies, and stopped with the server.
 #pragma once
 
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <sys/types.h>
 #include <vector>
@@ -13,20 +14,31 @@ class LocalWorkers {
  public:
   // Starts `count` workers of `threads_each` threads against `server_url`, logging at
   // `log_level` like the server.
-  LocalWorkers(const std::filesystem::path& worker_binary, const std::string& server_url,
-               int count, int threads_each, const std::string& log_level);
+  LocalWorkers(std::filesystem::path worker_binary, std::string server_url, int count,
+               int threads_each, std::string log_level);
   // Stops any that still run.
   ~LocalWorkers();
   LocalWorkers(const LocalWorkers&) = delete;
   LocalWorkers& operator=(const LocalWorkers&) = delete;
 
-  // SIGTERM to each: they finish or release their tile, then exit.
+  // Starts a replacement for every worker that has exited, so that a one-command farm
+  // never quietly ends up with nobody rendering. Call periodically.
+  void restart_exited();
+  // SIGTERM to each: they finish or release their tile, then exit. No restarts after this.
   void signal_stop();
   // signal_stop(), then waits until every one has exited.
   void stop();
 
  private:
-  std::vector<pid_t> children_;
+  pid_t spawn(int slot) const;
+
+  std::filesystem::path binary_;
+  std::string server_url_;
+  int threads_each_;
+  std::string log_level_;
+  std::mutex mutex_;
+  std::vector<pid_t> children_;  // by slot; -1 once reaped
+  bool stopping_ = false;
 };
 
 // The tessera-worker beside the running executable.

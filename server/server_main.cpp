@@ -42,13 +42,16 @@ std::pair<std::string, std::uint16_t> split_listen(const std::string& listen) {
   return {host, static_cast<std::uint16_t>(port)};
 }
 
-// Returns expired leases' tiles to the queue, once a second.
-void schedule_expiry(boost::asio::steady_timer& timer, tessera::Scheduler& scheduler) {
+// Once a second: expired leases' tiles go back to the queue, and dead local workers are
+// replaced.
+void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& scheduler,
+                     tessera::LocalWorkers* workers) {
   timer.expires_after(std::chrono::seconds(1));
-  timer.async_wait([&timer, &scheduler](const boost::system::error_code& ec) {
+  timer.async_wait([&timer, &scheduler, workers](const boost::system::error_code& ec) {
     if (ec) return;
     scheduler.expire_leases();
-    schedule_expiry(timer, scheduler);
+    if (workers) workers->restart_exited();
+    schedule_upkeep(timer, scheduler, workers);
   });
 }
 
@@ -86,9 +89,6 @@ int run(const ServerOptions& options) {
     std::filesystem::rename(temp, options.port_file);
   }
 
-  boost::asio::steady_timer expiry(io);
-  schedule_expiry(expiry, scheduler);
-
   std::unique_ptr<LocalWorkers> workers;
   if (options.local_workers > 0)
     workers = std::make_unique<LocalWorkers>(
@@ -96,6 +96,8 @@ int run(const ServerOptions& options) {
         "http://" + std::string(host == "0.0.0.0" || host == "::" ? "127.0.0.1" : host) + ":" +
             std::to_string(server.port()),
         options.local_workers, options.worker_threads, options.log_level);
+  boost::asio::steady_timer expiry(io);
+  schedule_upkeep(expiry, scheduler, workers.get());
 
   // Shutdown: local workers first (they finish or release their tiles while the server
   // still answers), then the server drains its in-flight requests and io.run() returns.

@@ -3,6 +3,8 @@
 // single machine's render of the same scene.
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
@@ -160,6 +162,44 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   finisher->wait_for(30s);
   again->signal(SIGTERM);
   again->wait_for(20s);
+}
+
+// The pids of a process's children, from /proc.
+std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> children;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string text;
+    std::getline(stat, text);
+    const auto close = text.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(text.substr(close + 2));
+    char state = 0;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
+  }
+  return children;
+}
+
+TEST(Farm, ALocalWorkerThatDiesIsReplaced) {
+  Farm farm("respawn", 1);
+  std::vector<pid_t> before;
+  ASSERT_TRUE(test::eventually([&] { return (before = children_of(farm.server().pid())).size() == 1; }, 20s));
+  ::kill(before[0], SIGKILL);
+  std::vector<pid_t> after;
+  ASSERT_TRUE(test::eventually(
+      [&] {
+        after = children_of(farm.server().pid());
+        return after.size() == 1 && after[0] != before[0];
+      },
+      20s))
+      << "no replacement worker was started";
+  // The replacement renders.
+  const json job = farm.api().submit("after-respawn", 50, small_showcase(32));
+  EXPECT_EQ(farm.wait_finished(job["id"])["state"], "completed");
 }
 
 }  // namespace
