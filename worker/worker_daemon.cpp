@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cstring>
-#include <mutex>
 #include <thread>
 #include <unistd.h>
 
@@ -39,7 +38,6 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
 }
 
 void WorkerDaemon::report_reachable(bool reachable, const char* what, const std::string& error) {
-  std::lock_guard lock(report_mutex_);
   if (reachable && unreachable_reported_)
     spdlog::info("coordinator {} reachable again", options_.server_url);
   if (!reachable && !unreachable_reported_)
@@ -143,12 +141,12 @@ std::optional<std::vector<float>> WorkerDaemon::render(const Claimed& tile, std:
   return pixels;
 }
 
-void WorkerDaemon::upload(HttpClient& client, const FinishedTile& tile) {
-  const std::string body(reinterpret_cast<const char*>(tile.pixels.data()),
-                         tile.pixels.size() * sizeof(float));
+void WorkerDaemon::upload(const Claimed& tile, const std::vector<float>& pixels,
+                          std::uint64_t rays) {
+  const std::string body(reinterpret_cast<const char*>(pixels.data()), pixels.size() * sizeof(float));
   const auto result = with_retry("upload", [&] {
-    return client.request("PUT", "/v1/leases/" + tile.lease_id + "/result", body,
-                          "application/octet-stream", {{"X-Tessera-Rays", std::to_string(tile.rays)}});
+    return client_.request("PUT", "/v1/leases/" + tile.lease_id + "/result", body,
+                           "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
   });
   if (result && result->status != 200)
     spdlog::info("result for lease {} refused ({}): {}", tile.lease_id, result->status, result->body);
@@ -176,7 +174,7 @@ int WorkerDaemon::run() {
       // The upload finishes before the next claim: while this worker still holds the
       // tile's lease, a claim would hand the same lease back (that is how a reconnecting
       // worker recovers its tile) and the tile would be rendered twice.
-      if (auto pixels = render(*tile, rays)) upload(client_, {tile->lease_id, std::move(*pixels), rays});
+      if (const auto pixels = render(*tile, rays)) upload(*tile, *pixels, rays);
     } catch (const std::exception& e) {
       spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
       release(*tile);

@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <map>
-#include <mutex>
 #include <memory>
 #include <optional>
 #include <string>
@@ -52,12 +51,7 @@ class WorkerDaemon {
   const Renderer& renderer_for(const std::string& digest);
   // Renders while heartbeating; empty when the lease was lost on the way.
   std::optional<std::vector<float>> render(const Claimed& tile, std::uint64_t& rays);
-  struct FinishedTile {
-    std::string lease_id;
-    std::vector<float> pixels;
-    std::uint64_t rays = 0;
-  };
-  void upload(HttpClient& client, const FinishedTile& tile);
+  void upload(const Claimed& tile, const std::vector<float>& pixels, std::uint64_t rays);
   void release(const Claimed& tile);
 
   WorkerOptions options_;
@@ -65,7 +59,6 @@ class WorkerDaemon {
   HttpClient client_;
   std::string worker_id_;
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
-  std::mutex report_mutex_;
   bool unreachable_reported_ = false;
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
