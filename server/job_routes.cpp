@@ -94,8 +94,12 @@ std::optional<ImageFormat> image_format(const std::string& name) {
   return std::nullopt;
 }
 
+// Only "render" is kept while parsing: a mesh scene's vertex arrays need not be built to
+// read one setting.
 OutputTransfer transfer_of(const std::string& scene_json) {
-  const json scene = json::parse(scene_json);
+  const json scene = json::parse(scene_json, [](int depth, json::parse_event_t event, json& parsed) {
+    return !(depth == 1 && event == json::parse_event_t::key && parsed != "render");
+  });
   const auto render = scene.find("render");
   if (render != scene.end() && render->contains("output_transfer") &&
       (*render)["output_transfer"] == "linear")
