@@ -26,7 +26,11 @@ json ApiClient::submit(const std::string& name, int priority, const json& scene)
   return json::parse(call("POST", "/v1/jobs", body.dump()).body);
 }
 
-json ApiClient::job(const std::string& id) { return json::parse(call("GET", "/v1/jobs/" + id).body); }
+json ApiClient::job(const std::string& id, double wait_s) {
+  std::string target = "/v1/jobs/" + id;
+  if (wait_s > 0) target += "?wait_s=" + std::to_string(wait_s);
+  return json::parse(call("GET", target).body);
+}
 
 json ApiClient::jobs(const std::string& state, int limit) {
   std::string target = "/v1/jobs?limit=" + std::to_string(limit);

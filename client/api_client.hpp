@@ -30,7 +30,8 @@ class ApiClient {
   explicit ApiClient(const std::string& server_url);
 
   nlohmann::json submit(const std::string& name, int priority, const nlohmann::json& scene);
-  nlohmann::json job(const std::string& id);
+  // With `wait_s` > 0 the server answers once the job has finished, or after wait_s.
+  nlohmann::json job(const std::string& id, double wait_s = 0);
   nlohmann::json jobs(const std::string& state, int limit);
   nlohmann::json cancel(const std::string& id);
   void remove(const std::string& id);

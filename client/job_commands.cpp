@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <thread>
 #include <unistd.h>
 
 #include "client/api_client.hpp"
@@ -93,14 +92,16 @@ std::string progress_line(const json& job, bool bar) {
 }
 
 // Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise (at
-// most one a second). Polls often, so that a finished job is noticed at once.
+// most one a second). Each poll waits on the server for the job to finish, so the end is
+// seen at once, and returns anyway after a moment with the progress so far.
 json watch(ApiClient& api, const std::string& id) {
   using clock = std::chrono::steady_clock;
   const bool tty = ::isatty(STDOUT_FILENO);
   std::string last;
   clock::time_point last_printed{};
+  const double wait_s = tty ? 0.1 : 0.5;
   while (true) {
-    const json job = api.job(id);
+    const json job = api.job(id, wait_s);
     const std::string line = progress_line(job, tty);
     const bool done = finished(job);
     if (tty) {
@@ -112,7 +113,6 @@ json watch(ApiClient& api, const std::string& id) {
     }
     std::fflush(stdout);
     if (done) return job;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
 }
 

@@ -71,15 +71,17 @@ nlohmann::json to_json(const WorkerInfo& worker) {
 }
 
 nlohmann::json to_json(const Lease& lease, std::int64_t now_ms) {
+  nlohmann::json tiles = nlohmann::json::array();
+  for (const LeaseTile& tile : lease.tiles)
+    tiles.push_back({{"index", tile.index},
+                     {"x", tile.rect.x},
+                     {"y", tile.rect.y},
+                     {"width", tile.rect.width},
+                     {"height", tile.rect.height}});
   return {{"id", lease.id},
           {"job_id", lease.job_id},
           {"scene_digest", lease.scene_digest},
-          {"tile",
-           {{"index", lease.tile_index},
-            {"x", lease.rect.x},
-            {"y", lease.rect.y},
-            {"width", lease.rect.width},
-            {"height", lease.rect.height}}},
+          {"tiles", std::move(tiles)},
           {"expires_in_s", std::max<std::int64_t>(0, lease.expires_at_ms - now_ms) / 1e3}};
 }
 

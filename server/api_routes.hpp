@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "common/scene.hpp"
-#include "server/claim_waiters.hpp"
+#include "server/long_polls.hpp"
 #include "server/clock.hpp"
 #include "server/router.hpp"
 #include "server/scheduler.hpp"
@@ -16,7 +16,8 @@ namespace tessera {
 struct ApiContext {
   Scheduler& scheduler;
   const Clock& clock;
-  ClaimWaiters& waiters;
+  LongPolls& claims;     // parked claims, woken when tiles may be available
+  LongPolls& job_waits;  // parked GET /v1/jobs/{id}?wait_s=, woken when a job finishes
   Limits limits;
   std::size_t max_job_body_bytes = 64 << 20;
   std::filesystem::path temp_dir;  // where images are encoded before they are sent

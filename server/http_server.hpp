@@ -9,7 +9,7 @@
 //   boost::asio::signal_set signals(io, SIGINT, SIGTERM);
 //   signals.async_wait([&](const boost::system::error_code& ec, int) {
 //     if (ec) return;
-//     claim_waiters.close();  // long-polls must answer for the drain to end
+//     long_polls.close();  // long-polls must answer for the drain to end
 //     server.stop();
 //   });
 //   io.run();  // returns once stopped and every in-flight request has been answered

@@ -1,4 +1,6 @@
+#include <chrono>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include "common/image_io.hpp"
@@ -81,6 +83,35 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
   return json_response(200, {{"jobs", std::move(jobs)}});
 }
 
+// With ?wait_s=S the answer waits until the job has finished, for at most S seconds, and
+// is the job's status either way: `tessera submit --wait` learns of the end at once.
+void status(ApiContext& context, const HttpRequest& request, Respond respond) {
+  const std::string id = request.params.at("id");
+  double wait_s = 0;
+  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
+    try {
+      std::size_t used = 0;
+      wait_s = std::stod(it->second, &used);
+      if (used != it->second.size()) wait_s = -1;
+    } catch (const std::exception&) {
+      wait_s = -1;
+    }
+    if (!(wait_s >= 0 && wait_s <= 60))
+      return respond(error_response(400, "invalid_request", "wait_s must be a number from 0 to 60"));
+  }
+  if (!context.scheduler.job(id)) return respond(not_found(id));
+  // Shared by the attempt and the timeout, which between them call it exactly once.
+  auto shared_respond = std::make_shared<Respond>(std::move(respond));
+  const auto answer = [&context, id, shared_respond](bool only_if_finished) {
+    const auto job = context.scheduler.job(id);
+    if (job && only_if_finished && !is_finished(job->state)) return false;
+    (*shared_respond)(job ? json_response(200, to_json(*job, context.clock.now_ms())) : not_found(id));
+    return true;
+  };
+  context.job_waits.wait(std::chrono::milliseconds(static_cast<long>(wait_s * 1000)),
+                         [answer] { return answer(true); }, [answer] { answer(false); });
+}
+
 struct ImageFormat {
   std::string extension;
   std::string content_type;
@@ -151,9 +182,7 @@ void add_job_routes(Router& router, ApiContext& context) {
   router.add("GET", "/v1/jobs",
              [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); });
   router.add("GET", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
-    const std::string& id = request.params.at("id");
-    const auto job = context.scheduler.job(id);
-    respond(job ? json_response(200, to_json(*job, context.clock.now_ms())) : not_found(id));
+    status(context, request, std::move(respond));
   });
   router.add("DELETE", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");

@@ -15,11 +15,21 @@ namespace tessera {
 
 Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
     : store_(store), clock_(clock), config_(config) {
-  std::lock_guard lock(mutex_);
-  load_and_reconcile();
+  {
+    std::lock_guard lock(mutex_);
+    load_and_reconcile();
+  }
+  image_thread_ = std::thread([this] { write_images(); });
 }
 
-Scheduler::~Scheduler() = default;
+Scheduler::~Scheduler() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  images_changed_.notify_all();
+  image_thread_.join();  // after the images still queued are written
+}
 
 JobEntry* Scheduler::find_job(const std::string& id) const {
   const auto it = jobs_.find(id);
@@ -154,21 +164,46 @@ Image Scheduler::assemble_locked(const JobEntry& job) const {
   return image;
 }
 
-void Scheduler::finish_image(JobEntry& job) {
-  std::string error;
-  try {
-    store_.write_image(job.status.id, assemble_locked(job));
-    return;
-  } catch (const std::exception& e) {
-    error = e.what();
+void Scheduler::wait_for_images() {
+  std::unique_lock lock(mutex_);
+  images_changed_.wait(lock, [&] { return images_to_write_.empty() && !writing_image_; });
+}
+
+void Scheduler::write_images() {
+  std::unique_lock lock(mutex_);
+  while (true) {
+    images_changed_.wait(lock, [&] { return stopping_ || !images_to_write_.empty(); });
+    if (images_to_write_.empty()) return;  // stopping, and nothing is left to write
+    const std::string id = std::move(images_to_write_.front());
+    images_to_write_.pop_front();
+    const JobEntry* job = find_job(id);
+    if (!job || job->status.state != JobState::completed) continue;
+    writing_image_ = true;
+    std::string error;
+    try {
+      const Image image = assemble_locked(*job);
+      // Encoding takes a while and touches no shared state: workers and clients go on.
+      lock.unlock();
+      store_.write_image(id, image);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (!lock.owns_lock()) lock.lock();
+    writing_image_ = false;
+    images_changed_.notify_all();
+    JobEntry* still = find_job(id);
+    if (!still) {
+      store_.remove_image(id);  // removed while it was being written
+    } else if (!error.empty() && still->status.state == JobState::completed) {
+      // Every tile is stored, so a resubmission renders again; a "completed" job without
+      // an image file would only fail later, when someone looks for it.
+      StagedChange change;
+      JobStatus& status = change.job(*still);
+      status.state = JobState::failed;
+      status.error = "cannot write the image: " + error;
+      commit(change);
+    }
   }
-  // Every tile is stored, so a resubmission renders again; a "completed" job without an
-  // image would only fail later, when someone asks for it.
-  StagedChange change;
-  JobStatus& status = change.job(job);
-  status.state = JobState::failed;
-  status.error = "cannot write the image: " + error;
-  commit(change);
 }
 
 }  // namespace tessera

@@ -5,7 +5,9 @@
 // holder of the tile's lease (fencing), and only once.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -13,6 +15,7 @@
 #include <set>
 #include <span>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <unordered_map>
 #include <vector>
@@ -67,21 +70,37 @@ struct WorkerInfo {
   std::int64_t last_seen_ms = 0;
 };
 
+struct LeaseTile {
+  int index = 0;
+  TileRect rect;
+};
+
+// A lease binds a batch of one or more tiles of one job to one worker. Its id is the
+// fencing token: a tile's pixels are accepted only under the lease it is currently bound
+// to. Tiles leave the lease one by one as their results arrive; the lease ends when none
+// is left, or all at once when it expires, is released or its job is canceled.
 struct Lease {
-  std::string id;  // unique per grant: fencing token
+  std::string id;  // unique per grant
   std::string job_id;
   std::string worker_id;
-  int tile_index = 0;
-  TileRect rect;
+  std::vector<LeaseTile> tiles;  // the tiles still owed, in hand-out order
   std::string scene_digest;
   std::int64_t expires_at_ms = 0;
 };
 
+// One tile's result within an upload.
+struct TileResult {
+  int tile_index = 0;
+  std::span<const float> pixels;  // float32 RGB, rows from the top
+  std::uint64_t rays = 0;
+};
+
 enum class ResultOutcome {
-  accepted,    // stored; the tile is done
-  duplicate,   // this lease already delivered; nothing changed
+  accepted,    // stored; the tiles are done (some may have been delivered already)
+  duplicate,   // every tile was already delivered under this lease; nothing changed
   stale,       // the lease expired, was withdrawn or given to another worker; refused
-  wrong_size,  // pixel count does not match the tile; refused
+  wrong_size,  // pixel count does not match a tile; refused
+  wrong_tile,  // a tile that this lease never held, or named twice; refused
 };
 
 enum class CancelOutcome { canceled, not_found, already_finished };
@@ -113,18 +132,31 @@ class Scheduler {
   std::optional<std::string> scene_json(const std::string& digest) const;
   // The job's image from the tiles stored so far; missing tiles are black.
   std::optional<Image> assemble(const std::string& id) const;
+  // Waits until the image file of every job completed so far is written (or has failed).
+  void wait_for_images();
 
   // --- workers --------------------------------------------------------------
   WorkerInfo register_worker(const std::string& name, const std::string& host, int threads);
   bool worker_known(const std::string& worker_id) const;
-  // A worker that still holds a live lease gets that lease back (reconnect); otherwise the
-  // best pending tile: highest priority job first, then oldest job, tiles centre-first.
-  std::optional<Lease> claim(const std::string& worker_id);
-  // Extends the lease; nothing when it is no longer the tile's current lease.
+  // A worker that still holds a live lease gets that lease back (reconnect); otherwise a
+  // new lease on up to `max_tiles` of the best pending tiles: highest priority job first,
+  // then oldest job, tiles centre-first. The batch is cut to the worker's share of the
+  // job's pending tiles, so that the last tiles of a job spread over every worker.
+  std::optional<Lease> claim(const std::string& worker_id, int max_tiles = 1);
+  // Extends the lease; nothing when it is no longer live.
   std::optional<Lease> heartbeat(const std::string& lease_id);
+  // Stores the results of some or all of the lease's tiles, atomically: every tile is
+  // accepted or none is.
+  ResultOutcome complete(const std::string& lease_id, std::span<const TileResult> results);
+  // The pixels of every tile the lease still owes, concatenated in the lease's order; the
+  // rays are counted once, on the first of them.
   ResultOutcome complete(const std::string& lease_id, std::span<const float> pixels,
                          std::uint64_t rays);
-  // The worker gives the tile back (for example on SIGTERM) without a result.
+  // The pixel count of each of the lease's job's tiles named by index (0 for an index the
+  // job does not have), to cut an upload into tiles; nothing when the lease is unknown.
+  std::optional<std::vector<std::size_t>> tile_pixel_counts(
+      const std::string& lease_id, std::span<const std::uint64_t> tile_indexes) const;
+  // The worker gives its remaining tiles back (for example on SIGTERM) without results.
   void release(const std::string& lease_id);
   // Records that a worker is alive (any request from it).
   void touch_worker(const std::string& worker_id);
@@ -136,11 +168,16 @@ class Scheduler {
   void expire_leases();
   // Called (outside the lock) whenever a tile may have become claimable.
   void on_work_available(std::function<void()> callback);
+  // Called whenever a job has finished (completed, failed or canceled). It runs with the
+  // lock held, so it must not call the Scheduler: it is meant to post a wake-up elsewhere.
+  void on_job_finished(std::function<void()> callback);
 
  private:
-  struct TileRef {
+  // The tiles bound to one lease id: live (still owed) and delivered (pixels stored).
+  struct LeaseTiles {
     std::string job_id;
-    int tile_index = 0;
+    std::vector<int> live;  // in no particular order
+    std::vector<int> delivered;
   };
   using Callbacks = std::vector<std::function<void()>>;
 
@@ -149,25 +186,31 @@ class Scheduler {
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
   Image assemble_locked(const JobEntry& job) const;
-  // Writes the completed job's image; a job whose image cannot be written fails.
-  void finish_image(JobEntry& job);
+  // The image thread: writes each completed job's image file, off the path of the request
+  // that completed it, and fails a job whose image cannot be written.
+  void write_images();
 
   // The one way state changes: write `change` in one transaction, then apply it.
   void commit(StagedChange& change);
   void apply_job(JobEntry& job, const JobStatus& next);
   void apply_tile(JobEntry& job, int index, TileSlot next);
-  // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters,
-  // leases_ and delivered_.
+  // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and
+  // leases_.
   void track_tile(JobEntry& job, int index, int sign);
+  // Adds (+1) or removes (-1) one tile from a lease's `live` or `delivered` list.
+  void index_lease_tile(const std::string& lease_id, const std::string& job_id, int index, int sign,
+                        std::vector<int> LeaseTiles::*list);
   // Computes the tile order of a freshly built job and tracks all its tiles.
   void index_tiles(JobEntry& job);
 
-  // Stages taking the lease off its tile and its worker; `expired` counts an attempt.
+  // Stages taking the lease off its live tiles and its worker; `expired` counts an attempt.
   void stage_lease_end(StagedChange& change, const std::string& lease_id, bool expired);
   // Returns the tiles of leases expired at `now` to the queue; true when there were any.
   bool expire_locked(std::int64_t now);
-  Lease lease_of(const JobEntry& job, int index) const;
+  Lease lease_of(const std::string& lease_id) const;
   std::string new_lease_id() const;
+  // How many tiles a claim for up to `max_tiles` of `job` gets.
+  int batch_size(const JobEntry& job, int max_tiles) const;
   // Records contact; persisted at most once per second per worker.
   void note_seen(WorkerEntry& worker, std::int64_t now);
 
@@ -178,10 +221,17 @@ class Scheduler {
   std::unordered_map<std::string, std::unique_ptr<JobEntry>> jobs_;
   // Jobs that may hand out tiles, in claim order: (-priority, created_at, id).
   std::set<std::tuple<int, std::int64_t, std::string>> active_;
-  std::unordered_map<std::string, TileRef> leases_;     // live lease id -> its tile
-  std::unordered_map<std::string, TileRef> delivered_;  // lease id whose pixels are stored
+  // Every lease id that binds a tile, live or delivered. A lease is live while `live` is
+  // not empty.
+  std::unordered_map<std::string, LeaseTiles> leases_;
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
   Callbacks callbacks_;
+  Callbacks finished_callbacks_;
+  std::deque<std::string> images_to_write_;  // completed jobs, oldest first
+  bool writing_image_ = false;
+  bool stopping_ = false;
+  std::condition_variable images_changed_;
+  std::thread image_thread_;  // last: it starts once everything else exists
 };
 
 }  // namespace tessera

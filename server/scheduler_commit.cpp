@@ -1,6 +1,8 @@
 // The Scheduler's bookkeeping: how staged changes reach the store and then memory, and
 // the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
 // every tile and job change.
+#include <algorithm>
+
 #include <spdlog/spdlog.h>
 
 #include "server/scheduler.hpp"
@@ -16,8 +18,8 @@ void Scheduler::commit(StagedChange& change) {
     for (const auto& [key, tile] : change.tiles) {
       const auto& [job, index] = key;
       const TileRow row = tile_row(job->status.id, index, tile);
-      if (change.pixels && change.pixels->job == job && change.pixels->tile_index == index)
-        store_.store_tile_result(row, change.pixels->pixels);
+      if (const auto pixels = change.pixels.find({job, index}); pixels != change.pixels.end())
+        store_.store_tile_result(row, pixels->second);
       else
         store_.update_tile(row);
     }
@@ -36,6 +38,7 @@ void Scheduler::commit(StagedChange& change) {
 
 void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   const JobStatus& s = job.status;
+  const bool was_finished = is_finished(s.state);
   // Every job state change passes here: one log line each.
   if (next.state != s.state) {
     if (next.error.empty())
@@ -52,6 +55,8 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   job.status = std::move(updated);
   if (!is_finished(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
+  else if (!was_finished)
+    for (const auto& callback : finished_callbacks_) callback();
 }
 
 void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {
@@ -72,17 +77,26 @@ void Scheduler::track_tile(JobEntry& job, int index, int sign) {
   if (tile.state == TileState::done) job.status.tiles_done += sign;
   if (!tile.lease_id.empty()) {
     job.status.tiles_rendering += sign;
-    if (sign > 0)
-      leases_[tile.lease_id] = {job.status.id, index};
-    else
-      leases_.erase(tile.lease_id);
+    index_lease_tile(tile.lease_id, job.status.id, index, sign, &LeaseTiles::live);
   }
-  if (!tile.result_lease_id.empty()) {
-    if (sign > 0)
-      delivered_[tile.result_lease_id] = {job.status.id, index};
-    else
-      delivered_.erase(tile.result_lease_id);
+  if (!tile.result_lease_id.empty())
+    index_lease_tile(tile.result_lease_id, job.status.id, index, sign, &LeaseTiles::delivered);
+}
+
+void Scheduler::index_lease_tile(const std::string& lease_id, const std::string& job_id, int index,
+                                 int sign, std::vector<int> LeaseTiles::*list) {
+  if (sign > 0) {
+    LeaseTiles& entry = leases_[lease_id];
+    entry.job_id = job_id;
+    (entry.*list).push_back(index);
+    return;
   }
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return;
+  std::vector<int>& tiles = it->second.*list;
+  if (const auto found = std::find(tiles.begin(), tiles.end(), index); found != tiles.end())
+    tiles.erase(found);
+  if (it->second.live.empty() && it->second.delivered.empty()) leases_.erase(it);
 }
 
 void Scheduler::index_tiles(JobEntry& job) {

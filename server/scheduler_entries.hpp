@@ -54,12 +54,6 @@ struct WorkerEntry {
 // transaction and only then applies them, so memory never runs ahead of the database.
 // Staging a record again returns the same copy.
 struct StagedChange {
-  struct Pixels {
-    const JobEntry* job = nullptr;
-    int tile_index = 0;
-    std::span<const float> pixels;
-  };
-
   TileSlot& tile(JobEntry& job, int index);
   JobStatus& job(JobEntry& job);
   WorkerEntry& worker(WorkerEntry& worker);
@@ -68,7 +62,8 @@ struct StagedChange {
   std::map<std::pair<JobEntry*, int>, TileSlot> tiles;
   std::map<JobEntry*, JobStatus> jobs;
   std::map<WorkerEntry*, WorkerEntry> workers;
-  std::optional<Pixels> pixels;  // stored with the tile they belong to
+  // Results, stored with the tile they belong to.
+  std::map<std::pair<const JobEntry*, int>, std::span<const float>> pixels;
 };
 
 JobRow job_row(const JobStatus& status);

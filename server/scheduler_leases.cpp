@@ -1,14 +1,16 @@
-// Leases: how a tile is bound to a worker, kept alive, delivered, given back or lost.
+// Leases: how a batch of tiles is bound to a worker, kept alive, delivered, given back or
+// lost.
 //
-// A lease is "current" while it is its tile's lease: from the grant until the result is
-// accepted, the worker gives it back or leaves, the job is canceled, or the lease is
-// reaped after expiring. Reaping happens in expire_leases(), in claim() (so that no
-// worker waits for the periodic sweep) and in a heartbeat that arrives too late.
-// A result for an expired lease that has not been reaped yet is accepted: nobody else
-// has the tile, so the work is valid. Once reaped, the tile may go to another worker under
-// a new lease id, and the old id is refused as stale: a tile's pixels always come from
-// exactly one lease, the one recorded as its result_lease_id.
+// A tile is "live" under a lease from the grant until its result is accepted, the worker
+// gives the lease back or leaves, the job is canceled, or the lease is reaped after
+// expiring. Reaping happens in expire_leases(), in claim() (so that no worker waits for
+// the periodic sweep) and in a heartbeat that arrives too late. A result for an expired
+// lease that has not been reaped yet is accepted: nobody else has the tiles, so the work
+// is valid. Once reaped, the tiles may go to another worker under a new lease id, and the
+// old id is refused as stale: a tile's pixels always come from exactly one lease, the one
+// recorded as its result_lease_id.
 #include <algorithm>
+#include <set>
 
 #include "server/ids.hpp"
 #include <spdlog/spdlog.h>
@@ -18,7 +20,18 @@
 
 namespace tessera {
 
-std::optional<Lease> Scheduler::claim(const std::string& worker_id) {
+int Scheduler::batch_size(const JobEntry& job, int max_tiles) const {
+  const int pending = static_cast<int>(job.pending.size());
+  if (max_tiles <= 1 || pending <= 1) return 1;
+  // At most half of an even share of what is left, so that batches shrink as the job nears
+  // its end and its last tiles spread over every worker instead of queueing behind one.
+  int workers = 0;
+  for (const auto& [id, worker] : workers_) workers += worker->info.state != worker_gone;
+  const int share = pending / (2 * std::max(1, workers));
+  return std::clamp(share, 1, std::min(max_tiles, pending));
+}
+
+std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tiles) {
   Callbacks notify;
   std::optional<Lease> result;
   {
@@ -30,10 +43,9 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id) {
 
     if (!worker->lease_id.empty()) {
       // A reconnecting worker (or a retried request) gets its own live lease back, so
-      // one worker never holds two tiles.
+      // one worker never holds two leases.
       note_seen(*worker, now);
-      const TileRef& ref = leases_.at(worker->lease_id);
-      result = lease_of(*jobs_.at(ref.job_id), ref.tile_index);
+      result = lease_of(worker->lease_id);
     } else {
       JobEntry* chosen = nullptr;
       for (const auto& key : active_) {
@@ -50,26 +62,30 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id) {
         WorkerEntry& staged_worker = change.worker(*worker);
         staged_worker.info.last_seen_ms = now;
         staged_worker.info.state = worker_idle;  // asking for work also revives a gone worker
-        int index = -1;
         if (chosen) {
-          index = chosen->order[*chosen->pending.begin()];
-          TileSlot& tile = change.tile(*chosen, index);
-          tile.state = TileState::leased;
-          tile.lease_id = new_lease_id();
-          tile.worker_id = worker_id;
-          tile.lease_expires_ms = now + config_.lease_timeout_ms;
+          const std::string lease_id = new_lease_id();
+          const int count = batch_size(*chosen, max_tiles);
+          auto position = chosen->pending.begin();  // staging leaves the pending set alone
+          for (int i = 0; i < count; ++i, ++position) {
+            const int index = chosen->order[*position];
+            TileSlot& tile = change.tile(*chosen, index);
+            tile.state = TileState::leased;
+            tile.lease_id = lease_id;
+            tile.worker_id = worker_id;
+            tile.lease_expires_ms = now + config_.lease_timeout_ms;
+            if (i == 0) staged_worker.info.current_tile = index;
+          }
           if (chosen->status.state == JobState::queued) {
             JobStatus& status = change.job(*chosen);
             status.state = JobState::running;
             if (status.started_at_ms == 0) status.started_at_ms = now;
           }
-          staged_worker.lease_id = tile.lease_id;
+          staged_worker.lease_id = lease_id;
           staged_worker.info.state = worker_rendering;
           staged_worker.info.current_job = chosen->status.id;
-          staged_worker.info.current_tile = index;
         }
         commit(change);
-        if (chosen) result = lease_of(*chosen, index);
+        if (chosen) result = lease_of(worker->lease_id);
       }
     }
   }
@@ -83,21 +99,22 @@ std::optional<Lease> Scheduler::heartbeat(const std::string& lease_id) {
   {
     std::lock_guard lock(mutex_);
     const auto it = leases_.find(lease_id);
-    if (it == leases_.end()) return std::nullopt;
+    if (it == leases_.end() || it->second.live.empty()) return std::nullopt;
+    const std::vector<int> live = it->second.live;  // commit() rewrites the index
     JobEntry& job = *jobs_.at(it->second.job_id);
-    const int index = it->second.tile_index;
+    const TileSlot& first = job.tiles[live.front()];
     const std::int64_t now = clock_.now_ms();
     StagedChange change;
-    if (now >= job.tiles[index].lease_expires_ms) {
-      // Too late: the worker is told it lost the tile, so the tile can go out again now.
+    if (now >= first.lease_expires_ms) {
+      // Too late: the worker is told it lost the tiles, so they can go out again now.
       stage_lease_end(change, lease_id, true);
       commit(change);
       notify = callbacks_;
     } else {
-      change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
+      for (const int index : live) change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
+      if (WorkerEntry* worker = find_worker(first.worker_id)) note_seen(*worker, now);
       commit(change);
-      if (WorkerEntry* worker = find_worker(job.tiles[index].worker_id)) note_seen(*worker, now);
-      result = lease_of(job, index);
+      result = lease_of(lease_id);
     }
   }
   for (const auto& callback : notify) callback();
@@ -106,55 +123,116 @@ std::optional<Lease> Scheduler::heartbeat(const std::string& lease_id) {
 
 ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const float> pixels,
                                   std::uint64_t rays) {
+  std::vector<TileResult> results;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = leases_.find(lease_id);
+    if (it == leases_.end()) return ResultOutcome::stale;
+    if (it->second.live.empty())
+      return it->second.delivered.empty() ? ResultOutcome::stale : ResultOutcome::duplicate;
+    std::size_t offset = 0;
+    for (const LeaseTile& tile : lease_of(lease_id).tiles) {
+      const std::size_t floats = tile.rect.pixel_count() * 3;
+      if (offset + floats > pixels.size()) return ResultOutcome::wrong_size;
+      results.push_back({tile.index, pixels.subspan(offset, floats), results.empty() ? rays : 0});
+      offset += floats;
+    }
+    if (offset != pixels.size()) return ResultOutcome::wrong_size;
+  }
+  // Checked again under the lock: the lease may have moved on in between.
+  return complete(lease_id, results);
+}
+
+ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const TileResult> results) {
   std::lock_guard lock(mutex_);
   const auto it = leases_.find(lease_id);
-  if (it == leases_.end())
-    return delivered_.contains(lease_id) ? ResultOutcome::duplicate : ResultOutcome::stale;
-  JobEntry& job = *jobs_.at(it->second.job_id);
-  const int index = it->second.tile_index;
-  const TileSlot& current = job.tiles[index];
-  if (pixels.size() != current.rect.pixel_count() * 3) return ResultOutcome::wrong_size;
+  if (it == leases_.end()) return ResultOutcome::stale;
+  const LeaseTiles entry = it->second;  // commit() rewrites the index
+  JobEntry& job = *jobs_.at(entry.job_id);
+  const auto holds = [](const std::vector<int>& tiles, int index) {
+    return std::find(tiles.begin(), tiles.end(), index) != tiles.end();
+  };
+
+  std::vector<const TileResult*> fresh;
+  std::set<int> named;
+  for (const TileResult& result : results) {
+    if (!named.insert(result.tile_index).second) return ResultOutcome::wrong_tile;
+    if (holds(entry.delivered, result.tile_index)) continue;  // a repeat: ignored
+    // A live lease gives up tiles only by delivering them, so a tile it neither holds nor
+    // delivered was never its own; a lease with no live tile left has ended.
+    if (!holds(entry.live, result.tile_index))
+      return entry.live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    if (result.pixels.size() != job.tiles[result.tile_index].rect.pixel_count() * 3)
+      return ResultOutcome::wrong_size;
+    fresh.push_back(&result);
+  }
+  if (fresh.empty()) return results.empty() ? ResultOutcome::wrong_size : ResultOutcome::duplicate;
 
   const std::int64_t now = clock_.now_ms();
   StagedChange change;
-  TileSlot& tile = change.tile(job, index);
-  tile.state = TileState::done;
-  tile.lease_id.clear();
-  tile.lease_expires_ms = 0;
-  tile.rays = rays;
-  tile.result_lease_id = lease_id;  // worker_id stays: who rendered it
-  change.pixels = StagedChange::Pixels{&job, index, pixels};
-
   JobStatus& status = change.job(job);
-  status.rays += rays;
-  const bool job_done = job.status.tiles_done + 1 == job.status.tiles_total;
+  for (const TileResult* result : fresh) {
+    TileSlot& tile = change.tile(job, result->tile_index);
+    tile.state = TileState::done;
+    tile.lease_id.clear();
+    tile.lease_expires_ms = 0;
+    tile.rays = result->rays;
+    tile.result_lease_id = lease_id;  // worker_id stays: who rendered it
+    change.pixels[{&job, result->tile_index}] = result->pixels;
+    status.rays += result->rays;
+  }
+  const bool job_done =
+      job.status.tiles_done + static_cast<int>(fresh.size()) == job.status.tiles_total;
   if (job_done) {
     status.state = JobState::completed;
     status.finished_at_ms = now;
   }
-  if (WorkerEntry* worker = find_worker(current.worker_id)) {
+  if (WorkerEntry* worker = find_worker(job.tiles[fresh.front()->tile_index].worker_id)) {
     WorkerEntry& staged = change.worker(*worker);
-    staged.info.tiles_rendered += 1;
+    staged.info.tiles_rendered += fresh.size();
     staged.info.last_seen_ms = now;
     if (staged.lease_id == lease_id) {
-      staged.lease_id.clear();
-      staged.info.current_job.clear();
-      staged.info.current_tile = -1;
-      staged.info.state = worker_idle;
+      // The lease's next tile in hand-out order, if any is left.
+      int next = -1;
+      for (const int index : entry.live)
+        if (!named.contains(index) && (next < 0 || job.rank[index] < job.rank[next])) next = index;
+      staged.info.current_tile = next;
+      if (next < 0) {
+        staged.lease_id.clear();
+        staged.info.current_job.clear();
+        staged.info.state = worker_idle;
+      }
     }
   }
   commit(change);
   // After the commit: should the write fail or the process die, the tiles are stored and
   // a restart writes the image again.
-  if (job_done) finish_image(job);
+  if (job_done) {
+    images_to_write_.push_back(job.status.id);
+    images_changed_.notify_all();
+  }
   return ResultOutcome::accepted;
+}
+
+std::optional<std::vector<std::size_t>> Scheduler::tile_pixel_counts(
+    const std::string& lease_id, std::span<const std::uint64_t> tile_indexes) const {
+  std::lock_guard lock(mutex_);
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return std::nullopt;
+  const JobEntry& job = *jobs_.at(it->second.job_id);
+  std::vector<std::size_t> counts;
+  counts.reserve(tile_indexes.size());
+  for (const std::uint64_t index : tile_indexes)
+    counts.push_back(index < job.tiles.size() ? job.tiles[index].rect.pixel_count() : 0);
+  return counts;
 }
 
 void Scheduler::release(const std::string& lease_id) {
   Callbacks notify;
   {
     std::lock_guard lock(mutex_);
-    if (!leases_.contains(lease_id)) return;
+    const auto it = leases_.find(lease_id);
+    if (it == leases_.end() || it->second.live.empty()) return;
     StagedChange change;
     stage_lease_end(change, lease_id, false);
     commit(change);
@@ -174,13 +252,14 @@ void Scheduler::expire_leases() {
 
 bool Scheduler::expire_locked(std::int64_t now) {
   std::vector<std::string> expired;
-  for (const auto& [lease_id, ref] : leases_)
-    if (now >= jobs_.at(ref.job_id)->tiles[ref.tile_index].lease_expires_ms)
+  for (const auto& [lease_id, entry] : leases_)
+    if (!entry.live.empty() &&
+        now >= jobs_.at(entry.job_id)->tiles[entry.live.front()].lease_expires_ms)
       expired.push_back(lease_id);
   if (expired.empty()) return false;
   StagedChange change;
   for (const std::string& lease_id : expired) {
-    spdlog::warn("lease {} expired without a heartbeat; its tile goes back to the queue", lease_id);
+    spdlog::warn("lease {} expired without a heartbeat; its tiles go back to the queue", lease_id);
     stage_lease_end(change, lease_id, true);
   }
   commit(change);
@@ -189,15 +268,18 @@ bool Scheduler::expire_locked(std::int64_t now) {
 
 void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_id, bool expired) {
   const auto it = leases_.find(lease_id);
-  if (it == leases_.end()) return;
+  if (it == leases_.end() || it->second.live.empty()) return;
   JobEntry& job = *jobs_.at(it->second.job_id);
-  TileSlot& tile = change.tile(job, it->second.tile_index);
-  const std::string worker_id = tile.worker_id;
-  tile.state = TileState::pending;
-  tile.lease_id.clear();
-  tile.worker_id.clear();
-  tile.lease_expires_ms = 0;
-  if (expired) tile.attempts += 1;
+  const std::string worker_id = job.tiles[it->second.live.front()].worker_id;
+  for (const int index : it->second.live) {
+    TileSlot& tile = change.tile(job, index);
+    if (tile.lease_id != lease_id) continue;  // already staged by an earlier call
+    tile.state = TileState::pending;
+    tile.lease_id.clear();
+    tile.worker_id.clear();
+    tile.lease_expires_ms = 0;
+    if (expired) tile.attempts += 1;
+  }
   if (WorkerEntry* worker = find_worker(worker_id)) {
     WorkerEntry& staged = change.worker(*worker);
     if (staged.lease_id == lease_id) {
@@ -209,16 +291,20 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
   }
 }
 
-Lease Scheduler::lease_of(const JobEntry& job, int index) const {
-  const TileSlot& tile = job.tiles[index];
+Lease Scheduler::lease_of(const std::string& lease_id) const {
+  const LeaseTiles& entry = leases_.at(lease_id);
+  const JobEntry& job = *jobs_.at(entry.job_id);
+  std::vector<int> live = entry.live;
+  std::sort(live.begin(), live.end(), [&](int a, int b) { return job.rank[a] < job.rank[b]; });
   Lease lease;
-  lease.id = tile.lease_id;
+  lease.id = lease_id;
   lease.job_id = job.status.id;
-  lease.worker_id = tile.worker_id;
-  lease.tile_index = index;
-  lease.rect = tile.rect;
   lease.scene_digest = job.status.scene_digest;
-  lease.expires_at_ms = tile.lease_expires_ms;
+  if (!live.empty()) {
+    lease.worker_id = job.tiles[live.front()].worker_id;
+    lease.expires_at_ms = job.tiles[live.front()].lease_expires_ms;
+  }
+  for (const int index : live) lease.tiles.push_back({index, job.tiles[index].rect});
   return lease;
 }
 
@@ -226,7 +312,7 @@ std::string Scheduler::new_lease_id() const {
   std::string id;
   do {
     id = "l-" + random_hex(16);
-  } while (leases_.contains(id) || delivered_.contains(id));
+  } while (leases_.contains(id));
   return id;
 }
 

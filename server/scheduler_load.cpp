@@ -3,6 +3,7 @@
 // that is not finished has a tile that is pending or under a lease that will expire, so
 // no job can be stuck.
 #include <algorithm>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -84,7 +85,7 @@ void Scheduler::load_and_reconcile() {
   for (auto& [id, job] : jobs_) index_tiles(*job);
 
   StagedChange change;
-  std::set<WorkerEntry*> holders;
+  std::map<WorkerEntry*, std::string> holders;  // worker -> the one lease it keeps
   for (auto& [id, job_ptr] : jobs_) {
     JobEntry& job = *job_ptr;
     if (unknown_state.contains(id)) change.job(job).error = "unknown state in the database";
@@ -104,8 +105,9 @@ void Scheduler::load_and_reconcile() {
         continue;
       }
       WorkerEntry* worker = find_worker(tile.worker_id);
+      const auto held = worker ? holders.find(worker) : holders.end();
       if (tile.lease_id.empty() || is_finished(job.status.state) || !worker ||
-          holders.contains(worker)) {
+          (held != holders.end() && held->second != tile.lease_id)) {
         TileSlot& reset = change.tile(job, index);
         reset.state = TileState::pending;
         clear_lease(reset);
@@ -113,14 +115,16 @@ void Scheduler::load_and_reconcile() {
       }
       // The lease stands: its worker re-claims and gets it back, or it expires as usual.
       // Its clock restarts, since no heartbeat could reach a coordinator that was down.
-      holders.insert(worker);
       if (tile.lease_expires_ms < now + config_.lease_timeout_ms)
         change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
       WorkerEntry& staged = change.worker(*worker);
+      if (held == holders.end() || job.rank[index] < job.rank[staged.info.current_tile]) {
+        staged.info.current_job = job.status.id;
+        staged.info.current_tile = index;
+      }
+      holders.emplace(worker, tile.lease_id);
       staged.lease_id = tile.lease_id;
       staged.info.state = worker_rendering;
-      staged.info.current_job = job.status.id;
-      staged.info.current_tile = index;
     }
   }
   // Without a lease we know nothing of a worker until it talks to us again.
@@ -170,8 +174,9 @@ void Scheduler::load_and_reconcile() {
   }
   if (!change.empty()) commit(change);
 
+  // Written by the image thread, once it starts.
   for (JobEntry* job : needs_image)
-    if (job->status.state == JobState::completed) finish_image(*job);
+    if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
   store_.prune_images([this](const std::string& job_id) {
     const JobEntry* job = find_job(job_id);
     return job && job->status.state == JobState::completed;

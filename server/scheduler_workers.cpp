@@ -95,6 +95,11 @@ void Scheduler::on_work_available(std::function<void()> callback) {
   callbacks_.push_back(std::move(callback));
 }
 
+void Scheduler::on_job_finished(std::function<void()> callback) {
+  std::lock_guard lock(mutex_);
+  finished_callbacks_.push_back(std::move(callback));
+}
+
 void Scheduler::note_seen(WorkerEntry& worker, std::int64_t now) {
   worker.info.last_seen_ms = now;
   if (now - worker.persisted_seen_ms < seen_write_interval_ms) return;

@@ -67,11 +67,13 @@ int run(const ServerOptions& options) {
   Scheduler scheduler(store, clock, config);
 
   boost::asio::io_context io;
-  ClaimWaiters waiters(io);
-  scheduler.on_work_available([&waiters] { waiters.notify(); });
+  LongPolls claims(io);
+  LongPolls job_waits(io);
+  scheduler.on_work_available([&claims] { claims.notify(); });
+  scheduler.on_job_finished([&job_waits] { job_waits.notify(); });
 
   Router router;
-  ApiContext context{scheduler, clock, waiters, Limits{}, 64 << 20,
+  ApiContext context{scheduler, clock, claims, job_waits, Limits{}, 64 << 20,
                      std::filesystem::path(options.data_dir) / "tmp"};
   add_health_routes(router);
   add_job_routes(router, context);
@@ -108,7 +110,8 @@ int run(const ServerOptions& options) {
     spdlog::info("signal {}: shutting down", signal);
     stopper = std::thread([&] {
       if (workers) workers->signal_stop();
-      waiters.close();  // parked claims answer now; the workers see their signal and leave
+      claims.close();  // parked claims answer now; the workers see their signal and leave
+      job_waits.close();
       if (workers) workers->stop();
       boost::asio::post(io, [&expiry] { expiry.cancel(); });  // timers belong to the io threads
       server.stop();

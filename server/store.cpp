@@ -251,8 +251,7 @@ void Store::delete_job(const std::string& job_id) {
   tx.commit();
   // After the commit: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served.
-  std::error_code ignored;
-  std::filesystem::remove(image_path(job_id), ignored);
+  remove_image(job_id);
 }
 
 std::optional<std::string> Store::scene_json(const std::string& digest) {
@@ -321,6 +320,11 @@ void Store::update_worker_seen(const std::string& worker_id, std::int64_t last_s
 
 void Store::write_image(const std::string& job_id, const Image& image) {
   tessera::write_image(image, image_path(job_id), OutputTransfer::linear);
+}
+
+void Store::remove_image(const std::string& job_id) {
+  std::error_code ignored;
+  std::filesystem::remove(image_path(job_id), ignored);
 }
 
 bool Store::has_image(const std::string& job_id) const {

@@ -96,8 +96,10 @@ class Store {
   void upsert_worker(const WorkerRow& worker);
   void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);
 
-  // Writes data_dir/images/<job_id>.exr (linear, atomically replaced).
+  // Writes data_dir/images/<job_id>.exr (linear, atomically replaced). Touches no database
+  // state, so it may run beside the other calls.
   void write_image(const std::string& job_id, const Image& image);
+  void remove_image(const std::string& job_id);
   bool has_image(const std::string& job_id) const;
   // Deletes image files (and leftovers of interrupted writes) whose job is not kept.
   void prune_images(const std::function<bool(const std::string& job_id)>& keep);

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <bit>
 #include <cstring>
 
@@ -15,9 +16,30 @@ using nlohmann::json;
 static_assert(std::endian::native == std::endian::little,
               "tile pixels travel as little-endian float32");
 
-// The largest tile a scene may ask for, as float32 RGB.
-constexpr std::size_t max_tile_bytes(const Limits& limits) {
-  return static_cast<std::size_t>(limits.max_tile_size) * limits.max_tile_size * 3 * sizeof(float);
+// The most tiles one lease may hold, and so one upload carry.
+constexpr std::uint64_t max_batch_tiles = 256;
+
+// The largest upload: the largest tile a scene may ask for as float32 RGB, and no less than
+// what workers send at most in one request (worker/tile_uploads.hpp).
+constexpr std::size_t max_upload_bytes(const Limits& limits) {
+  return std::max<std::size_t>(
+      static_cast<std::size_t>(limits.max_tile_size) * limits.max_tile_size * 3 * sizeof(float),
+      64u << 20);
+}
+
+// "3,17,4" -> {3, 17, 4}; nothing when the list is not whole numbers separated by commas.
+std::optional<std::vector<std::uint64_t>> parse_number_list(const std::string& text) {
+  std::vector<std::uint64_t> numbers;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    if (item.empty() || item.size() > 19 || item.find_first_not_of("0123456789") != std::string::npos)
+      return std::nullopt;
+    numbers.push_back(std::stoull(item));
+    start = end + 1;
+  }
+  return numbers;
 }
 
 HttpResponse lease_lost(const std::string& id) {
@@ -59,6 +81,15 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string worker = request.params.at("id");
   if (!context.scheduler.worker_known(worker))
     return respond(error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
+  int max_tiles = 1;
+  if (auto it = request.query.find("max_tiles"); it != request.query.end()) {
+    const auto parsed = parse_number_list(it->second);
+    if (!parsed || parsed->size() != 1 || parsed->front() < 1 || parsed->front() > max_batch_tiles)
+      return respond(error_response(400, "invalid_request",
+                                    "max_tiles must be an integer from 1 to " +
+                                        std::to_string(max_batch_tiles)));
+    max_tiles = static_cast<int>(parsed->front());
+  }
   double wait_s = 20;
   if (auto it = request.query.find("wait_s"); it != request.query.end()) {
     try {
@@ -72,10 +103,10 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   context.scheduler.touch_worker(worker);
   // Shared by the attempt and the timeout, which between them call it exactly once.
   auto shared_respond = std::make_shared<Respond>(std::move(respond));
-  context.waiters.wait(
+  context.claims.wait(
       std::chrono::milliseconds(static_cast<long>(wait_s * 1000)),
-      [&context, worker, shared_respond] {
-        const auto lease = context.scheduler.claim(worker);
+      [&context, worker, max_tiles, shared_respond] {
+        const auto lease = context.scheduler.claim(worker, max_tiles);
         if (!lease) return false;
         (*shared_respond)(json_response(200, to_json(*lease, context.clock.now_ms())));
         return true;
@@ -87,27 +118,66 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
   const std::string& id = request.params.at("id");
   if (request.body.size() % (3 * sizeof(float)) != 0)
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
-  std::uint64_t rays = 0;
-  if (auto it = request.headers.find("x-tessera-rays"); it != request.headers.end()) {
-    try {
-      rays = std::stoull(it->second);
-    } catch (const std::exception&) {
-      return error_response(400, "invalid_request", "X-Tessera-Rays must be a whole number");
-    }
+  const auto header = [&](const char* name) -> const std::string* {
+    const auto it = request.headers.find(name);
+    return it == request.headers.end() ? nullptr : &it->second;
+  };
+  std::vector<std::uint64_t> rays{0};
+  if (const std::string* text = header("x-tessera-rays")) {
+    const auto parsed = parse_number_list(*text);
+    if (!parsed)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must be whole numbers separated by commas");
+    rays = *parsed;
   }
   std::vector<float> pixels(request.body.size() / sizeof(float));
   std::memcpy(pixels.data(), request.body.data(), request.body.size());
-  switch (context.scheduler.complete(id, pixels, rays)) {
+
+  ResultOutcome outcome{};
+  if (const std::string* text = header("x-tessera-tiles")) {
+    // Some of the lease's tiles, in the order given, each the size of its tile.
+    const auto tiles = parse_number_list(*text);
+    if (!tiles || tiles->size() > max_batch_tiles)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Tiles must be tile indexes separated by commas");
+    if (rays.size() != tiles->size())
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must give one count per tile in X-Tessera-Tiles");
+    const auto sizes = context.scheduler.tile_pixel_counts(id, *tiles);
+    if (!sizes)
+      return error_response(409, "lease_lost", "lease " + id + " is no longer held; the result was refused");
+    std::vector<TileResult> results;
+    std::size_t offset = 0;
+    for (std::size_t i = 0; i < tiles->size(); ++i) {
+      const std::size_t floats = (*sizes)[i] * 3;
+      if (offset + floats > pixels.size()) break;
+      results.push_back({static_cast<int>((*tiles)[i]),
+                         std::span<const float>(pixels).subspan(offset, floats), rays[i]});
+      offset += floats;
+    }
+    outcome = results.size() != tiles->size() || offset != pixels.size()
+                  ? ResultOutcome::wrong_size
+                  : context.scheduler.complete(id, results);
+  } else {
+    if (rays.size() != 1)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must be one count when X-Tessera-Tiles is absent");
+    outcome = context.scheduler.complete(id, pixels, rays.front());
+  }
+  switch (outcome) {
     case ResultOutcome::accepted: return json_response(200, {{"status", "accepted"}});
     case ResultOutcome::duplicate:
       // Harmless to the image, but a healthy worker never renders a tile twice.
-      spdlog::warn("duplicate result for lease {}: the tile was already delivered", id);
+      spdlog::warn("duplicate result for lease {}: the tiles were already delivered", id);
       return json_response(200, {{"status", "duplicate"}});
     case ResultOutcome::stale:
       return error_response(409, "lease_lost",
                             "lease " + id + " is no longer held; the result was refused");
     case ResultOutcome::wrong_size:
-      return error_response(400, "wrong_size", "the pixel count does not match the tile");
+      return error_response(400, "wrong_size", "the pixel count does not match the tiles");
+    case ResultOutcome::wrong_tile:
+      return error_response(400, "wrong_tile",
+                            "a tile named in X-Tessera-Tiles is not this lease's, or is named twice");
   }
   return error_response(500, "internal", "unexpected result outcome");
 }
@@ -147,7 +217,7 @@ void add_worker_routes(Router& router, ApiContext& context) {
   });
   router.add("PUT", "/v1/leases/{id}/result",
              [&context](HttpRequest&& request, Respond respond) { respond(upload(context, request)); },
-             max_tile_bytes(context.limits));
+             max_upload_bytes(context.limits));
   router.add("POST", "/v1/leases/{id}/release", [&context](HttpRequest&& request, Respond respond) {
     context.scheduler.release(request.params.at("id"));
     respond(HttpResponse{204, "", "", {}});

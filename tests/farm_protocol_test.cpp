@@ -11,6 +11,7 @@
 #include <chrono>
 #include <future>
 #include <map>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -70,8 +71,9 @@ class RawWorker {
   const std::string& id() const { return id_; }
   const json& registration() const { return registration_; }
 
-  HttpResult claim(double wait_s) {
-    return http_.request("POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s));
+  HttpResult claim(double wait_s, const std::string& more_query = "") {
+    return http_.request("POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s) +
+                                     more_query);
   }
   HttpResult heartbeat(const std::string& lease) {
     return http_.request("POST", "/v1/leases/" + lease + "/heartbeat");
@@ -79,6 +81,13 @@ class RawWorker {
   HttpResult upload(const std::string& lease, std::string body, std::uint64_t rays = 100) {
     return http_.request("PUT", "/v1/leases/" + lease + "/result", std::move(body),
                          "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
+  }
+  // Some of a batch lease's tiles in one request, as tessera-worker sends them.
+  HttpResult upload_tiles(const std::string& lease, const std::string& tiles, std::string body,
+                          const std::string& rays) {
+    return http_.request("PUT", "/v1/leases/" + lease + "/result", std::move(body),
+                         "application/octet-stream",
+                         {{"X-Tessera-Tiles", tiles}, {"X-Tessera-Rays", rays}});
   }
   // A new connection, as after a network blip: the worker id is all that carries over.
   void reconnect() { http_ = HttpClient(url_, 30s); }
@@ -139,7 +148,8 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   const std::string lease_id = lease["id"];
   EXPECT_FALSE(lease_id.empty());
   EXPECT_EQ(lease["job_id"], job_id);
-  EXPECT_EQ(lease["tile"], (json{{"index", 0}, {"x", 0}, {"y", 0}, {"width", 16}, {"height", 16}}));
+  EXPECT_EQ(lease["tiles"],
+            json::array({{{"index", 0}, {"x", 0}, {"y", 0}, {"width", 16}, {"height", 16}}}));
   EXPECT_GT(lease["expires_in_s"].get<double>(), 0);
   EXPECT_LE(lease["expires_in_s"].get<double>(), 30);
   // The scene a worker renders is the one submitted, fetched by its digest.
@@ -191,6 +201,88 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   EXPECT_TRUE(is_error(worker.heartbeat(lease_id), 410, "lease_lost"));
 }
 
+TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
+  Farm farm("proto-batch", 0);
+  HttpClient http(farm.url(), 10s);
+  RawWorker worker(farm.url(), "batch");
+  const std::string job_id = farm.api().submit("batch", 50, test::showcase(64, 32, 1, 16))["id"];
+
+  for (const char* bad : {"&max_tiles=0", "&max_tiles=257", "&max_tiles=two", "&max_tiles=1,2"})
+    EXPECT_TRUE(is_error(worker.claim(0, bad), 400, "invalid_request")) << bad;
+  // 8 tiles and one worker: a claim gets at most half of them, so that workers joining
+  // later still find some.
+  const HttpResult claimed = worker.claim(5, "&max_tiles=100");
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const json lease = json::parse(claimed.body);
+  const std::string lease_id = lease["id"];
+  ASSERT_EQ(lease["tiles"].size(), 4u) << lease.dump();
+  std::vector<int> tiles;
+  for (const json& tile : lease["tiles"]) {
+    EXPECT_EQ(tile["width"], 16);
+    tiles.push_back(tile["index"]);
+  }
+  // The four middle tiles of the 4x2 grid, centre-first.
+  EXPECT_EQ(std::set<int>(tiles.begin(), tiles.end()), (std::set<int>{1, 2, 5, 6}));
+  EXPECT_EQ(farm.api().job(job_id)["tiles"]["rendering"], 4);
+  const auto index = [&](int i) { return std::to_string(tiles[static_cast<std::size_t>(i)]); };
+
+  // Two tiles in one upload, each its own value.
+  const HttpResult first = worker.upload_tiles(lease_id, index(0) + "," + index(1),
+                                               tile_body(16, 16, 1.0f) + tile_body(16, 16, 2.0f), "10,20");
+  ASSERT_EQ(first.status, 200) << first.body;
+  EXPECT_EQ(json::parse(first.body)["status"], "accepted");
+  json job = farm.api().job(job_id);
+  EXPECT_EQ(job["tiles"]["done"], 2);
+  EXPECT_EQ(job["tiles"]["rendering"], 2);
+  EXPECT_EQ(job["stats"]["rays"], 30);
+  // What is still owed comes back on a heartbeat, and on a re-claim.
+  const HttpResult beat = worker.heartbeat(lease_id);
+  ASSERT_EQ(beat.status, 200) << beat.body;
+  EXPECT_EQ(json::parse(beat.body)["tiles"].size(), 2u);
+  EXPECT_EQ(json::parse(worker.claim(0).body)["tiles"], json::parse(beat.body)["tiles"]);
+
+  // Refused, and nothing stored: a tile the lease does not hold, one named twice, a
+  // missing ray count, the wrong size.
+  const std::string before = exr_bytes(http, job_id);
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "0", tile_body(16, 16, 9.0f), "1"), 400, "wrong_tile"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2) + "," + index(2),
+                                           tile_body(16, 16, 9.0f) + tile_body(16, 16, 9.0f), "1,1"),
+                       400, "wrong_tile"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2) + "," + index(3),
+                                           tile_body(16, 16, 9.0f) + tile_body(16, 16, 9.0f), "1"),
+                       400, "invalid_request"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2), tile_body(16, 8, 9.0f), "1"), 400, "wrong_size"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "x", tile_body(16, 16, 9.0f), "1"), 400, "invalid_request"));
+  EXPECT_EQ(exr_bytes(http, job_id), before);
+
+  // A retried group beside a new tile: the repeat is ignored, the new tile stored.
+  const HttpResult mixed = worker.upload_tiles(lease_id, index(1) + "," + index(2),
+                                               tile_body(16, 16, 7.0f) + tile_body(16, 16, 3.0f), "20,30");
+  ASSERT_EQ(mixed.status, 200) << mixed.body;
+  EXPECT_EQ(json::parse(mixed.body)["status"], "accepted");
+  const HttpResult repeat = worker.upload_tiles(lease_id, index(2), tile_body(16, 16, 7.0f), "30");
+  ASSERT_EQ(repeat.status, 200) << repeat.body;
+  EXPECT_EQ(json::parse(repeat.body)["status"], "duplicate");
+  ASSERT_EQ(worker.upload_tiles(lease_id, index(3), tile_body(16, 16, 4.0f), "40").status, 200);
+  // Every tile delivered: the lease is over and the worker idle.
+  EXPECT_TRUE(is_error(worker.heartbeat(lease_id), 410, "lease_lost"));
+  EXPECT_EQ(worker_info(farm, worker.id())["state"], "idle");
+  EXPECT_EQ(worker_info(farm, worker.id())["tiles_rendered"], 4);
+  job = farm.api().job(job_id);
+  EXPECT_EQ(job["tiles"]["done"], 4);
+  EXPECT_EQ(job["stats"]["rays"], 100);
+
+  // Each tile holds the value of its first accepted upload.
+  const Image image = decode_exr(farm, exr_bytes(http, job_id));
+  for (int i = 0; i < 4; ++i) {
+    const int tile = tiles[static_cast<std::size_t>(i)];
+    const int x = tile % 4 * 16 + 8;
+    const int y = tile / 4 * 16 + 8;
+    EXPECT_EQ(image.pixels()[(static_cast<std::size_t>(y) * 64 + x) * 3], static_cast<float>(i + 1))
+        << "tile " << tile;
+  }
+}
+
 TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
   Farm farm("proto-wake", 0);
   RawWorker worker(farm.url(), "parked");
@@ -227,7 +319,7 @@ TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   const json rescuer_lease = json::parse(second.body);
   EXPECT_NE(rescuer_lease["id"], slow_lease["id"]);
   EXPECT_EQ(rescuer_lease["job_id"], job_id);
-  EXPECT_EQ(rescuer_lease["tile"], slow_lease["tile"]);
+  EXPECT_EQ(rescuer_lease["tiles"], slow_lease["tiles"]);
   EXPECT_EQ(worker_info(farm, slow.id())["state"], "idle");
 
   // The slow worker learns it lost the tile, and its late result is refused.

@@ -55,9 +55,10 @@ TEST(OpenApi, ServerRoutesAndTheContractAgree) {
     ManualClock clock;
     Scheduler scheduler(store, clock);
     boost::asio::io_context io;
-    ClaimWaiters waiters(io);
+    LongPolls claims(io);
+    LongPolls job_waits(io);
     Router router;
-    ApiContext context{scheduler, clock, waiters, Limits{}, 1 << 20, dir / "tmp"};
+    ApiContext context{scheduler, clock, claims, job_waits, Limits{}, 1 << 20, dir / "tmp"};
     add_health_routes(router);
     add_job_routes(router, context);
     add_worker_routes(router, context);

@@ -13,115 +13,12 @@
 
 #include "common/image_io.hpp"
 #include "server/tile_order.hpp"
+#include "tests/scheduler_fixture.hpp"
 
 namespace tessera {
 namespace {
 
-constexpr std::int64_t timeout_ms = 30'000;
-
-Scene scene_of(int width, int height, int tile_size) {
-  Scene scene;
-  scene.width = width;
-  scene.height = height;
-  scene.render.tile_size = tile_size;
-  return scene;
-}
-
-// Distinct, awkward values (negative, fractional, large) so that any misplaced or
-// converted pixel shows up; `seed` tells uploads of the same tile apart.
-float value_at(int x, int y, int channel, float seed) {
-  return seed + static_cast<float>(x) * 1.25f - static_cast<float>(y) * 0.3f +
-         static_cast<float>(channel) * 1e4f + 1.0f / 3.0f;
-}
-
-std::vector<float> tile_pixels(const TileRect& rect, float seed) {
-  std::vector<float> pixels;
-  for (int y = rect.y; y < rect.y + rect.height; ++y)
-    for (int x = rect.x; x < rect.x + rect.width; ++x)
-      for (int c = 0; c < 3; ++c) pixels.push_back(value_at(x, y, c, seed));
-  return pixels;
-}
-
-// The job's row as the store has it, but in `state` (to stage a crash).
-JobRow row_of(const JobStatus& job, const std::string& state) {
-  JobRow row;
-  row.id = job.id;
-  row.name = job.name;
-  row.priority = job.priority;
-  row.state = state;
-  row.width = job.width;
-  row.height = job.height;
-  row.tile_size = job.tile_size;
-  row.scene_digest = job.scene_digest;
-  row.created_at_ms = job.created_at_ms;
-  row.rays = job.rays;
-  return row;
-}
-
-bool same_bits(std::span<const float> a, std::span<const float> b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
-}
-
-class SchedulerTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() /
-           ("tessera-scheduler-test-" + std::to_string(::getpid()) + "-" + info->name());
-    std::filesystem::remove_all(dir_);
-    open();
-  }
-  void TearDown() override {
-    scheduler_.reset();
-    store_.reset();
-    std::filesystem::remove_all(dir_);
-  }
-
-  void open() {
-    store_ = std::make_unique<Store>(dir_);
-    SchedulerConfig config;
-    config.lease_timeout_ms = timeout_ms;
-    scheduler_ = std::make_unique<Scheduler>(*store_, clock_, config);
-  }
-  // What a coordinator restart does: everything in memory is lost.
-  void reopen() {
-    scheduler_.reset();
-    store_.reset();
-    open();
-  }
-
-  Scheduler& s() { return *scheduler_; }
-  std::string worker(const std::string& name = "w") {
-    return s().register_worker(name, "host", 4).id;
-  }
-  JobStatus submit(int width, int height, int tile_size, int priority = 50,
-                   const std::string& json = "{}") {
-    return s().submit("job", priority, scene_of(width, height, tile_size), json);
-  }
-  ResultOutcome deliver(const Lease& lease, float seed = 0.0f, std::uint64_t rays = 10) {
-    return s().complete(lease.id, tile_pixels(lease.rect, seed), rays);
-  }
-  // Claims and completes tiles with one worker until the job is completed.
-  void finish(const std::string& job_id, const std::string& worker_id, float seed = 0.0f) {
-    while (s().job(job_id)->state != JobState::completed) {
-      const auto lease = s().claim(worker_id);
-      ASSERT_TRUE(lease);
-      ASSERT_EQ(lease->job_id, job_id);
-      ASSERT_EQ(deliver(*lease, seed), ResultOutcome::accepted);
-    }
-  }
-  WorkerInfo info_of(const std::string& worker_id) {
-    for (const WorkerInfo& w : s().workers())
-      if (w.id == worker_id) return w;
-    ADD_FAILURE() << "no worker " << worker_id;
-    return {};
-  }
-
-  std::filesystem::path dir_;
-  ManualClock clock_;
-  std::unique_ptr<Store> store_;
-  std::unique_ptr<Scheduler> scheduler_;
-};
+using namespace test;
 
 TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   const JobStatus submitted = submit(100, 37, 32);
@@ -143,7 +40,7 @@ TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   EXPECT_EQ(s().job(submitted.id)->tiles_rendering, 1);
   EXPECT_EQ(info_of(w).state, "rendering");
   EXPECT_EQ(info_of(w).current_job, submitted.id);
-  EXPECT_EQ(info_of(w).current_tile, lease->tile_index);
+  EXPECT_EQ(info_of(w).current_tile, lease->tiles[0].index);
   ASSERT_EQ(deliver(*lease), ResultOutcome::accepted);
   EXPECT_EQ(info_of(w).state, "idle");
   finish(submitted.id, w);
@@ -160,6 +57,7 @@ TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   for (const TileRect& rect : split_into_tiles(100, 37, 32))
     expected.paste(rect, tile_pixels(rect, 0.0f));
   EXPECT_TRUE(same_bits(s().assemble(submitted.id)->pixels(), expected.pixels()));
+  s().wait_for_images();
   const auto path = store_->data_dir() / "images" / (submitted.id + ".exr");
   ASSERT_TRUE(std::filesystem::exists(path));
   EXPECT_TRUE(same_bits(read_image(path).pixels(), expected.pixels()));
@@ -187,7 +85,7 @@ TEST_F(SchedulerTest, TilesGoOutCentreFirst) {
   const std::string w = worker();
   std::vector<int> order;
   while (auto lease = s().claim(w)) {
-    order.push_back(lease->tile_index);
+    order.push_back(lease->tiles[0].index);
     ASSERT_EQ(deliver(*lease), ResultOutcome::accepted);
   }
   EXPECT_EQ(order, (std::vector<int>{4, 1, 3, 5, 7, 0, 2, 6, 8}));
@@ -204,7 +102,7 @@ TEST_F(SchedulerTest, ReconnectingWorkerGetsItsLeaseBack) {
   clock_.advance_ms(1000);
   const Lease again = *s().claim(w);
   EXPECT_EQ(again.id, first.id);
-  EXPECT_EQ(again.tile_index, first.tile_index);
+  EXPECT_EQ(again.tiles[0].index, first.tiles[0].index);
   EXPECT_EQ(again.expires_at_ms, first.expires_at_ms);
   EXPECT_EQ(s().job(first.job_id)->tiles_rendering, 1);
 }
@@ -234,7 +132,7 @@ TEST_F(SchedulerTest, HeartbeatExtendsAndTheLeaseExpiresExactlyAfterTheTimeout) 
 
   const auto second = s().claim(w2);
   ASSERT_TRUE(second);
-  EXPECT_EQ(second->tile_index, lease.tile_index);
+  EXPECT_EQ(second->tiles[0].index, lease.tiles[0].index);
   EXPECT_NE(second->id, lease.id);
   EXPECT_EQ(second->worker_id, w2);
 }
@@ -263,9 +161,10 @@ TEST_F(SchedulerTest, StaleResultIsRefusedAfterReassignment) {
 
   EXPECT_EQ(deliver(new_lease, 2.0f), ResultOutcome::accepted);
   EXPECT_EQ(deliver(old_lease, 1.0f), ResultOutcome::stale);
-  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), tile_pixels(new_lease.rect, 2.0f)));
+  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), tile_pixels(new_lease.tiles[0].rect, 2.0f)));
+  s().wait_for_images();
   EXPECT_TRUE(
-      same_bits(read_image(store_->image_path(job)).pixels(), tile_pixels(new_lease.rect, 2.0f)));
+      same_bits(read_image(store_->image_path(job)).pixels(), tile_pixels(new_lease.tiles[0].rect, 2.0f)));
 }
 
 TEST_F(SchedulerTest, ExpiredLeaseNotYetReassignedIsStillAccepted) {
@@ -286,7 +185,7 @@ TEST_F(SchedulerTest, DuplicateResultChangesNothing) {
   EXPECT_EQ(s().job(job)->tiles_done, 1);
   EXPECT_EQ(info_of(w).tiles_rendered, 1u);
   Image expected(32, 16);
-  expected.paste(lease.rect, tile_pixels(lease.rect, 1.0f));
+  expected.paste(lease.tiles[0].rect, tile_pixels(lease.tiles[0].rect, 1.0f));
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
   reopen();  // duplicates are recognised from the store too
   EXPECT_EQ(deliver(lease, 9.0f, 7), ResultOutcome::duplicate);
@@ -295,7 +194,7 @@ TEST_F(SchedulerTest, DuplicateResultChangesNothing) {
 TEST_F(SchedulerTest, WrongSizeIsRefusedAndTheLeaseKept) {
   const std::string job = submit(16, 16, 16).id;
   const Lease lease = *s().claim(worker());
-  std::vector<float> short_pixels = tile_pixels(lease.rect, 0.0f);
+  std::vector<float> short_pixels = tile_pixels(lease.tiles[0].rect, 0.0f);
   short_pixels.pop_back();
   EXPECT_EQ(s().complete(lease.id, short_pixels, 1), ResultOutcome::wrong_size);
   EXPECT_EQ(s().job(job)->tiles_done, 0);
@@ -332,6 +231,7 @@ TEST_F(SchedulerTest, RemoveOnlyFinishedJobs) {
 
   const std::string w = worker();
   finish(running.id, w);
+  s().wait_for_images();
   ASSERT_TRUE(std::filesystem::exists(store_->image_path(running.id)));
   EXPECT_EQ(s().remove(running.id), RemoveOutcome::removed);
   EXPECT_FALSE(s().job(running.id));
@@ -357,7 +257,7 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   for (int i = 0; i < 4; ++i) {
     const Lease lease = *s().claim(w1);
     ASSERT_EQ(deliver(lease), ResultOutcome::accepted);
-    done.insert(lease.tile_index);
+    done.insert(lease.tiles[0].index);
   }
   const Lease held = *s().claim(w2);
 
@@ -373,10 +273,10 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
 
   const Lease back = *s().claim(w2);
   EXPECT_EQ(back.id, held.id);
-  EXPECT_EQ(back.tile_index, held.tile_index);
+  EXPECT_EQ(back.tiles[0].index, held.tiles[0].index);
   while (auto lease = s().claim(w1)) {
-    EXPECT_FALSE(done.contains(lease->tile_index));
-    EXPECT_NE(lease->tile_index, held.tile_index);
+    EXPECT_FALSE(done.contains(lease->tiles[0].index));
+    EXPECT_NE(lease->tiles[0].index, held.tiles[0].index);
     ASSERT_EQ(deliver(*lease), ResultOutcome::accepted);
   }
   EXPECT_EQ(info_of(w1).state, "idle");
@@ -388,6 +288,7 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   Image expected(96, 96);
   for (const TileRect& rect : split_into_tiles(96, 96, 32))
     expected.paste(rect, tile_pixels(rect, 0.0f));
+  s().wait_for_images();
   EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
   reopen();
   EXPECT_EQ(s().job(job)->state, JobState::completed);
@@ -416,12 +317,14 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
   JobRow row = row_of(*s().job(job.id), "running");
   row.started_at_ms = job.created_at_ms;
   store_->update_job(row);
+  s().wait_for_images();
   std::filesystem::remove(store_->image_path(job.id));
   clock_.advance_ms(100);
   reopen();
   const JobStatus after = *s().job(job.id);
   EXPECT_EQ(after.state, JobState::completed);
   EXPECT_EQ(after.finished_at_ms, clock_.now_ms());
+  s().wait_for_images();
   ASSERT_TRUE(std::filesystem::exists(store_->image_path(job.id)));
   EXPECT_TRUE(
       same_bits(read_image(store_->image_path(job.id)).pixels(), s().assemble(job.id)->pixels()));
@@ -449,7 +352,7 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   EXPECT_EQ(deliver(first), ResultOutcome::stale);
 
   const Lease second = *s().claim(w2);
-  EXPECT_EQ(second.tile_index, first.tile_index);
+  EXPECT_EQ(second.tiles[0].index, first.tiles[0].index);
   EXPECT_NE(second.id, first.id);
   s().release(second.id);
   EXPECT_EQ(info_of(w2).state, "idle");

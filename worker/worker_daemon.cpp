@@ -1,5 +1,6 @@
 #include "worker/worker_daemon.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <thread>
@@ -25,25 +26,41 @@ std::string host_name() {
 
 constexpr std::size_t kMaxCachedScenes = 2;
 
+// A batch lasts about this long: long enough that the round trips between batches cost
+// well under 1%, short enough that a higher-priority job waits little for a worker.
+constexpr double kBatchSeconds = 0.5;
+constexpr int kMaxBatchTiles = 256;  // the coordinator's limit
+// Finished tiles wait this long for others to share their upload with.
+constexpr auto kUploadGather = std::chrono::milliseconds(50);
+constexpr std::size_t kMaxUploadBytes = 16u << 20;  // under the coordinator's 64 MiB
+
 }  // namespace
 
 WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
     : options_(std::move(options)),
       stop_(stop),
       client_(options_.server_url,
-              std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))) {
+              std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
+      upload_client_(options_.server_url, std::chrono::seconds(60)) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
+  uploads_ = std::make_unique<TileUploads>(
+      [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
+      kUploadGather, kMaxUploadBytes);
 }
 
+WorkerDaemon::~WorkerDaemon() = default;
+
 void WorkerDaemon::report_reachable(bool reachable, const char* what, const std::string& error) {
-  if (reachable && unreachable_reported_)
-    spdlog::info("coordinator {} reachable again", options_.server_url);
-  if (!reachable && !unreachable_reported_)
+  // Called from the main thread and the upload thread: exchange() makes one of them say it.
+  if (reachable) {
+    if (unreachable_reported_.exchange(false))
+      spdlog::info("coordinator {} reachable again", options_.server_url);
+  } else if (!unreachable_reported_.exchange(true)) {
     spdlog::warn("cannot reach the coordinator at {} ({}: {}); retrying with backoff",
                  options_.server_url, what, error);
-  unreachable_reported_ = !reachable;
+  }
 }
 
 template <typename F>
@@ -83,9 +100,17 @@ bool WorkerDaemon::register_self() {
   return true;
 }
 
+int WorkerDaemon::batch_tiles() const {
+  if (tile_thread_seconds_ <= 0) return options_.threads;  // nothing measured yet
+  const double tiles = kBatchSeconds * options_.threads / tile_thread_seconds_;
+  return static_cast<int>(std::clamp(tiles, static_cast<double>(options_.threads),
+                                     static_cast<double>(kMaxBatchTiles)));
+}
+
 std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
-  const std::string target =
-      "/v1/workers/" + worker_id_ + "/claim?wait_s=" + std::to_string(options_.claim_wait_s);
+  const std::string target = "/v1/workers/" + worker_id_ + "/claim?wait_s=" +
+                             std::to_string(options_.claim_wait_s) +
+                             "&max_tiles=" + std::to_string(batch_tiles());
   const auto result = with_retry("claim", [&] { return client_.request("POST", target); });
   if (!result || result->status == 204) return std::nullopt;
   if (result->status == 404) {  // the coordinator forgot us (a new data dir): join again
@@ -98,9 +123,11 @@ std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
     return std::nullopt;
   }
   const json lease = json::parse(result->body);
-  const json& tile = lease.at("tile");
-  return Claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"),
-                 TileRect{tile.at("x"), tile.at("y"), tile.at("width"), tile.at("height")}};
+  Claimed claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"), {}};
+  for (const json& tile : lease.at("tiles"))
+    claimed.tiles.push_back(
+        {tile.at("index"), TileRect{tile.at("x"), tile.at("y"), tile.at("width"), tile.at("height")}});
+  return claimed;
 }
 
 const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
@@ -113,48 +140,77 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   return *renderers_.emplace(digest, std::move(renderer)).first->second;
 }
 
-std::optional<std::vector<float>> WorkerDaemon::render(const Claimed& tile, std::uint64_t& rays) {
-  const Renderer& renderer = renderer_for(tile.scene_digest);
-  heartbeat_->begin(tile.lease_id);
-  std::vector<float> pixels(tile.rect.pixel_count() * 3);
+void WorkerDaemon::render(const Claimed& lease) {
+  const Renderer& renderer = renderer_for(lease.scene_digest);
+  uploading_lease_ = lease.lease_id;  // uploads_ is idle between leases
+  heartbeat_->begin(lease.lease_id);
+  const int count = static_cast<int>(lease.tiles.size());
+  std::atomic<int> next{0};
+  std::atomic<int> rendered{0};
+  // Each thread takes the next tile in the lease's (centre-first) order until none is
+  // left, or the lease is lost, or the worker is asked to stop.
+  const auto render_tiles = [&] {
+    while (!stop_ && !heartbeat_->lost() && !uploads_->refused()) {
+      const int i = next++;
+      if (i >= count) return;
+      const ClaimedTile& tile = lease.tiles[i];
+      FinishedTile finished{tile.index, std::vector<float>(tile.rect.pixel_count() * 3), 0};
+      finished.rays = renderer.render_tile(tile.rect, finished.pixels).total();
+      uploads_->push(std::move(finished));
+      ++rendered;
+    }
+  };
+  const auto start = std::chrono::steady_clock::now();
   if (options_.threads == 1) {
-    rays = renderer.render_tile(tile.rect, pixels).total();
+    render_tiles();
   } else {
-    // All threads on one tile, a row each: the tile finishes (and is uploaded) sooner than
-    // with one tile per thread, and every pixel is computed the same way either way.
-    std::atomic<std::uint64_t> ray_count{0};
     arena_->execute([&] {
-      tbb::parallel_for(0, tile.rect.height, [&](int row) {
-        if (heartbeat_->lost()) return;
-        const TileRect line{tile.rect.x, tile.rect.y + row, tile.rect.width, 1};
-        const std::size_t row_floats = static_cast<std::size_t>(tile.rect.width) * 3;
-        ray_count += renderer.render_tile(line, std::span<float>(pixels).subspan(row * row_floats, row_floats))
-                         .total();
-      });
+      tbb::parallel_for(0, options_.threads, [&](int) { render_tiles(); },
+                        tbb::simple_partitioner());
     });
-    rays = ray_count;
   }
-  if (!heartbeat_->end()) {
-    spdlog::info("lease {} was withdrawn; dropping the tile of job {}", tile.lease_id, tile.job_id);
-    return std::nullopt;
+  const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  const bool delivered = uploads_->flush();
+  const bool kept = heartbeat_->end();
+  if (rendered == count && !stop_) {
+    const double per_tile = took.count() * options_.threads / count;
+    tile_thread_seconds_ =
+        tile_thread_seconds_ > 0 ? 0.5 * (tile_thread_seconds_ + per_tile) : per_tile;
   }
-  return pixels;
+  if (!delivered || !kept) {
+    spdlog::info("lease {} was withdrawn; dropping the rest of its tiles of job {}", lease.lease_id,
+                 lease.job_id);
+    return;
+  }
+  if (rendered < count) release(lease.lease_id);  // stopping: give back what was not rendered
 }
 
-void WorkerDaemon::upload(const Claimed& tile, const std::vector<float>& pixels,
-                          std::uint64_t rays) {
-  const std::string body(reinterpret_cast<const char*>(pixels.data()), pixels.size() * sizeof(float));
+bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles) {
+  std::string body;
+  std::string indexes;
+  std::string rays;
+  std::size_t bytes = 0;
+  for (const FinishedTile& tile : tiles) bytes += tile.pixels.size() * sizeof(float);
+  body.reserve(bytes);
+  for (const FinishedTile& tile : tiles) {
+    body.append(reinterpret_cast<const char*>(tile.pixels.data()), tile.pixels.size() * sizeof(float));
+    indexes += (indexes.empty() ? "" : ",") + std::to_string(tile.index);
+    rays += (rays.empty() ? "" : ",") + std::to_string(tile.rays);
+  }
   const auto result = with_retry("upload", [&] {
-    return client_.request("PUT", "/v1/leases/" + tile.lease_id + "/result", body,
-                           "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
+    return upload_client_.request("PUT", "/v1/leases/" + lease_id + "/result", body,
+                                  "application/octet-stream",
+                                  {{"X-Tessera-Tiles", indexes}, {"X-Tessera-Rays", rays}});
   });
-  if (result && result->status != 200)
-    spdlog::info("result for lease {} refused ({}): {}", tile.lease_id, result->status, result->body);
+  if (!result) return true;  // stopping while unreachable: the lease will expire
+  if (result->status == 200) return true;
+  spdlog::info("result for lease {} refused ({}): {}", lease_id, result->status, result->body);
+  return false;
 }
 
-void WorkerDaemon::release(const Claimed& tile) {
+void WorkerDaemon::release(const std::string& lease_id) {
   try {
-    client_.request("POST", "/v1/leases/" + tile.lease_id + "/release");
+    client_.request("POST", "/v1/leases/" + lease_id + "/release");
   } catch (const HttpError&) {
     // The lease will expire on its own.
   }
@@ -165,19 +221,20 @@ int WorkerDaemon::run() {
   while (!stop_) {
     const auto tile = claim();
     if (!tile) continue;
-    if (stop_) {  // asked to stop while waiting: give the tile straight back
-      release(*tile);
+    if (stop_) {  // asked to stop while waiting: give the tiles straight back
+      release(tile->lease_id);
       break;
     }
-    std::uint64_t rays = 0;
     try {
-      // The upload finishes before the next claim: while this worker still holds the
-      // tile's lease, a claim would hand the same lease back (that is how a reconnecting
-      // worker recovers its tile) and the tile would be rendered twice.
-      if (const auto pixels = render(*tile, rays)) upload(*tile, *pixels, rays);
+      // Every upload finishes before the next claim: while this worker still holds the
+      // lease, a claim would hand the same lease back (that is how a reconnecting worker
+      // recovers its tiles) and they would be rendered twice.
+      render(*tile);
     } catch (const std::exception& e) {
-      spdlog::error("tile of job {} failed: {}", tile->job_id, e.what());
-      release(*tile);
+      spdlog::error("lease {} of job {} failed: {}", tile->lease_id, tile->job_id, e.what());
+      uploads_->flush();
+      heartbeat_->end();
+      release(tile->lease_id);
     }
   }
   try {

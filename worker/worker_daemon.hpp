@@ -1,6 +1,7 @@
-// tessera-worker's loop: register with the coordinator, claim a tile (long-polling while
-// there is none), render it with every thread while a heartbeat keeps the lease alive,
-// upload the pixels, claim again. The coordinator never calls the worker.
+// tessera-worker's loop: register with the coordinator, claim a lease on a batch of tiles
+// (long-polling while there is none), render them with every thread, a tile per thread,
+// while a heartbeat keeps the lease alive and finished tiles travel back in groups; claim
+// again. The coordinator never calls the worker.
 #pragma once
 
 #include <atomic>
@@ -14,6 +15,7 @@
 
 #include "client/http_client.hpp"
 #include "worker/lease_heartbeat.hpp"
+#include "worker/tile_uploads.hpp"
 #include "worker/renderer.hpp"
 
 namespace tessera {
@@ -29,16 +31,21 @@ class WorkerDaemon {
  public:
   // `stop` is set (by a signal thread) to ask for a clean exit after the current tile.
   WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop);
+  ~WorkerDaemon();
 
   // Returns the process exit code.
   int run();
 
  private:
+  struct ClaimedTile {
+    int index = 0;
+    TileRect rect;
+  };
   struct Claimed {
     std::string lease_id;
     std::string job_id;
     std::string scene_digest;
-    TileRect rect;
+    std::vector<ClaimedTile> tiles;  // in the order to render them
   };
 
   // Calls `attempt` until it succeeds or stop is requested, backing off (capped) while
@@ -49,17 +56,25 @@ class WorkerDaemon {
   bool register_self();
   std::optional<Claimed> claim();
   const Renderer& renderer_for(const std::string& digest);
-  // Renders while heartbeating; empty when the lease was lost on the way.
-  std::optional<std::vector<float>> render(const Claimed& tile, std::uint64_t& rays);
-  void upload(const Claimed& tile, const std::vector<float>& pixels, std::uint64_t rays);
-  void release(const Claimed& tile);
+  // Renders the batch while heartbeating, handing each finished tile to uploads_, and
+  // returns once they are all sent. Stops early when the lease is lost or the worker is
+  // asked to stop; the tiles not rendered then are released.
+  void render(const Claimed& lease);
+  bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
+  void release(const std::string& lease_id);
+  // How many tiles to ask for: about batch_seconds of work, from the speed seen so far.
+  int batch_tiles() const;
 
   WorkerOptions options_;
   const std::atomic<bool>& stop_;
   HttpClient client_;
   std::string worker_id_;
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
-  bool unreachable_reported_ = false;
+  HttpClient upload_client_;                   // used by uploads_' thread only
+  std::string uploading_lease_;                // the lease uploads_ sends for
+  std::unique_ptr<TileUploads> uploads_;
+  double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet
+  std::atomic<bool> unreachable_reported_{false};
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
   std::unique_ptr<tbb::task_arena> arena_;  // made once: a new arena per tile costs a lot

@@ -1,10 +1,10 @@
-#include "server/claim_waiters.hpp"
+#include "server/long_polls.hpp"
 
 #include <boost/asio/post.hpp>
 
 namespace tessera {
 
-struct ClaimWaiters::Waiter {
+struct LongPolls::Waiter {
   explicit Waiter(boost::asio::strand<boost::asio::io_context::executor_type>& strand)
       : timer(strand) {}
   boost::asio::steady_timer timer;
@@ -14,9 +14,9 @@ struct ClaimWaiters::Waiter {
   bool done = false;
 };
 
-ClaimWaiters::ClaimWaiters(boost::asio::io_context& io) : strand_(boost::asio::make_strand(io)) {}
+LongPolls::LongPolls(boost::asio::io_context& io) : strand_(boost::asio::make_strand(io)) {}
 
-void ClaimWaiters::wait(std::chrono::milliseconds wait, std::function<bool()> attempt,
+void LongPolls::wait(std::chrono::milliseconds wait, std::function<bool()> attempt,
                         std::function<void()> on_timeout) {
   if (attempt()) return;
   if (wait.count() <= 0 || closed_) {
@@ -46,7 +46,7 @@ void ClaimWaiters::wait(std::chrono::milliseconds wait, std::function<bool()> at
   });
 }
 
-void ClaimWaiters::finish(const std::shared_ptr<Waiter>& waiter, bool claimed) {
+void LongPolls::finish(const std::shared_ptr<Waiter>& waiter, bool claimed) {
   if (waiter->done) return;
   waiter->done = true;
   waiters_.erase(waiter->position);
@@ -54,7 +54,7 @@ void ClaimWaiters::finish(const std::shared_ptr<Waiter>& waiter, bool claimed) {
   if (!claimed) waiter->on_timeout();
 }
 
-void ClaimWaiters::notify() {
+void LongPolls::notify() {
   boost::asio::post(strand_, [this] {
     // Copy: finish() removes from the list while we walk it.
     const std::list<std::shared_ptr<Waiter>> parked = waiters_;
@@ -63,7 +63,7 @@ void ClaimWaiters::notify() {
   });
 }
 
-void ClaimWaiters::close() {
+void LongPolls::close() {
   closed_ = true;
   boost::asio::post(strand_, [this] {
     const std::list<std::shared_ptr<Waiter>> parked = waiters_;

@@ -1,5 +1,6 @@
-// Long-polled claims: a worker asking for work when there is none is parked here until a
-// tile may have become available or its wait runs out. Nothing polls on a timer.
+// Long-polled requests: a worker asking for work when there is none, or a client waiting
+// for its job to finish, is parked here until what it waits for may have happened
+// (notify()) or its wait runs out. Nothing polls on a timer.
 #pragma once
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
@@ -16,9 +17,9 @@
 
 namespace tessera {
 
-class ClaimWaiters {
+class LongPolls {
  public:
-  explicit ClaimWaiters(boost::asio::io_context& io);
+  explicit LongPolls(boost::asio::io_context& io);
 
   // Runs `attempt` now and, while it returns false, again after each notify() until
   // `wait` has passed; then calls `on_timeout`. Exactly one of a true attempt or

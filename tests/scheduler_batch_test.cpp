@@ -1,0 +1,217 @@
+// Leases on batches of tiles: how a claim sizes its batch, how the tiles of one lease are
+// delivered in groups, and what happens to the ones still owed when the lease ends early.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/image_io.hpp"
+#include "tests/scheduler_fixture.hpp"
+
+namespace tessera {
+namespace {
+
+using namespace test;
+
+std::vector<int> indexes_of(const Lease& lease) {
+  std::vector<int> indexes;
+  for (const LeaseTile& tile : lease.tiles) indexes.push_back(tile.index);
+  return indexes;
+}
+
+// The lease's tiles after the first.
+std::vector<int> rest_of(const Lease& lease) {
+  std::vector<int> indexes = indexes_of(lease);
+  indexes.erase(indexes.begin());
+  return indexes;
+}
+
+using SchedulerBatchTest = SchedulerTest;
+
+TEST_F(SchedulerBatchTest, AClaimTakesUpToHalfOfTheWorkersShareCentreFirst) {
+  const std::string job = submit(96, 96, 32).id;  // 3x3 tiles, centre-first 4 1 3 5 7 0 2 6 8
+  const std::string w = worker();
+  const Lease first = *s().claim(w, 100);
+  EXPECT_EQ(indexes_of(first), (std::vector<int>{4, 1, 3, 5}));  // 9 pending / 2
+  EXPECT_EQ(s().job(job)->tiles_rendering, 4);
+  EXPECT_EQ(info_of(w).current_tile, 4);
+  ASSERT_EQ(deliver(first), ResultOutcome::accepted);  // all four, in the lease's order
+  EXPECT_EQ(s().job(job)->tiles_done, 4);
+  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).tiles_rendered, 4u);
+
+  // The batch shrinks as the job nears its end, down to single tiles.
+  EXPECT_EQ(indexes_of(*s().claim(w, 100)), (std::vector<int>{7, 0}));
+}
+
+TEST_F(SchedulerBatchTest, EveryWorkerIsCountedInTheShareAndMaxTilesCaps) {
+  submit(128, 128, 16);  // 64 tiles
+  const std::string w1 = worker("one");
+  const std::string w2 = worker("two");
+  EXPECT_EQ(s().claim(w1, 100)->tiles.size(), 16u);  // 64 / (2 * 2)
+  EXPECT_EQ(s().claim(w2, 5)->tiles.size(), 5u);
+  const std::string w3 = worker("three");
+  s().worker_left(w3);  // a worker that left takes no share
+  EXPECT_EQ(s().claim(worker("four"), 100)->tiles.size(), 7u);  // 43 / (2 * 3)
+}
+
+TEST_F(SchedulerBatchTest, TilesOfOneLeaseAreDeliveredInGroups) {
+  const std::string job = submit(96, 96, 32).id;
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 100);
+  ASSERT_EQ(lease.tiles.size(), 4u);
+  const LeaseTile& a = lease.tiles[0];
+  const LeaseTile& b = lease.tiles[1];
+  const LeaseTile& c = lease.tiles[2];
+  const LeaseTile& d = lease.tiles[3];
+  const auto pixels_a = tile_pixels(a.rect, 1.0f);
+  const auto pixels_b = tile_pixels(b.rect, 2.0f);
+  const auto pixels_c = tile_pixels(c.rect, 3.0f);
+  const auto pixels_d = tile_pixels(d.rect, 4.0f);
+  const auto other_b = tile_pixels(b.rect, 9.0f);
+
+  const std::vector<TileResult> group{{b.index, pixels_b, 20}, {a.index, pixels_a, 10}};
+  ASSERT_EQ(s().complete(lease.id, group), ResultOutcome::accepted);
+  EXPECT_EQ(s().job(job)->tiles_done, 2);
+  EXPECT_EQ(s().job(job)->tiles_rendering, 2);
+  EXPECT_EQ(s().job(job)->rays, 30u);
+  EXPECT_EQ(info_of(w).current_tile, c.index);  // the next one owed
+  EXPECT_EQ(info_of(w).tiles_rendered, 2u);
+  const auto owed = s().heartbeat(lease.id);
+  ASSERT_TRUE(owed);
+  EXPECT_EQ(indexes_of(*owed), (std::vector<int>{c.index, d.index}));
+  EXPECT_EQ(s().claim(w, 100)->id, lease.id);  // a re-claim gets what is still owed
+
+  // A repeat alone is a duplicate; beside a new tile it is ignored. Either way the first
+  // accepted pixels stay.
+  const std::vector<TileResult> repeat{{b.index, other_b, 20}};
+  EXPECT_EQ(s().complete(lease.id, repeat), ResultOutcome::duplicate);
+  const std::vector<TileResult> mixed{{b.index, other_b, 20}, {c.index, pixels_c, 30}};
+  EXPECT_EQ(s().complete(lease.id, mixed), ResultOutcome::accepted);
+  EXPECT_EQ(s().job(job)->rays, 60u);
+  const std::vector<TileResult> last{{d.index, pixels_d, 40}};
+  EXPECT_EQ(s().complete(lease.id, last), ResultOutcome::accepted);
+  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_FALSE(s().heartbeat(lease.id));  // nothing owed: the lease is over
+  EXPECT_EQ(s().complete(lease.id, repeat), ResultOutcome::duplicate);
+
+  Image expected(96, 96);
+  expected.paste(a.rect, pixels_a);
+  expected.paste(b.rect, pixels_b);
+  expected.paste(c.rect, pixels_c);
+  expected.paste(d.rect, pixels_d);
+  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
+  reopen();  // the store knows which lease delivered what
+  EXPECT_EQ(s().complete(lease.id, repeat), ResultOutcome::duplicate);
+  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
+}
+
+TEST_F(SchedulerBatchTest, AnUploadIsAllOrNothing) {
+  const std::string job = submit(96, 96, 32).id;
+  const Lease lease = *s().claim(worker(), 100);
+  const LeaseTile& a = lease.tiles[0];
+  const LeaseTile& b = lease.tiles[1];
+  const auto pixels_a = tile_pixels(a.rect, 1.0f);
+  const auto pixels_b = tile_pixels(b.rect, 2.0f);
+  auto short_b = pixels_b;
+  short_b.pop_back();
+  const int foreign = 0;  // a tile of the job that this lease does not hold
+  const std::vector<int> held = indexes_of(lease);
+  ASSERT_EQ(std::count(held.begin(), held.end(), foreign), 0);
+  const auto pixels_foreign = tile_pixels(split_into_tiles(96, 96, 32)[foreign], 5.0f);
+
+  const std::vector<TileResult> with_foreign{{a.index, pixels_a, 1}, {foreign, pixels_foreign, 1}};
+  EXPECT_EQ(s().complete(lease.id, with_foreign), ResultOutcome::wrong_tile);
+  const std::vector<TileResult> twice{{a.index, pixels_a, 1}, {a.index, pixels_a, 1}};
+  EXPECT_EQ(s().complete(lease.id, twice), ResultOutcome::wrong_tile);
+  const std::vector<TileResult> with_short{{a.index, pixels_a, 1}, {b.index, short_b, 1}};
+  EXPECT_EQ(s().complete(lease.id, with_short), ResultOutcome::wrong_size);
+  // The whole-lease form wants every owed tile, no more and no less.
+  EXPECT_EQ(s().complete(lease.id, pixels_a, 1), ResultOutcome::wrong_size);
+  EXPECT_EQ(s().job(job)->tiles_done, 0);
+  EXPECT_EQ(s().job(job)->tiles_rendering, 4);
+  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), Image(96, 96).pixels()));
+}
+
+TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
+  const std::string job = submit(96, 96, 32).id;
+  const std::string slow = worker("slow");
+  const Lease lease = *s().claim(slow, 100);
+  const LeaseTile& a = lease.tiles[0];
+  const auto pixels_a = tile_pixels(a.rect, 1.0f);
+  const std::vector<TileResult> delivered{{a.index, pixels_a, 10}};
+  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+
+  clock_.advance_ms(timeout_ms);
+  s().expire_leases();
+  EXPECT_EQ(s().job(job)->tiles_done, 1);
+  EXPECT_EQ(s().job(job)->tiles_rendering, 0);
+  EXPECT_EQ(info_of(slow).state, "idle");
+  EXPECT_FALSE(s().heartbeat(lease.id));
+
+  // The owed tiles go out again first, centre-first, under a new lease (two of them: the
+  // share of one of two workers in the 8 tiles pending).
+  const Lease rescue = *s().claim(worker("rescuer"), 3);
+  EXPECT_NE(rescue.id, lease.id);
+  std::vector<int> owed = rest_of(lease);
+  owed.pop_back();
+  EXPECT_EQ(indexes_of(rescue), owed);
+  // The old lease: its delivered tile is a duplicate, an owed one stale.
+  const auto late_b = tile_pixels(lease.tiles[1].rect, 9.0f);
+  const std::vector<TileResult> late{{lease.tiles[1].index, late_b, 10}};
+  EXPECT_EQ(s().complete(lease.id, late), ResultOutcome::stale);
+  EXPECT_EQ(s().complete(lease.id, delivered), ResultOutcome::duplicate);
+  ASSERT_EQ(deliver(rescue, 2.0f), ResultOutcome::accepted);
+  EXPECT_EQ(s().job(job)->tiles_done, 3);
+}
+
+TEST_F(SchedulerBatchTest, ReleaseGivesBackWhatWasNotDelivered) {
+  const std::string job = submit(96, 96, 32).id;
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 100);
+  const auto pixels_a = tile_pixels(lease.tiles[0].rect, 1.0f);
+  const std::vector<TileResult> delivered{{lease.tiles[0].index, pixels_a, 10}};
+  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+  s().release(lease.id);
+  EXPECT_EQ(s().job(job)->tiles_done, 1);
+  EXPECT_EQ(s().job(job)->tiles_rendering, 0);
+  EXPECT_EQ(info_of(w).state, "idle");
+  const Lease next = *s().claim(w, 100);
+  EXPECT_NE(next.id, lease.id);
+  EXPECT_EQ(next.tiles[0].index, lease.tiles[1].index);  // first in line again
+}
+
+TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
+  const std::string job = submit(96, 96, 32).id;
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 100);
+  const auto pixels_a = tile_pixels(lease.tiles[0].rect, 1.0f);
+  const std::vector<TileResult> delivered{{lease.tiles[0].index, pixels_a, 10}};
+  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+  reopen();
+  EXPECT_EQ(info_of(w).state, "rendering");
+  EXPECT_EQ(info_of(w).current_tile, lease.tiles[1].index);
+  const Lease back = *s().claim(w, 100);
+  EXPECT_EQ(back.id, lease.id);
+  EXPECT_EQ(indexes_of(back), rest_of(lease));
+  EXPECT_EQ(s().job(job)->tiles_rendering, 3);
+}
+
+TEST_F(SchedulerBatchTest, AJobWhoseImageCannotBeWrittenFails) {
+  const std::string job = submit(32, 32, 32).id;
+  // A file where the images directory should be: the image write must fail.
+  std::filesystem::remove_all(store_->data_dir() / "images");
+  std::ofstream(store_->data_dir() / "images") << "not a directory";
+  ASSERT_EQ(deliver(*s().claim(worker())), ResultOutcome::accepted);
+  s().wait_for_images();
+  const JobStatus failed = *s().job(job);
+  EXPECT_EQ(failed.state, JobState::failed);
+  EXPECT_NE(failed.error.find("cannot write the image"), std::string::npos) << failed.error;
+  EXPECT_EQ(failed.tiles_done, 1);  // the tiles are kept all the same
+}
+
+}  // namespace
+}  // namespace tessera

@@ -1,0 +1,132 @@
+// The Scheduler's unit-test fixture: a real Store in a temporary directory, a manual clock,
+// and helpers that fill tiles with values that show any misplaced pixel.
+#pragma once
+
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server/scheduler.hpp"
+
+namespace tessera::test {
+
+inline constexpr std::int64_t timeout_ms = 30'000;
+
+inline Scene scene_of(int width, int height, int tile_size) {
+  Scene scene;
+  scene.width = width;
+  scene.height = height;
+  scene.render.tile_size = tile_size;
+  return scene;
+}
+
+// Distinct, awkward values (negative, fractional, large) so that any misplaced or
+// converted pixel shows up; `seed` tells uploads of the same tile apart.
+inline float value_at(int x, int y, int channel, float seed) {
+  return seed + static_cast<float>(x) * 1.25f - static_cast<float>(y) * 0.3f +
+         static_cast<float>(channel) * 1e4f + 1.0f / 3.0f;
+}
+
+inline std::vector<float> tile_pixels(const TileRect& rect, float seed) {
+  std::vector<float> pixels;
+  for (int y = rect.y; y < rect.y + rect.height; ++y)
+    for (int x = rect.x; x < rect.x + rect.width; ++x)
+      for (int c = 0; c < 3; ++c) pixels.push_back(value_at(x, y, c, seed));
+  return pixels;
+}
+
+// The job's row as the store has it, but in `state` (to stage a crash).
+inline JobRow row_of(const JobStatus& job, const std::string& state) {
+  JobRow row;
+  row.id = job.id;
+  row.name = job.name;
+  row.priority = job.priority;
+  row.state = state;
+  row.width = job.width;
+  row.height = job.height;
+  row.tile_size = job.tile_size;
+  row.scene_digest = job.scene_digest;
+  row.created_at_ms = job.created_at_ms;
+  row.rays = job.rays;
+  return row;
+}
+
+inline bool same_bits(std::span<const float> a, std::span<const float> b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
+}
+
+class SchedulerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = std::filesystem::temp_directory_path() /
+           ("tessera-scheduler-test-" + std::to_string(::getpid()) + "-" + info->name());
+    std::filesystem::remove_all(dir_);
+    open();
+  }
+  void TearDown() override {
+    scheduler_.reset();
+    store_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+
+  void open() {
+    store_ = std::make_unique<Store>(dir_);
+    SchedulerConfig config;
+    config.lease_timeout_ms = timeout_ms;
+    scheduler_ = std::make_unique<Scheduler>(*store_, clock_, config);
+  }
+  // What a coordinator restart does: everything in memory is lost.
+  void reopen() {
+    scheduler_.reset();
+    store_.reset();
+    open();
+  }
+
+  Scheduler& s() { return *scheduler_; }
+  std::string worker(const std::string& name = "w") {
+    return s().register_worker(name, "host", 4).id;
+  }
+  JobStatus submit(int width, int height, int tile_size, int priority = 50,
+                   const std::string& json = "{}") {
+    return s().submit("job", priority, scene_of(width, height, tile_size), json);
+  }
+  ResultOutcome deliver(const Lease& lease, float seed = 0.0f, std::uint64_t rays = 10) {
+    // Every tile the lease owes, in its order; the rays count once.
+    std::vector<float> pixels;
+    for (const LeaseTile& tile : lease.tiles) {
+      const std::vector<float> part = tile_pixels(tile.rect, seed);
+      pixels.insert(pixels.end(), part.begin(), part.end());
+    }
+    return s().complete(lease.id, pixels, rays);
+  }
+  // Claims and completes tiles with one worker until the job is completed.
+  void finish(const std::string& job_id, const std::string& worker_id, float seed = 0.0f) {
+    while (s().job(job_id)->state != JobState::completed) {
+      const auto lease = s().claim(worker_id);
+      ASSERT_TRUE(lease);
+      ASSERT_EQ(lease->job_id, job_id);
+      ASSERT_EQ(deliver(*lease, seed), ResultOutcome::accepted);
+    }
+  }
+  WorkerInfo info_of(const std::string& worker_id) {
+    for (const WorkerInfo& w : s().workers())
+      if (w.id == worker_id) return w;
+    ADD_FAILURE() << "no worker " << worker_id;
+    return {};
+  }
+
+  std::filesystem::path dir_;
+  ManualClock clock_;
+  std::unique_ptr<Store> store_;
+  std::unique_ptr<Scheduler> scheduler_;
+};
+
+}  // namespace tessera::test

@@ -1,0 +1,74 @@
+#include "worker/tile_uploads.hpp"
+
+#include <algorithm>
+
+namespace tessera {
+
+TileUploads::TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_bytes)
+    : send_(std::move(send)),
+      gather_(gather),
+      max_group_bytes_(max_group_bytes),
+      thread_([this] { run(); }) {}
+
+TileUploads::~TileUploads() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+void TileUploads::push(FinishedTile tile) {
+  {
+    std::lock_guard lock(mutex_);
+    ready_bytes_ += tile.pixels.size() * sizeof(float);
+    ready_.push_back(std::move(tile));
+  }
+  changed_.notify_all();
+}
+
+bool TileUploads::flush() {
+  std::unique_lock lock(mutex_);
+  flushing_ = true;
+  changed_.notify_all();
+  changed_.wait(lock, [&] { return ready_.empty() && !sending_; });
+  flushing_ = false;
+  return !refused_.exchange(false);
+}
+
+std::vector<FinishedTile> TileUploads::take_group() {
+  // Whole tiles up to the byte limit, and always at least one.
+  std::size_t count = 0;
+  std::size_t bytes = 0;
+  while (count < ready_.size() &&
+         (count == 0 || bytes + ready_[count].pixels.size() * sizeof(float) <= max_group_bytes_))
+    bytes += ready_[count++].pixels.size() * sizeof(float);
+  std::vector<FinishedTile> group(std::make_move_iterator(ready_.begin()),
+                                  std::make_move_iterator(ready_.begin() + static_cast<long>(count)));
+  ready_.erase(ready_.begin(), ready_.begin() + static_cast<long>(count));
+  ready_bytes_ -= bytes;
+  return group;
+}
+
+void TileUploads::run() {
+  std::unique_lock lock(mutex_);
+  while (true) {
+    changed_.wait(lock, [&] { return stopping_ || !ready_.empty(); });
+    if (ready_.empty()) return;  // stopping with nothing left to send
+    changed_.wait_for(lock, gather_, [&] {
+      return stopping_ || flushing_ || ready_bytes_ >= max_group_bytes_;
+    });
+    std::vector<FinishedTile> group = take_group();
+    sending_ = true;
+    const bool dropped = refused_;
+    lock.unlock();
+    const bool sent = dropped || send_(group);
+    lock.lock();
+    if (!sent) refused_ = true;
+    sending_ = false;
+    changed_.notify_all();
+  }
+}
+
+}  // namespace tessera

@@ -1,0 +1,61 @@
+// Finished tiles travel to the coordinator from a thread of their own, so that rendering
+// goes on while they are on the way. Tiles that finish close together share one request:
+// the coordinator then pays for one request and one transaction per group, not per tile.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace tessera {
+
+struct FinishedTile {
+  int index = 0;  // the tile's index in its job
+  std::vector<float> pixels;
+  std::uint64_t rays = 0;
+};
+
+class TileUploads {
+ public:
+  // Sends one group of the current lease's tiles; returns false when the coordinator
+  // refused it (the lease is lost), after which the lease's later tiles are dropped.
+  using Send = std::function<bool(const std::vector<FinishedTile>&)>;
+
+  // A group is sent once `gather` has passed since its first tile was ready, when it
+  // reaches `max_group_bytes` of pixels, or on flush().
+  TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_bytes);
+  ~TileUploads();
+  TileUploads(const TileUploads&) = delete;
+  TileUploads& operator=(const TileUploads&) = delete;
+
+  void push(FinishedTile tile);
+  // Sends what is left and waits until every pushed tile has been sent or dropped. Returns
+  // false when the coordinator refused a group since the last flush; then clears that.
+  bool flush();
+  // True once the coordinator refused a group of the current lease.
+  bool refused() const { return refused_; }
+
+ private:
+  void run();
+  std::vector<FinishedTile> take_group();
+
+  Send send_;
+  std::chrono::milliseconds gather_;
+  std::size_t max_group_bytes_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<FinishedTile> ready_;
+  std::size_t ready_bytes_ = 0;
+  bool flushing_ = false;
+  bool sending_ = false;
+  bool stopping_ = false;
+  std::atomic<bool> refused_{false};
+  std::thread thread_;
+};
+
+}  // namespace tessera
