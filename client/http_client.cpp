@@ -3,6 +3,7 @@
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <charconv>
 #include <cstdint>
@@ -11,6 +12,7 @@
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -186,6 +188,7 @@ struct HttpClient::Connection {
   BaseUrl url;
   std::string host_header;
   std::chrono::milliseconds timeout;
+  std::atomic<bool> interrupted{false};
   net::io_context io;
   beast::tcp_stream stream;  // after io, which it uses
   beast::flat_buffer buffer;
@@ -201,6 +204,23 @@ HttpClient::HttpClient(HttpClient&&) noexcept = default;
 HttpClient& HttpClient::operator=(HttpClient&&) noexcept = default;
 
 void HttpClient::set_timeout(std::chrono::milliseconds timeout) { connection_->timeout = timeout; }
+
+void HttpClient::interrupt() {
+  Connection& c = *connection_;
+  c.interrupted = true;
+  // Posting is what io_context allows from another thread; the cancel then runs on the
+  // requesting thread, inside its run(), and aborts the operation under way.
+  net::post(c.io, [&c] { c.stream.cancel(); });
+}
+
+void HttpClient::clear_interrupt() {
+  Connection& c = *connection_;
+  c.interrupted = false;
+  // A cancel posted while no request ran is still queued: run it now, harmlessly.
+  c.io.restart();
+  c.io.poll();
+  if (c.open) c.close();
+}
 
 HttpResult HttpClient::request(std::string_view method, std::string_view target, std::string body,
                                std::string_view content_type, const Headers& headers) {
@@ -220,12 +240,25 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
   message.body() = std::move(body);
   message.prepare_payload();
 
+  const auto interrupted = [&] {
+    return HttpError(HttpError::Kind::interrupted, std::string(method) + " " + std::string(target) +
+                                                       " on " + c.where() + ": interrupted");
+  };
   for (int attempt = 0;; ++attempt) {
+    if (c.interrupted) throw interrupted();
     const bool reused = c.open;
-    if (!c.open) c.connect();
+    if (!c.open) {
+      try {
+        c.connect();
+      } catch (const HttpError&) {
+        if (c.interrupted) throw interrupted();  // the interrupt canceled the connect
+        throw;
+      }
+    }
     Connection::Outcome outcome = c.exchange(message);
     if (outcome.result) return std::move(*outcome.result);
     c.close();
+    if (c.interrupted) throw interrupted();
     if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) continue;
 
     const std::string what = std::string(method) + " " + std::string(target) + " on " + c.where();

@@ -29,6 +29,7 @@ class HttpError : public std::runtime_error {
     connect_failed,  // no connection could be made (refused, unreachable, unknown host)
     timeout,         // no complete answer within the client's timeout
     protocol,        // the connection failed or the answer was not valid HTTP
+    interrupted,     // interrupt() was called
   };
   HttpError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const noexcept { return kind_; }
@@ -66,6 +67,12 @@ class HttpClient {
 
   // For requests that may legitimately take long, such as a long-polled claim.
   void set_timeout(std::chrono::milliseconds timeout);
+  // Safe from any thread: ends the request in progress, if any, and every later one, with
+  // an HttpError of kind `interrupted`, until clear_interrupt(). For a process that must
+  // not sit out a long poll when it is asked to stop.
+  void interrupt();
+  // Makes the client usable again after interrupt(), on a new connection.
+  void clear_interrupt();
   const std::string& base_url() const { return base_url_; }
 
  private:

@@ -297,6 +297,45 @@ TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
   EXPECT_LT(Clock::now() - start, 10s) << "the claim waited for its timeout instead of the job";
 }
 
+TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
+  Farm farm("proto-job-wait", 0);
+  HttpClient http(farm.url(), 30s);
+  RawWorker worker(farm.url(), "finisher");
+  const std::string job_id = farm.api().submit("waited", 50, one_tile_scene())["id"];
+  for (const char* bad : {"-1", "61", "soon", "1x"})
+    EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/" + job_id + "?wait_s=" + bad), 400,
+                         "invalid_request"))
+        << bad;
+  EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/j-missing?wait_s=5"), 404, "not_found"));
+
+  // Not finished within wait_s: the status as it is, after the wait.
+  const auto start = Clock::now();
+  const HttpResult unfinished = http.request("GET", "/v1/jobs/" + job_id + "?wait_s=0.3");
+  EXPECT_GE(Clock::now() - start, 290ms);
+  ASSERT_EQ(unfinished.status, 200) << unfinished.body;
+  EXPECT_EQ(json::parse(unfinished.body)["state"], "queued");
+
+  // Parked, then woken by the result that completes the job.
+  auto parked = std::async(std::launch::async, [&] {
+    HttpClient waiting(farm.url(), 30s);
+    return waiting.request("GET", "/v1/jobs/" + job_id + "?wait_s=20");
+  });
+  ASSERT_EQ(parked.wait_for(300ms), std::future_status::timeout) << "the status did not wait";
+  const HttpResult claimed = worker.claim(5);
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const auto delivered_at = Clock::now();
+  ASSERT_EQ(worker.upload(json::parse(claimed.body)["id"], tile_body(16, 16, 0.5f)).status, 200);
+  const HttpResult finished = parked.get();
+  EXPECT_LT(Clock::now() - delivered_at, 5s) << "the status waited for its timeout instead of the job";
+  ASSERT_EQ(finished.status, 200) << finished.body;
+  EXPECT_EQ(json::parse(finished.body)["state"], "completed");
+  // A finished job answers at once.
+  const auto again = Clock::now();
+  EXPECT_EQ(json::parse(http.request("GET", "/v1/jobs/" + job_id + "?wait_s=20").body)["state"],
+            "completed");
+  EXPECT_LT(Clock::now() - again, 5s);
+}
+
 TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   Farm farm("proto-expiry", 0, {"--lease-timeout", "1", "--heartbeat-interval", "0.2"});
   HttpClient http(farm.url(), 10s);

@@ -3,6 +3,7 @@
 // leaving it stranded under a lease. Each farm image is compared bit for bit with a local
 // render: whoever renders a tile, the pixels are the same.
 #include <ctime>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -130,6 +131,26 @@ TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
   EXPECT_EQ(by_first + by_second, total);
   EXPECT_GT(by_second, 0);
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
+}
+
+TEST(FarmScheduling, AnIdleWorkerExitsAtOnceOnSigterm) {
+  Farm farm("sched-idle-stop", 0);
+  auto idle = farm.start_worker("idle", 1);
+  ASSERT_TRUE(test::eventually([&] { return farm.worker_named("idle").has_value(); }, 20s))
+      << "the worker never registered; see " << (farm.dir() / "idle.log");
+  // Registered, so its first claim is on its way and then parked: there is no job, and a
+  // claim waits 10 s for one.
+  std::this_thread::sleep_for(300ms);
+  const auto stopped_at = std::chrono::steady_clock::now();
+  idle->signal(SIGTERM);
+  const auto status = idle->wait_for(15s);
+  ASSERT_TRUE(status.has_value()) << "the worker did not exit after SIGTERM";
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "status " << *status;
+  EXPECT_LT(std::chrono::steady_clock::now() - stopped_at, 3s)
+      << "the worker sat out its long poll instead of stopping";
+  EXPECT_EQ(farm.worker_named("idle").value()["state"], "gone");  // it said goodbye
+  EXPECT_EQ(test::read_text(farm.dir() / "idle.log").find("cannot reach"), std::string::npos)
+      << "the interrupted claim was reported as an unreachable coordinator";
 }
 
 }  // namespace

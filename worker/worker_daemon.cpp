@@ -73,6 +73,7 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
       report_reachable(true, what, "");
       return result;
     } catch (const HttpError& e) {
+      if (e.kind() == HttpError::Kind::interrupted) return std::nullopt;  // stopping
       report_reachable(false, what, e.what());
       for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms) std::this_thread::sleep_for(50ms);
       backoff = std::min<std::chrono::milliseconds>(backoff * 2, 5s);
@@ -208,7 +209,10 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
   return false;
 }
 
+void WorkerDaemon::interrupt() { client_.interrupt(); }
+
 void WorkerDaemon::release(const std::string& lease_id) {
+  client_.clear_interrupt();  // a stop may have interrupted the client: this must still go out
   try {
     client_.request("POST", "/v1/leases/" + lease_id + "/release");
   } catch (const HttpError&) {
@@ -237,6 +241,7 @@ int WorkerDaemon::run() {
       release(tile->lease_id);
     }
   }
+  client_.clear_interrupt();
   try {
     client_.request("DELETE", "/v1/workers/" + worker_id_);
   } catch (const HttpError&) {

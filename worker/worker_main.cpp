@@ -22,19 +22,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 
-  // Signals go to one thread that turns them into a flag: the loop finishes its tile.
+  // Signals go to one thread that turns them into a flag: the loop finishes the tiles in
+  // hand. Blocked before any thread starts, so that every thread inherits the mask.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   std::atomic<bool> stop{false};
-  std::thread([&signals, &stop] {
-    int signal = 0;
-    sigwait(&signals, &signal);
-    spdlog::info("signal {}: finishing the current tile, then exiting", signal);
-    stop = true;
-  }).detach();
 
   // TBB (ours and Embree's) may use exactly the threads asked for: idle pool threads
   // spinning for work would take CPU from the renderers and from workers beside this one.
@@ -42,5 +37,19 @@ int main(int argc, char** argv) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(options.threads));
   tessera::WorkerDaemon daemon(options, stop);
-  return daemon.run();
+  std::atomic<bool> exiting{false};
+  std::thread signal_thread([&signals, &stop, &daemon, &exiting] {
+    int signal = 0;
+    sigwait(&signals, &signal);
+    if (exiting) return;  // woken by main below
+    spdlog::info("signal {}: finishing the tiles in hand, then exiting", signal);
+    stop = true;
+    daemon.interrupt();
+  });
+  const int code = daemon.run();
+  // The signal thread must be gone before the daemon it points at.
+  exiting = true;
+  pthread_kill(signal_thread.native_handle(), SIGTERM);
+  signal_thread.join();
+  return code;
 }
