@@ -45,6 +45,11 @@ float linear_to_srgb(float linear) {
   return 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
 }
 
+void encode_images_on_calling_thread() {
+  OIIO::attribute("threads", 1);
+  OIIO::attribute("exr_threads", -1);  // -1: OpenEXR without a thread pool of its own
+}
+
 bool is_supported_image_path(const std::filesystem::path& path) {
   return kind_of(path) != FileKind::unknown;
 }

@@ -16,6 +16,12 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
 // Reads any file OpenImageIO knows as linear float RGB (for EXR, exactly what was written).
 Image read_image(const std::filesystem::path& path);
 
+// From now on the process encodes and decodes image files on the calling thread only, for
+// a process whose cores are for other work: OpenImageIO and OpenEXR start no helper
+// threads of their own, and background encoding stays in the (low-priority) thread that
+// asked for it.
+void encode_images_on_calling_thread();
+
 // True for the extensions write_image accepts.
 bool is_supported_image_path(const std::filesystem::path& path);
 

@@ -5,6 +5,9 @@
 
 #include "server/scheduler.hpp"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -125,6 +128,7 @@ CancelOutcome Scheduler::cancel(const std::string& id) {
   for (const TileSlot& tile : job->tiles)
     if (!tile.lease_id.empty()) stage_lease_end(change, tile.lease_id, false);
   commit(change);
+  job->canvas.reset();
   return CancelOutcome::canceled;
 }
 
@@ -145,11 +149,19 @@ std::optional<std::string> Scheduler::scene_json(const std::string& digest) cons
   return store_.scene_json(digest);
 }
 
-std::optional<Image> Scheduler::assemble(const std::string& id) const {
+std::shared_ptr<const Image> Scheduler::assemble(const std::string& id) const {
   std::lock_guard lock(mutex_);
   const JobEntry* job = find_job(id);
-  if (!job) return std::nullopt;
-  return assemble_locked(*job);
+  if (!job) return nullptr;
+  // Only a finished job's canvas is safe to share: a running one still takes tiles.
+  if (job->canvas && is_finished(job->status.state)) return job->canvas;
+  if (job->canvas) return std::make_shared<const Image>(*job->canvas);
+  return std::make_shared<const Image>(assemble_locked(*job));
+}
+
+Image& Scheduler::canvas_of(JobEntry& job) {
+  if (!job.canvas) job.canvas = std::make_shared<Image>(assemble_locked(job));
+  return *job.canvas;
 }
 
 Image Scheduler::assemble_locked(const JobEntry& job) const {
@@ -170,6 +182,8 @@ void Scheduler::wait_for_images() {
 }
 
 void Scheduler::write_images() {
+  // Below the threads that answer requests and render: an image file is for later.
+  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
   std::unique_lock lock(mutex_);
   while (true) {
     images_changed_.wait(lock, [&] { return stopping_ || !images_to_write_.empty(); });
@@ -181,10 +195,12 @@ void Scheduler::write_images() {
     writing_image_ = true;
     std::string error;
     try {
-      const Image image = assemble_locked(*job);
+      // A completed job's canvas changes no more, so it can be read outside the lock.
+      const std::shared_ptr<const Image> image =
+          job->canvas ? job->canvas : std::make_shared<const Image>(assemble_locked(*job));
       // Encoding takes a while and touches no shared state: workers and clients go on.
       lock.unlock();
-      store_.write_image(id, image);
+      store_.write_image(id, *image);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -194,7 +210,10 @@ void Scheduler::write_images() {
     JobEntry* still = find_job(id);
     if (!still) {
       store_.remove_image(id);  // removed while it was being written
-    } else if (!error.empty() && still->status.state == JobState::completed) {
+      continue;
+    }
+    still->canvas.reset();  // the file (or the store) serves it from now on
+    if (!error.empty() && still->status.state == JobState::completed) {
       // Every tile is stored, so a resubmission renders again; a "completed" job without
       // an image file would only fail later, when someone looks for it.
       StagedChange change;

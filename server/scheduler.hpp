@@ -130,8 +130,10 @@ class Scheduler {
   CancelOutcome cancel(const std::string& id);
   RemoveOutcome remove(const std::string& id);
   std::optional<std::string> scene_json(const std::string& digest) const;
-  // The job's image from the tiles stored so far; missing tiles are black.
-  std::optional<Image> assemble(const std::string& id) const;
+  // The job's image from the tiles stored so far; missing tiles are black. A running job
+  // keeps its image in memory as tiles arrive, until its image file is written, so that
+  // previews and the download right after completion need not read every tile back.
+  std::shared_ptr<const Image> assemble(const std::string& id) const;
   // Waits until the image file of every job completed so far is written (or has failed).
   void wait_for_images();
 
@@ -186,6 +188,8 @@ class Scheduler {
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
   Image assemble_locked(const JobEntry& job) const;
+  // The job's in-memory image, made from the stored tiles when it has none yet.
+  Image& canvas_of(JobEntry& job);
   // The image thread: writes each completed job's image file, off the path of the request
   // that completed it, and fails a job whose image cannot be written.
   void write_images();

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <span>
@@ -42,6 +43,9 @@ struct JobEntry {
   std::vector<int> order;  // position in hand-out order -> tile index (centre-first)
   std::vector<int> rank;   // tile index -> position
   std::set<int> pending;   // positions of pending tiles; begin() is handed out next
+  // The accepted tiles pasted together, from the first result until the image file is
+  // written; shared with readers that encode it outside the lock, once it changes no more.
+  std::shared_ptr<Image> canvas;
 };
 
 struct WorkerEntry {

@@ -205,8 +205,12 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
     }
   }
   commit(change);
-  // After the commit: should the write fail or the process die, the tiles are stored and
-  // a restart writes the image again.
+  // After the commit, so that a canvas made now from the store already holds them.
+  Image& canvas = canvas_of(job);
+  for (const TileResult* result : fresh)
+    canvas.paste(job.tiles[result->tile_index].rect, result->pixels);
+  // Should the write fail or the process die, the tiles are stored and a restart writes
+  // the image again.
   if (job_done) {
     images_to_write_.push_back(job.status.id);
     images_changed_.notify_all();

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "common/image_io.hpp"
 #include "server/api_routes.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
@@ -58,6 +59,9 @@ void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& sched
 int run(const ServerOptions& options) {
   using namespace tessera;
   const auto [host, port] = split_listen(options.listen);
+  // The cores belong to the local workers and the requests; an image file is written by
+  // one low-priority thread, not by a pool of OpenEXR threads competing with them.
+  encode_images_on_calling_thread();
 
   Store store(options.data_dir);
   SystemClock clock;
