@@ -163,6 +163,7 @@ int submit(const Options& options, ApiClient& api) {
     std::printf("%s\n", job.dump(2).c_str());
   else
     std::printf("submitted %s (%s)\n", id.c_str(), name.c_str());
+  std::fflush(stdout);  // scripts reading the id need it now, not when --wait ends
   if (!options.wait) return kExitOk;
   const json final_job = watch(api, id);
   if (options.json_output) std::printf("%s\n", final_job.dump(2).c_str());
