@@ -29,7 +29,15 @@ std::vector<int> rest_of(const Lease& lease) {
   return indexes;
 }
 
-using SchedulerBatchTest = SchedulerTest;
+class SchedulerBatchTest : public SchedulerTest {
+ protected:
+  // Delivers the lease's first tile alone, as a group of one.
+  ResultOutcome deliver_first(const Lease& lease) {
+    const std::vector<float> pixels = tile_pixels(lease.tiles[0].rect, 1.0f);
+    const std::vector<TileResult> group{{lease.tiles[0].index, pixels, 10}};
+    return s().complete(lease.id, group);
+  }
+};
 
 TEST_F(SchedulerBatchTest, AClaimTakesUpToHalfOfTheWorkersShareCentreFirst) {
   const std::string job = submit(96, 96, 32).id;  // 3x3 tiles, centre-first 4 1 3 5 7 0 2 6 8
@@ -140,10 +148,7 @@ TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
   const std::string job = submit(96, 96, 32).id;
   const std::string slow = worker("slow");
   const Lease lease = *s().claim(slow, 100);
-  const LeaseTile& a = lease.tiles[0];
-  const auto pixels_a = tile_pixels(a.rect, 1.0f);
-  const std::vector<TileResult> delivered{{a.index, pixels_a, 10}};
-  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+  ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
 
   clock_.advance_ms(timeout_ms);
   s().expire_leases();
@@ -163,7 +168,7 @@ TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
   const auto late_b = tile_pixels(lease.tiles[1].rect, 9.0f);
   const std::vector<TileResult> late{{lease.tiles[1].index, late_b, 10}};
   EXPECT_EQ(s().complete(lease.id, late), ResultOutcome::stale);
-  EXPECT_EQ(s().complete(lease.id, delivered), ResultOutcome::duplicate);
+  EXPECT_EQ(deliver_first(lease), ResultOutcome::duplicate);
   ASSERT_EQ(deliver(rescue, 2.0f), ResultOutcome::accepted);
   EXPECT_EQ(s().job(job)->tiles_done, 3);
 }
@@ -172,9 +177,7 @@ TEST_F(SchedulerBatchTest, ReleaseGivesBackWhatWasNotDelivered) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
   const Lease lease = *s().claim(w, 100);
-  const auto pixels_a = tile_pixels(lease.tiles[0].rect, 1.0f);
-  const std::vector<TileResult> delivered{{lease.tiles[0].index, pixels_a, 10}};
-  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+  ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
   s().release(lease.id);
   EXPECT_EQ(s().job(job)->tiles_done, 1);
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
@@ -188,9 +191,7 @@ TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
   const Lease lease = *s().claim(w, 100);
-  const auto pixels_a = tile_pixels(lease.tiles[0].rect, 1.0f);
-  const std::vector<TileResult> delivered{{lease.tiles[0].index, pixels_a, 10}};
-  ASSERT_EQ(s().complete(lease.id, delivered), ResultOutcome::accepted);
+  ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
   reopen();
   EXPECT_EQ(info_of(w).state, "rendering");
   EXPECT_EQ(info_of(w).current_tile, lease.tiles[1].index);

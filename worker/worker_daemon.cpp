@@ -174,6 +174,9 @@ void WorkerDaemon::render(const Claimed& lease) {
   const bool delivered = uploads_->flush();
   const bool kept = heartbeat_->end();
   if (rendered == count && !stop_) {
+    // Tiles of another scene may cost anything: start that estimate afresh.
+    if (lease.scene_digest != timed_scene_) tile_thread_seconds_ = 0;
+    timed_scene_ = lease.scene_digest;
     const double per_tile = took.count() * options_.threads / count;
     tile_thread_seconds_ =
         tile_thread_seconds_ > 0 ? 0.5 * (tile_thread_seconds_ + per_tile) : per_tile;

@@ -77,6 +77,7 @@ class WorkerDaemon {
   std::string uploading_lease_;                // the lease uploads_ sends for
   std::unique_ptr<TileUploads> uploads_;
   double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet
+  std::string timed_scene_;         // the scene whose tiles tile_thread_seconds_ measures
   std::atomic<bool> unreachable_reported_{false};
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
