@@ -159,6 +159,7 @@ void WorkerDaemon::render(const Claimed& lease) {
       finished.rays = renderer.render_tile(tile.rect, finished.pixels).total();
       uploads_->push(std::move(finished));
       ++rendered;
+      ++tiles_rendered_;
     }
   };
   const auto start = std::chrono::steady_clock::now();
@@ -249,7 +250,7 @@ int WorkerDaemon::run() {
     client_.request("DELETE", "/v1/workers/" + worker_id_);
   } catch (const HttpError&) {
   }
-  spdlog::info("worker {} stopped", worker_id_);
+  spdlog::info("worker {} stopped after rendering {} tiles", worker_id_, tiles_rendered_.load());
   return 0;
 }
 

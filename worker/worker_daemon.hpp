@@ -79,6 +79,7 @@ class WorkerDaemon {
   double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet
   std::string timed_scene_;         // the scene whose tiles tile_thread_seconds_ measures
   std::atomic<bool> unreachable_reported_{false};
+  std::atomic<std::uint64_t> tiles_rendered_{0};  // for the log line at exit
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
   std::unique_ptr<tbb::task_arena> arena_;  // made once: a new arena per tile costs a lot

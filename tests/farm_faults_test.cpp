@@ -1,0 +1,186 @@
+// Faults with real processes and real signals: a worker killed in the middle of a tile, a
+// coordinator killed in the middle of a job and started again, a worker frozen until its
+// lease was given away. In every case the job completes with the image of a render
+// without the fault, and no tile is taken from two workers.
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include <gtest/gtest.h>
+
+#include "tests/farm_fixture.hpp"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using nlohmann::json;
+using test::Farm;
+
+// Short leases, so that a lost worker's tiles come back within a test's patience.
+const std::vector<std::string> quick_leases{"--lease-timeout", "1", "--heartbeat-interval", "0.2"};
+
+// What a worker said it rendered in its last log line ("... after rendering N tiles").
+int tiles_rendered_by(const fs::path& log) {
+  const std::string text = test::read_text(log);
+  std::smatch match;
+  static const std::regex line("after rendering ([0-9]+) tiles");
+  int count = -1;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator(); ++it)
+    count = std::stoi((*it)[1]);
+  return count;
+}
+
+TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
+  Farm farm("fault-kill-worker", 0, quick_leases);
+  const json scene = test::showcase(256, 192, 8, 32);  // 48 tiles
+  const std::string id = farm.api().submit("kill", 50, scene)["id"];
+  auto doomed = farm.start_worker("doomed", 1);
+  ASSERT_TRUE(test::eventually(
+      [&] {
+        const auto info = farm.worker_named("doomed");
+        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= 2;
+      },
+      30s));
+  doomed->signal(SIGKILL);
+  ASSERT_TRUE(doomed->wait_for(10s).has_value());
+  const int done_at_kill = farm.api().job(id)["tiles"]["done"];
+  ASSERT_LT(done_at_kill, 48) << "the job finished before the kill: make it bigger";
+
+  auto rescuer = farm.start_worker("rescuer", 1);
+  const json done = farm.wait_finished(id, 60s);
+  ASSERT_EQ(done["state"], "completed") << done.dump();
+  EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
+  // The killed worker's tiles came back through expiry, not through anything it said.
+  EXPECT_NE(test::read_text(farm.dir() / "server.log").find("expired without a heartbeat"),
+            std::string::npos);
+  const int by_doomed = farm.worker_named("doomed").value()["tiles_rendered"];
+  const int by_rescuer = farm.worker_named("rescuer").value()["tiles_rendered"];
+  EXPECT_EQ(by_doomed + by_rescuer, 48);
+  EXPECT_GE(by_doomed, done_at_kill == 0 ? 0 : 1);
+}
+
+TEST(FarmFaults, ALongTileOnALiveWorkerIsNeverTakenAway) {
+  // Each tile takes several lease timeouts to render; only the heartbeats keep it.
+  Farm farm("fault-long-tile", 0, quick_leases);
+  const json scene = test::showcase(128, 64, 256, 64);  // 2 tiles of 64x64 at 256 spp
+  const std::string id = farm.api().submit("long", 50, scene)["id"];
+  auto worker = farm.start_worker("steady", 1);
+  const json done = farm.wait_finished(id, 120s);
+  ASSERT_EQ(done["state"], "completed") << done.dump();
+  const double seconds = done["elapsed_s"];
+  ASSERT_GT(seconds, 2.0) << "the tiles were too quick to outlast a lease: make them slower";
+  EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("expired"), std::string::npos)
+      << "a lease expired while its worker was heartbeating";
+  EXPECT_EQ(farm.worker_named("steady").value()["tiles_rendered"], 2);
+  EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
+}
+
+TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
+  Farm farm("fault-fence", 0, quick_leases);
+  const json scene = test::showcase(256, 192, 16, 32);  // 48 tiles
+  const std::string id = farm.api().submit("fence", 50, scene)["id"];
+  auto frozen = farm.start_worker("frozen", 1);
+  ASSERT_TRUE(test::eventually(
+      [&] {
+        const auto info = farm.worker_named("frozen");
+        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= 1;
+      },
+      30s));
+  frozen->signal(SIGSTOP);  // mid-lease: no heartbeats, no uploads
+  ASSERT_TRUE(test::eventually([&] { return farm.worker_named("frozen").value()["state"] == "idle"; }, 20s))
+      << "the frozen worker's lease did not expire";
+  auto rescuer = farm.start_worker("rescuer", 1);
+  ASSERT_TRUE(test::eventually(
+      [&] { return farm.worker_named("rescuer").value_or(json{{"tiles_rendered", 0}})["tiles_rendered"] >= 2; },
+      30s));
+  frozen->signal(SIGCONT);
+
+  const json done = farm.wait_finished(id, 90s);
+  ASSERT_EQ(done["state"], "completed") << done.dump();
+  EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
+  // The frozen worker was told its late tiles were refused, dropped them and went on.
+  ASSERT_TRUE(test::eventually(
+      [&] { return test::read_text(farm.dir() / "frozen.log").find("refused") != std::string::npos; }, 10s))
+      << "the late result was not refused; see " << (farm.dir() / "frozen.log");
+  EXPECT_TRUE(frozen->wait_for(0ms) == std::nullopt) << "the frozen worker died instead of carrying on";
+  EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("duplicate result"), std::string::npos);
+  const int by_frozen = farm.worker_named("frozen").value()["tiles_rendered"];
+  const int by_rescuer = farm.worker_named("rescuer").value()["tiles_rendered"];
+  EXPECT_EQ(by_frozen + by_rescuer, 48) << "a tile was accepted from two workers, or from none";
+}
+
+TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAgain) {
+  const fs::path dir = test::fresh_dir("fault-kill-server");
+  const json scene = test::showcase(320, 240, 8, 32);  // 80 tiles
+  auto start_server = [&](const std::string& listen, const std::string& log) {
+    fs::remove(dir / "port");
+    auto server = std::make_unique<test::Process>(
+        TESSERA_SERVER_BIN,
+        std::vector<std::string>{"--listen", listen, "--data-dir", (dir / "data").string(),
+                                 "--local-workers", "0", "--port-file", (dir / "port").string(),
+                                 "--log-level", "info"},
+        dir / log);
+    EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s));
+    int port = 0;
+    std::ifstream(dir / "port") >> port;
+    return std::pair{std::move(server), port};
+  };
+
+  auto [server, port] = start_server("127.0.0.1:0", "first.log");
+  const std::string url = "http://127.0.0.1:" + std::to_string(port);
+  ApiClient api(url);
+  const std::string id = api.submit("resume", 50, scene)["id"];
+  const std::string canceled = api.submit("canceled", 10, scene)["id"];
+  ASSERT_EQ(api.cancel(canceled)["state"], "canceled");
+  auto worker = std::make_unique<test::Process>(
+      TESSERA_WORKER_BIN,
+      std::vector<std::string>{"--server", url, "--threads", "1", "--name", "survivor", "--log-level", "info"},
+      dir / "survivor.log");
+  ASSERT_TRUE(test::eventually([&] { return api.job(id)["tiles"]["done"].get<int>() >= 10; }, 60s));
+  server->signal(SIGKILL);
+  ASSERT_TRUE(server->wait_for(10s).has_value());
+  // Read from the store, as the next coordinator will: every tile acknowledged is there.
+  const int acknowledged = [&] {
+    auto [probe, probe_port] = start_server("127.0.0.1:0", "probe.log");
+    ApiClient probe_api("http://127.0.0.1:" + std::to_string(probe_port));
+    const int done = probe_api.job(id)["tiles"]["done"];
+    probe->signal(SIGKILL);
+    probe->wait_for(10s);
+    return done;
+  }();
+  ASSERT_GE(acknowledged, 10);
+  ASSERT_LT(acknowledged, 80) << "the job finished before the kill: make it bigger";
+
+  // The same address again: the worker, which kept retrying, finds it by itself.
+  auto [again, again_port] = start_server("127.0.0.1:" + std::to_string(port), "second.log");
+  ASSERT_EQ(again_port, port);
+  const json done = [&] {
+    json job;
+    test::eventually(
+        [&] {
+          job = api.job(id);
+          return job["state"] == "completed";
+        },
+        90s);
+    return job;
+  }();
+  ASSERT_EQ(done["state"], "completed") << done.dump();
+  EXPECT_EQ(api.job(canceled)["state"], "canceled");
+  const fs::path exr = dir / "resumed.exr";
+  test::write_text(exr, api.image(id, "exr", false));
+  EXPECT_TRUE(test::same_pixels(read_image(exr), test::render_image(scene, 2)));
+
+  // No tile was rendered twice: the one worker rendered exactly the job's 80 tiles, the
+  // ones done before the crash included, and none of the canceled job's.
+  worker->signal(SIGTERM);
+  ASSERT_TRUE(worker->wait_for(20s).has_value());
+  EXPECT_EQ(tiles_rendered_by(dir / "survivor.log"), 80) << "see " << (dir / "survivor.log");
+  again->signal(SIGTERM);
+  again->wait_for(20s);
+}
+
+}  // namespace
+}  // namespace tessera
