@@ -128,7 +128,6 @@ CancelOutcome Scheduler::cancel(const std::string& id) {
   for (const TileSlot& tile : job->tiles)
     if (!tile.lease_id.empty()) stage_lease_end(change, tile.lease_id, false);
   commit(change);
-  job->canvas.reset();
   return CancelOutcome::canceled;
 }
 

@@ -30,6 +30,10 @@ namespace tessera {
 struct SchedulerConfig {
   std::int64_t lease_timeout_ms = 30'000;      // a lease expires this long after its last heartbeat
   std::int64_t heartbeat_interval_ms = 5'000;  // what workers are told to use
+  int max_tile_attempts = 3;  // a tile that fails this often fails its job
+  // A worker that failed this often on a job gets no more of its tiles while another
+  // worker could take them.
+  int worker_failures_per_job = 2;
 };
 
 enum class JobState { queued, running, completed, failed, canceled };
@@ -160,6 +164,10 @@ class Scheduler {
       const std::string& lease_id, std::span<const std::uint64_t> tile_indexes) const;
   // The worker gives its remaining tiles back (for example on SIGTERM) without results.
   void release(const std::string& lease_id);
+  // The worker could not render `tile_index`: that tile fails once (see max_tile_attempts)
+  // and the lease's other tiles go back as by release(). Nothing when the lease is not
+  // live or does not owe that tile.
+  void fail_tile(const std::string& lease_id, int tile_index, const std::string& error);
   // Records that a worker is alive (any request from it).
   void touch_worker(const std::string& worker_id);
   void worker_left(const std::string& worker_id);
@@ -207,8 +215,14 @@ class Scheduler {
   // Computes the tile order of a freshly built job and tracks all its tiles.
   void index_tiles(JobEntry& job);
 
-  // Stages taking the lease off its live tiles and its worker; `expired` counts an attempt.
+  // Stages taking the lease off its live tiles and its worker. An expired lease counts a
+  // failure against each tile it still owed.
   void stage_lease_end(StagedChange& change, const std::string& lease_id, bool expired);
+  // Stages one failure of a tile by a worker; at the limit, the job fails with `error`.
+  void stage_tile_failure(StagedChange& change, JobEntry& job, int index, const WorkerEntry* worker,
+                          const std::string& error);
+  // Whether `worker` should get none of `job`'s tiles, having failed on it too often.
+  bool kept_off(const JobEntry& job, const WorkerEntry& worker) const;
   // Returns the tiles of leases expired at `now` to the queue; true when there were any.
   bool expire_locked(std::int64_t now);
   Lease lease_of(const std::string& lease_id) const;

@@ -55,8 +55,11 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   job.status = std::move(updated);
   if (!is_finished(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
-  else if (!was_finished)
+  else if (!was_finished) {
+    // A canceled or failed job's partial image is read from the store from now on.
+    if (job.status.state != JobState::completed) job.canvas.reset();
     for (const auto& callback : finished_callbacks_) callback();
+  }
 }
 
 void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {

@@ -63,6 +63,7 @@ TileRow tile_row(const std::string& job_id, int index, const TileSlot& t) {
   row.attempts = t.attempts;
   row.rays = t.rays;
   row.result_lease_id = t.result_lease_id;
+  row.last_error = t.last_error;
   return row;
 }
 

@@ -32,9 +32,10 @@ struct TileSlot {
   std::string lease_id;   // the live lease; "" when none
   std::string worker_id;  // the lease holder, or who rendered a done tile
   std::int64_t lease_expires_ms = 0;
-  int attempts = 0;  // leases that expired on this tile
+  int attempts = 0;  // times it failed: its lease expired, or its worker reported an error
   std::uint64_t rays = 0;
   std::string result_lease_id;  // the lease whose pixels are stored
+  std::string last_error;       // why it failed last
 };
 
 struct JobEntry {
@@ -46,9 +47,14 @@ struct JobEntry {
   // The accepted tiles pasted together, from the first result until the image file is
   // written; shared with readers that encode it outside the lock, once it changes no more.
   std::shared_ptr<Image> canvas;
+  // Failures on this job by worker, as "name@host" so that a restarted worker process is
+  // still the same worker; in memory only.
+  std::map<std::string, int> failures_by_worker;
 };
 
 struct WorkerEntry {
+  std::string key() const { return info.name + "@" + info.host; }
+
   WorkerInfo info;                     // current_job/current_tile mirror lease_id
   std::string lease_id;                // the live lease it holds; "" when none
   std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store

@@ -50,7 +50,7 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
       JobEntry* chosen = nullptr;
       for (const auto& key : active_) {
         JobEntry& job = *jobs_.at(std::get<2>(key));
-        if (!job.pending.empty()) {
+        if (!job.pending.empty() && !kept_off(job, *worker)) {
           chosen = &job;
           break;
         }
@@ -68,12 +68,16 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
           auto position = chosen->pending.begin();  // staging leaves the pending set alone
           for (int i = 0; i < count; ++i, ++position) {
             const int index = chosen->order[*position];
+            // A tile that failed before goes out alone, so that another failure is
+            // charged to it and not to tiles that happened to share its batch.
+            if (i > 0 && chosen->tiles[index].attempts > 0) break;
             TileSlot& tile = change.tile(*chosen, index);
             tile.state = TileState::leased;
             tile.lease_id = lease_id;
             tile.worker_id = worker_id;
             tile.lease_expires_ms = now + config_.lease_timeout_ms;
             if (i == 0) staged_worker.info.current_tile = index;
+            if (tile.attempts > 0) break;
           }
           if (chosen->status.state == JobState::queued) {
             JobStatus& status = change.job(*chosen);
@@ -274,17 +278,21 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
   const auto it = leases_.find(lease_id);
   if (it == leases_.end() || it->second.live.empty()) return;
   JobEntry& job = *jobs_.at(it->second.job_id);
-  const std::string worker_id = job.tiles[it->second.live.front()].worker_id;
-  for (const int index : it->second.live) {
+  std::vector<int> owed = it->second.live;
+  std::sort(owed.begin(), owed.end(), [&](int a, int b) { return job.rank[a] < job.rank[b]; });
+  const std::string worker_id = job.tiles[owed.front()].worker_id;
+  WorkerEntry* worker = find_worker(worker_id);
+  std::vector<int> ended;
+  for (const int index : owed) {
     TileSlot& tile = change.tile(job, index);
     if (tile.lease_id != lease_id) continue;  // already staged by an earlier call
     tile.state = TileState::pending;
     tile.lease_id.clear();
     tile.worker_id.clear();
     tile.lease_expires_ms = 0;
-    if (expired) tile.attempts += 1;
+    ended.push_back(index);
   }
-  if (WorkerEntry* worker = find_worker(worker_id)) {
+  if (worker) {
     WorkerEntry& staged = change.worker(*worker);
     if (staged.lease_id == lease_id) {
       staged.lease_id.clear();
@@ -293,6 +301,67 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
       if (staged.info.state == worker_rendering) staged.info.state = worker_idle;
     }
   }
+  if (!expired) return;
+  // Any of the tiles still owed may be the one the worker crashed or hung on. Each is
+  // charged, and goes out alone next time (see claim()), where a further failure is its own.
+  const std::string who = worker ? "worker " + worker->info.name + " on " + worker->info.host : "its worker";
+  for (const int index : ended)
+    stage_tile_failure(change, job, index, worker, who + " stopped responding (its lease expired)");
+}
+
+void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int index,
+                                   const WorkerEntry* worker, const std::string& error) {
+  TileSlot& tile = change.tile(job, index);
+  tile.attempts += 1;
+  tile.last_error = error;
+  // Not staged: a count kept in memory only, and harmless should the commit fail.
+  if (worker) job.failures_by_worker[worker->key()] += 1;
+  spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index, tile.attempts,
+               config_.max_tile_attempts, error);
+  if (tile.attempts < config_.max_tile_attempts) return;
+  JobStatus& status = change.job(job);
+  if (is_finished(status.state)) return;
+  status.state = JobState::failed;
+  status.finished_at_ms = clock_.now_ms();
+  status.error = "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
+                 std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
+                 " times; the last error: " + error;
+  // Its other tiles are withdrawn from their workers, as for a cancel.
+  for (const auto& [lease_id, entry] : leases_)
+    if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+}
+
+bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {
+  const auto failed_too_often = [&](const WorkerEntry& w) {
+    const auto it = job.failures_by_worker.find(w.key());
+    return it != job.failures_by_worker.end() && it->second >= config_.worker_failures_per_job;
+  };
+  if (!failed_too_often(worker)) return false;
+  // Only while another worker could take the tiles: with nobody else, trying again is the
+  // way to the attempt limit, which ends the job instead of leaving it waiting forever.
+  for (const auto& [id, other] : workers_)
+    if (other.get() != &worker && other->info.state != worker_gone && !failed_too_often(*other))
+      return true;
+  return false;
+}
+
+void Scheduler::fail_tile(const std::string& lease_id, int tile_index, const std::string& error) {
+  Callbacks notify;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = leases_.find(lease_id);
+    if (it == leases_.end()) return;
+    const std::vector<int>& live = it->second.live;
+    if (std::find(live.begin(), live.end(), tile_index) == live.end()) return;
+    JobEntry& job = *jobs_.at(it->second.job_id);
+    const WorkerEntry* worker = find_worker(job.tiles[tile_index].worker_id);
+    StagedChange change;
+    stage_lease_end(change, lease_id, false);
+    stage_tile_failure(change, job, tile_index, worker, error);
+    commit(change);
+    notify = callbacks_;
+  }
+  for (const auto& callback : notify) callback();
 }
 
 Lease Scheduler::lease_of(const std::string& lease_id) const {

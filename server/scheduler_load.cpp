@@ -77,6 +77,7 @@ void Scheduler::load_and_reconcile() {
     tile.attempts = row.attempts;
     tile.rays = row.rays;
     tile.result_lease_id = std::move(row.result_lease_id);
+    tile.last_error = std::move(row.last_error);
     const auto expected_bytes =
         static_cast<std::int64_t>(row.rect.pixel_count() * 3 * sizeof(float));
     if (tile.state == TileState::done && row.pixel_bytes != expected_bytes)

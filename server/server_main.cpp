@@ -28,6 +28,7 @@ struct ServerOptions {
   int worker_threads = 1;
   double lease_timeout_s = 30;
   double heartbeat_interval_s = 5;
+  int max_tile_attempts = 3;
   std::string log_level = "info";
   std::string port_file;
 };
@@ -68,6 +69,7 @@ int run(const ServerOptions& options) {
   SchedulerConfig config;
   config.lease_timeout_ms = static_cast<std::int64_t>(options.lease_timeout_s * 1000);
   config.heartbeat_interval_ms = static_cast<std::int64_t>(options.heartbeat_interval_s * 1000);
+  config.max_tile_attempts = options.max_tile_attempts;
   Scheduler scheduler(store, clock, config);
 
   boost::asio::io_context io;
@@ -155,6 +157,10 @@ int main(int argc, char** argv) {
                  "Seconds between a worker's heartbeats")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-tile-attempts", options.max_tile_attempts,
+                 "Failures of one tile (lease expired, or an error reported) that fail its job")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,

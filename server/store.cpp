@@ -16,7 +16,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little);
 static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559);
 
-constexpr int schema_version = 1;
+constexpr int schema_version = 2;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -54,6 +54,7 @@ CREATE TABLE tiles (
   rays INTEGER NOT NULL DEFAULT 0,
   result_lease_id TEXT NOT NULL DEFAULT '',
   pixels BLOB,
+  last_error TEXT NOT NULL DEFAULT '',
   PRIMARY KEY (job_id, tile_index)
 );
 CREATE TABLE workers (
@@ -81,7 +82,8 @@ void bind_tile_state(Statement& s, const TileRow& tile, int first) {
       .bind(first + 3, tile.lease_expires_ms)
       .bind(first + 4, tile.attempts)
       .bind(first + 5, static_cast<std::int64_t>(tile.rays))
-      .bind(first + 6, tile.result_lease_id);
+      .bind(first + 6, tile.result_lease_id)
+      .bind(first + 7, tile.last_error);
 }
 
 }  // namespace
@@ -99,6 +101,13 @@ Store::Store(const std::filesystem::path& data_dir)
 void Store::create_schema() {
   const int version = std::stoi(db_.query_text("PRAGMA user_version"));
   if (version == schema_version) return;
+  if (version == 1) {  // before tiles remembered why they failed
+    Transaction tx(db_);
+    db_.exec("ALTER TABLE tiles ADD COLUMN last_error TEXT NOT NULL DEFAULT ''");
+    db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
+    tx.commit();
+    return;
+  }
   if (version != 0)
     throw std::runtime_error("store: " + (data_dir_ / "tessera.db").string() +
                              " has schema version " + std::to_string(version) +
@@ -141,7 +150,7 @@ StoredState Store::load() {
     // length() of a blob is read from the record header; the pixels stay on disk.
     auto s = db_.statement(
         "SELECT job_id, tile_index, x, y, w, h, state, lease_id, worker_id, lease_expires_ms, "
-        "attempts, rays, result_lease_id, ifnull(length(pixels), 0) FROM tiles "
+        "attempts, rays, result_lease_id, ifnull(length(pixels), 0), last_error FROM tiles "
         "ORDER BY job_id, tile_index");
     while (s->step()) {
       TileRow& tile = state.tiles.emplace_back();
@@ -156,6 +165,7 @@ StoredState Store::load() {
       tile.rays = static_cast<std::uint64_t>(s->column_int64(11));
       tile.result_lease_id = s->column_text(12);
       tile.pixel_bytes = s->column_int64(13);
+      tile.last_error = s->column_text(14);
     }
   }
   {
@@ -204,8 +214,8 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json,
   for (const TileRow& tile : tiles) {
     auto s = db_.statement(
         "INSERT INTO tiles (job_id, tile_index, x, y, w, h, state, lease_id, worker_id, "
-        "lease_expires_ms, attempts, rays, result_lease_id) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+        "lease_expires_ms, attempts, rays, result_lease_id, last_error) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     s->bind(1, tile.job_id)
         .bind(2, tile.tile_index)
         .bind(3, tile.rect.x)
@@ -264,19 +274,20 @@ std::optional<std::string> Store::scene_json(const std::string& digest) {
 void Store::update_tile(const TileRow& tile) {
   auto s = db_.statement(
       "UPDATE tiles SET state = ?, lease_id = ?, worker_id = ?, lease_expires_ms = ?, "
-      "attempts = ?, rays = ?, result_lease_id = ? WHERE job_id = ? AND tile_index = ?");
+      "attempts = ?, rays = ?, result_lease_id = ?, last_error = ? "
+      "WHERE job_id = ? AND tile_index = ?");
   bind_tile_state(*s, tile, 1);
-  s->bind(8, tile.job_id).bind(9, tile.tile_index).run();
+  s->bind(9, tile.job_id).bind(10, tile.tile_index).run();
 }
 
 void Store::store_tile_result(const TileRow& tile, std::span<const float> pixels) {
   // One statement, so the pixels and the state that says they are there land together.
   auto s = db_.statement(
       "UPDATE tiles SET state = ?, lease_id = ?, worker_id = ?, lease_expires_ms = ?, "
-      "attempts = ?, rays = ?, result_lease_id = ?, pixels = ? "
+      "attempts = ?, rays = ?, result_lease_id = ?, last_error = ?, pixels = ? "
       "WHERE job_id = ? AND tile_index = ?");
   bind_tile_state(*s, tile, 1);
-  s->bind_blob(8, std::as_bytes(pixels)).bind(9, tile.job_id).bind(10, tile.tile_index).run();
+  s->bind_blob(9, std::as_bytes(pixels)).bind(10, tile.job_id).bind(11, tile.tile_index).run();
 }
 
 void Store::for_each_tile_pixels(

@@ -41,9 +41,10 @@ struct TileRow {
   std::string lease_id;   // the live lease; "" when none
   std::string worker_id;  // the lease holder, or who rendered a done tile
   std::int64_t lease_expires_ms = 0;
-  int attempts = 0;  // leases that expired on this tile
+  int attempts = 0;  // times it failed: its lease expired, or its worker reported an error
   std::uint64_t rays = 0;
   std::string result_lease_id;   // the lease whose pixels are stored; "" when none
+  std::string last_error;        // why it failed last; "" when it never did
   std::int64_t pixel_bytes = 0;  // size of the stored pixels; read by load() only
 };
 

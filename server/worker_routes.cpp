@@ -182,6 +182,24 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
   return error_response(500, "internal", "unexpected result outcome");
 }
 
+// {"tile": 17, "error": "..."}: the worker could not render that tile of its lease.
+HttpResponse report_failure(ApiContext& context, const HttpRequest& request) {
+  json body;
+  try {
+    body = parse_json_text(request.body);
+  } catch (const SceneError& e) {
+    return error_response(400, "malformed_json", e.detail());
+  }
+  if (!body.is_object() || !body.contains("tile") || !body["tile"].is_number_integer())
+    return error_response(400, "invalid_request", "tile is required and must be an integer", "/tile");
+  if (!body.contains("error") || !body["error"].is_string())
+    return error_response(400, "invalid_request", "error is required and must be a string", "/error");
+  // Kept short: it ends up in the job's error and in logs.
+  std::string error = body["error"].get<std::string>().substr(0, 1000);
+  context.scheduler.fail_tile(request.params.at("id"), body["tile"].get<int>(), error);
+  return HttpResponse{204, "", "", {}};
+}
+
 }  // namespace
 
 void add_worker_routes(Router& router, ApiContext& context) {
@@ -218,6 +236,9 @@ void add_worker_routes(Router& router, ApiContext& context) {
   router.add("PUT", "/v1/leases/{id}/result",
              [&context](HttpRequest&& request, Respond respond) { respond(upload(context, request)); },
              max_upload_bytes(context.limits));
+  router.add("POST", "/v1/leases/{id}/fail", [&context](HttpRequest&& request, Respond respond) {
+    respond(report_failure(context, request));
+  });
   router.add("POST", "/v1/leases/{id}/release", [&context](HttpRequest&& request, Respond respond) {
     context.scheduler.release(request.params.at("id"));
     respond(HttpResponse{204, "", "", {}});

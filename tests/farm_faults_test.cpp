@@ -182,5 +182,75 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   again->wait_for(20s);
 }
 
+// Sets an environment variable for the processes started while it lives.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) { ::setenv(name, value.c_str(), 1); }
+  ~ScopedEnv() { ::unsetenv(name_); }
+
+ private:
+  const char* name_;
+};
+
+// The tile handed out first (centre-first): the one every fault below is put on.
+int first_tile_of(const json& scene) {
+  const int tile = scene["render"]["tile_size"];
+  const int columns = (scene["image"]["width"].get<int>() + tile - 1) / tile;
+  const int rows = (scene["image"]["height"].get<int>() + tile - 1) / tile;
+  return rows / 2 * columns + columns / 2;
+}
+
+TEST(FarmFaults, ATileThatCrashesItsWorkerFailsTheJobAfterThreeTries) {
+  const json scene = test::showcase(256, 192, 4, 32);  // 48 tiles
+  const int poison = first_tile_of(scene);
+  // Local workers inherit the fault from the coordinator's environment; each one that
+  // dies is replaced, so the tile is tried again and again.
+  const ScopedEnv fault("TESSERA_FAULT_INJECTION", "crash:" + std::to_string(poison));
+  std::vector<std::string> args = quick_leases;
+  args.insert(args.end(), {"--worker-threads", "1"});
+  Farm farm("fault-crash-tile", 2, args);
+  const std::string id = farm.api().submit("poison", 50, scene)["id"];
+  const json done = farm.wait_finished(id, 90s);
+  ASSERT_EQ(done["state"], "failed") << done.dump();
+  const std::string error = done["error"];
+  EXPECT_NE(error.find("tile " + std::to_string(poison) + " "), std::string::npos) << error;
+  EXPECT_NE(error.find("failed 3 times"), std::string::npos) << error;
+  EXPECT_NE(error.find("stopped responding"), std::string::npos) << error;
+  // The farm is not stuck on it: the next job completes on the same workers.
+  json healthy = scene;
+  healthy["image"]["width"] = 64;  // one tile that is not the poisoned index
+  healthy["image"]["height"] = 32;
+  const std::string next = farm.api().submit("after", 50, healthy)["id"];
+  EXPECT_EQ(farm.wait_finished(next, 60s)["state"], "completed");
+}
+
+TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob) {
+  const json scene = test::showcase(256, 192, 4, 32);
+  const int poison = first_tile_of(scene);
+  Farm farm("fault-error-tile", 0);
+  std::vector<std::unique_ptr<test::Process>> workers;
+  {
+    const ScopedEnv fault("TESSERA_FAULT_INJECTION", "error:" + std::to_string(poison));
+    for (const char* name : {"one", "two", "three"}) workers.push_back(farm.start_worker(name, 1));
+  }
+  ASSERT_TRUE(test::eventually([&] { return farm.api().workers()["workers"].size() == 3; }, 20s));
+  const std::string id = farm.api().submit("reported", 50, scene)["id"];
+  const json done = farm.wait_finished(id, 60s);
+  ASSERT_EQ(done["state"], "failed") << done.dump();
+  // 8 columns of 32-pixel tiles.
+  const std::string at = "(" + std::to_string(poison % 8 * 32) + ", " + std::to_string(poison / 8 * 32) + ")";
+  EXPECT_EQ(done["error"], "tile " + std::to_string(poison) + " at " + at +
+                               " failed 3 times; the last error: fault injection: error on tile " +
+                               std::to_string(poison));
+  // Reporting is not crashing: every worker is still there, and tried the tile.
+  int reporters = 0;
+  for (const char* name : {"one", "two", "three"}) {
+    EXPECT_FALSE(workers[static_cast<std::size_t>(reporters)]->wait_for(0ms).has_value()) << name << " died";
+    reporters += test::read_text(farm.dir() / (std::string(name) + ".log")).find("failed: fault injection") !=
+                 std::string::npos;
+  }
+  EXPECT_GE(reporters, 2) << "the tile was not retried on another worker";
+}
+
 }  // namespace
 }  // namespace tessera

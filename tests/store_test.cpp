@@ -65,7 +65,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "images"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "1");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "2");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -77,6 +77,27 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("schema version 99"), std::string::npos) << e.what();
   }
+}
+
+TEST_F(StoreTest, UpgradesAVersion1DatabaseKeepingItsRows) {
+  store_->insert_job(job_row("j-1", "d1"), R"({"scene":1})", tile_rows("j-1"));
+  store_.reset();
+  {  // what version 1 wrote: tiles without last_error
+    SqliteDb db(dir_ / "tessera.db");
+    db.exec("ALTER TABLE tiles DROP COLUMN last_error");
+    db.exec("PRAGMA user_version=1");
+  }
+  store_ = std::make_unique<Store>(dir_);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "2");
+  TileRow failed = tile_rows("j-1")[0];
+  failed.attempts = 1;
+  failed.last_error = "it broke";
+  store_->update_tile(failed);
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.jobs.size(), 1u);
+  ASSERT_EQ(state.tiles.size(), tile_rows("j-1").size());
+  EXPECT_EQ(state.tiles[0].last_error, "it broke");
+  EXPECT_EQ(state.tiles[1].last_error, "");
 }
 
 TEST_F(StoreTest, JobsTilesScenesAndWorkersSurviveAReopen) {

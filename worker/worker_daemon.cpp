@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <mutex>
 #include <cstring>
 #include <thread>
 #include <unistd.h>
@@ -148,16 +150,26 @@ void WorkerDaemon::render(const Claimed& lease) {
   const int count = static_cast<int>(lease.tiles.size());
   std::atomic<int> next{0};
   std::atomic<int> rendered{0};
+  std::mutex failure_mutex;
+  std::optional<std::pair<int, std::string>> failure;  // the first tile that could not be rendered
   // Each thread takes the next tile in the lease's (centre-first) order until none is
-  // left, or the lease is lost, or the worker is asked to stop.
+  // left, or the lease is lost, or a tile failed, or the worker is asked to stop.
   const auto render_tiles = [&] {
     while (!stop_ && !heartbeat_->lost() && !uploads_->refused()) {
       const int i = next++;
       if (i >= count) return;
       const ClaimedTile& tile = lease.tiles[i];
-      FinishedTile finished{tile.index, std::vector<float>(tile.rect.pixel_count() * 3), 0};
-      finished.rays = renderer.render_tile(tile.rect, finished.pixels).total();
-      uploads_->push(std::move(finished));
+      try {
+        inject_fault(tile.index);
+        FinishedTile finished{tile.index, std::vector<float>(tile.rect.pixel_count() * 3), 0};
+        finished.rays = renderer.render_tile(tile.rect, finished.pixels).total();
+        uploads_->push(std::move(finished));
+      } catch (const std::exception& e) {
+        std::lock_guard lock(failure_mutex);
+        if (!failure) failure.emplace(tile.index, e.what());
+        next = count;  // the others finish their tiles and take no more
+        return;
+      }
       ++rendered;
       ++tiles_rendered_;
     }
@@ -187,6 +199,11 @@ void WorkerDaemon::render(const Claimed& lease) {
                  lease.job_id);
     return;
   }
+  if (failure) {
+    spdlog::error("tile {} of job {} failed: {}", failure->first, lease.job_id, failure->second);
+    report_failure(lease.lease_id, failure->first, failure->second);  // gives back the rest too
+    return;
+  }
   if (rendered < count) release(lease.lease_id);  // stopping: give back what was not rendered
 }
 
@@ -214,6 +231,27 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
 }
 
 void WorkerDaemon::interrupt() { client_.interrupt(); }
+
+void WorkerDaemon::report_failure(const std::string& lease_id, int tile_index,
+                                  const std::string& error) {
+  const std::string body = json{{"tile", tile_index}, {"error", error}}.dump();
+  with_retry("failure report", [&] {
+    return client_.request("POST", "/v1/leases/" + lease_id + "/fail", body);
+  });
+}
+
+void WorkerDaemon::inject_fault(int tile_index) const {
+  if (options_.fault.empty()) return;
+  const auto colon = options_.fault.find(':');
+  if (colon == std::string::npos || std::stoi(options_.fault.substr(colon + 1)) != tile_index) return;
+  const std::string kind = options_.fault.substr(0, colon);
+  if (kind == "crash") {
+    spdlog::error("fault injection: crashing on tile {}", tile_index);
+    std::abort();
+  }
+  if (kind == "error")
+    throw std::runtime_error("fault injection: error on tile " + std::to_string(tile_index));
+}
 
 void WorkerDaemon::release(const std::string& lease_id) {
   client_.clear_interrupt();  // a stop may have interrupted the client: this must still go out

@@ -25,6 +25,9 @@ struct WorkerOptions {
   std::string name;     // default: the host name
   int threads = 0;      // 0: one per core
   double claim_wait_s = 10;
+  // Fault injection for the test suite: "crash:N" aborts the process, "error:N" reports
+  // a failure, whenever tile N of any job is about to be rendered. Empty: none.
+  std::string fault;
 };
 
 class WorkerDaemon {
@@ -64,6 +67,9 @@ class WorkerDaemon {
   // asked to stop; the tiles not rendered then are released.
   void render(const Claimed& lease);
   bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
+  void report_failure(const std::string& lease_id, int tile_index, const std::string& error);
+  // Applies options_.fault to a tile about to be rendered.
+  void inject_fault(int tile_index) const;
   void release(const std::string& lease_id);
   // How many tiles to ask for: about batch_seconds of work, from the speed seen so far.
   int batch_tiles() const;

@@ -1,6 +1,7 @@
 // tessera-worker: renders tiles for a coordinator.
 #include <atomic>
 #include <csignal>
+#include <cstdlib>
 #include <pthread.h>
 #include <thread>
 
@@ -20,6 +21,9 @@ int main(int argc, char** argv) {
   app.add_option("--name", options.name, "Name shown in `tessera workers` (default: host name)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  // Not a flag: only the test suite injects faults, and local workers inherit it from their
+  // coordinator's environment.
+  if (const char* fault = std::getenv("TESSERA_FAULT_INJECTION")) options.fault = fault;
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   // Signals go to one thread that turns them into a flag: the loop finishes the tiles in
