@@ -6,7 +6,10 @@ namespace tessera {
 
 using nlohmann::json;
 
-ApiClient::ApiClient(const std::string& server_url) : http_(server_url, std::chrono::seconds(60)) {}
+ApiClient::ApiClient(const std::string& server_url, const std::string& token)
+    : http_(server_url, std::chrono::seconds(60)) {
+  http_.set_bearer_token(token);
+}
 
 HttpResult ApiClient::call(const std::string& method, const std::string& target,
                            const std::string& body) {

@@ -27,7 +27,8 @@ class ApiError : public std::runtime_error {
 
 class ApiClient {
  public:
-  explicit ApiClient(const std::string& server_url);
+  // `token`: the API token to send, "" for none.
+  explicit ApiClient(const std::string& server_url, const std::string& token = "");
 
   nlohmann::json submit(const std::string& name, int priority, const nlohmann::json& scene);
   // With `wait_s` > 0 the server answers once the job has finished, or after wait_s.

@@ -205,6 +205,10 @@ HttpClient& HttpClient::operator=(HttpClient&&) noexcept = default;
 
 void HttpClient::set_timeout(std::chrono::milliseconds timeout) { connection_->timeout = timeout; }
 
+void HttpClient::set_bearer_token(std::string token) {
+  authorization_ = token.empty() ? "" : "Bearer " + token;
+}
+
 void HttpClient::interrupt() {
   Connection& c = *connection_;
   c.interrupted = true;
@@ -236,6 +240,7 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
   message.set(http::field::host, c.host_header);
   message.set(http::field::user_agent, "tessera");
   if (!body.empty() && !content_type.empty()) message.set(http::field::content_type, to_beast(content_type));
+  if (!authorization_.empty()) message.set(http::field::authorization, authorization_);
   for (const auto& [name, value] : headers) message.set(name, value);
   message.body() = std::move(body);
   message.prepare_payload();

@@ -67,6 +67,8 @@ class HttpClient {
 
   // For requests that may legitimately take long, such as a long-polled claim.
   void set_timeout(std::chrono::milliseconds timeout);
+  // Sent as "Authorization: Bearer TOKEN" with every request from now on; "" for none.
+  void set_bearer_token(std::string token);
   // Safe from any thread: ends the request in progress, if any, and every later one, with
   // an HttpError of kind `interrupted`, until clear_interrupt(). For a process that must
   // not sit out a long poll when it is asked to stop.
@@ -78,6 +80,7 @@ class HttpClient {
  private:
   struct Connection;
   std::string base_url_;
+  std::string authorization_;  // the whole header value; "" for none
   std::unique_ptr<Connection> connection_;
 };
 

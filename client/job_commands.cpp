@@ -10,6 +10,7 @@
 
 #include "client/api_client.hpp"
 #include "common/scene_parser.hpp"
+#include "common/secret.hpp"
 
 namespace tessera {
 namespace {
@@ -18,6 +19,8 @@ using nlohmann::json;
 
 struct Options {
   std::string server;
+  std::string token;
+  std::string token_file;
   bool json_output = false;
   // submit
   std::string scene_path;
@@ -175,7 +178,8 @@ int submit(const Options& options, ApiClient& api) {
 // Runs one command, turning transport and API errors into messages and exit codes.
 int run(const std::function<int(ApiClient&)>& command, const Options& options) {
   try {
-    ApiClient api(server_url(options));
+    ApiClient api(server_url(options),
+                  resolve_secret(options.token, options.token_file, "TESSERA_API_TOKEN", "API token"));
     return command(api);
   } catch (const CommandFailed& failed) {
     return failed.code;
@@ -189,6 +193,9 @@ int run(const std::function<int(ApiClient&)>& command, const Options& options) {
                      ? ""
                      : (" (at " + e.path() + ")").c_str());
     return e.status() == 400 || e.status() == 422 ? kExitUsage : kExitJobFailed;
+  } catch (const std::runtime_error& e) {  // a token file that cannot be read, say
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitUsage;
   }
 }
 
@@ -199,6 +206,10 @@ void add_job_commands(CLI::App& app) {
   app.add_option("--server", options->server,
                  "Coordinator URL (default: $TESSERA_SERVER or http://127.0.0.1:8640)");
   app.add_flag("--json", options->json_output, "Print the server's JSON");
+  app.add_option("--token", options->token,
+                 "The server's API token (default: $TESSERA_API_TOKEN; --token-file keeps it "
+                 "out of the process list)");
+  app.add_option("--token-file", options->token_file, "Read the API token from this file");
 
   auto on = [&app, options](const char* name, const char* help,
                             std::function<int(const Options&, ApiClient&)> command) {

@@ -18,8 +18,13 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
+
+#include "server/http_types.hpp"
 
 namespace boost::asio {
 class io_context;
@@ -45,6 +50,11 @@ struct HttpServerOptions {
   std::chrono::milliseconds idle_timeout{60'000};
   std::uint32_t max_header_bytes = 16 * 1024;  // larger: 431
   std::size_t default_body_limit = 1 << 20;    // for routes added without a limit; larger: 413
+  // Asked once a request's header is read and its route known, before any body is read:
+  // the route's role and the Authorization header ("" when absent). An answer refuses the
+  // request with it. Unset: everyone may call everything.
+  std::function<std::optional<HttpResponse>(std::string_view role, std::string_view authorization)>
+      authorize;
 };
 
 class HttpServer {

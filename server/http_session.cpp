@@ -143,6 +143,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     route_ = shared_->router.match(
         std::string_view(request.method_string().data(), request.method_string().size()), path_);
     if (!route_.handler) return send(std::move(route_.error), body_follows || !keep_alive_);
+    if (shared_->options.authorize) {
+      const auto authorization = request[http::field::authorization];
+      // Refused before the body is read, so a stranger cannot make the server take one in.
+      if (auto refused = shared_->options.authorize(
+              route_.role, std::string_view(authorization.data(), authorization.size())))
+        return send(std::move(*refused), body_follows || !keep_alive_);
+    }
 
     auto query = parse_query(question == std::string_view::npos ? std::string_view()
                                                                 : target.substr(question + 1));

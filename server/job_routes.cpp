@@ -5,6 +5,7 @@
 
 #include "common/image_io.hpp"
 #include "common/scene_parser.hpp"
+#include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
 
@@ -178,12 +179,13 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
 void add_job_routes(Router& router, ApiContext& context) {
   router.add("POST", "/v1/jobs",
              [&context](HttpRequest&& request, Respond respond) { respond(submit(context, request)); },
-             context.max_job_body_bytes);
+             context.max_job_body_bytes, role_client);
   router.add("GET", "/v1/jobs",
-             [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); });
+             [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); },
+             std::nullopt, role_client);
   router.add("GET", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
     status(context, request, std::move(respond));
-  });
+  }, std::nullopt, role_client);
   router.add("DELETE", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
     switch (context.scheduler.remove(id)) {
@@ -193,9 +195,10 @@ void add_job_routes(Router& router, ApiContext& context) {
         return respond(error_response(409, "not_finished",
                                       "job " + id + " is still active; cancel it first"));
     }
-  });
+  }, std::nullopt, role_client);
   router.add("GET", "/v1/jobs/{id}/image",
-             [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); });
+             [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); },
+             std::nullopt, role_client);
   router.add("POST", "/v1/jobs/{id}/cancel", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
     switch (context.scheduler.cancel(id)) {
@@ -205,7 +208,7 @@ void add_job_routes(Router& router, ApiContext& context) {
       case CancelOutcome::already_finished:
         return respond(error_response(409, "already_finished", "job " + id + " has already finished"));
     }
-  });
+  }, std::nullopt, role_client);
 }
 
 void add_health_routes(Router& router) {

@@ -71,7 +71,7 @@ std::optional<std::map<std::string, std::string>> parse_query(std::string_view q
 }
 
 void Router::add(std::string method, std::string pattern, Handler handler,
-                 std::optional<std::size_t> body_limit) {
+                 std::optional<std::size_t> body_limit, std::string role) {
   if (method.empty()) throw std::invalid_argument("route " + pattern + ": empty method");
   if (pattern.empty() || pattern.front() != '/')
     throw std::invalid_argument("route pattern \"" + pattern + "\" must start with '/'");
@@ -112,7 +112,7 @@ void Router::add(std::string method, std::string pattern, Handler handler,
                              "\" with other parameter names");
   }
   routes_.push_back({std::move(method), std::move(pattern), std::move(segments), std::move(handler),
-                     body_limit});
+                     body_limit, std::move(role)});
 }
 
 RouteMatch Router::match(std::string_view method, std::string_view path) const {
@@ -161,6 +161,7 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
       result.handler = &route.handler;
       result.pattern = route.pattern;
       result.body_limit = route.body_limit;
+      result.role = route.role;
       for (std::size_t i = 0; i < parts.size(); ++i)
         if (route.segments[i].is_param) result.params.emplace(route.segments[i].text, parts[i]);
       return result;
@@ -174,6 +175,12 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
                                     "; allowed: " + allow);
   result.error.headers.emplace_back("Allow", allow);
   return result;
+}
+
+std::optional<std::string> Router::role_of(std::string_view method, std::string_view pattern) const {
+  for (const Route& route : routes_)
+    if (route.method == method && route.pattern == pattern) return route.role;
+  return std::nullopt;
 }
 
 std::vector<std::pair<std::string, std::string>> Router::routes() const {

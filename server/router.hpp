@@ -20,6 +20,7 @@ struct RouteMatch {
   std::string pattern;               // the matched route's pattern, for logs
   std::map<std::string, std::string> params;  // percent-decoded
   std::optional<std::size_t> body_limit;      // nullopt: the server's default
+  std::string role;                           // who may call it; "" for anyone
   // When handler is null: 404 not_found, 405 method_not_allowed (with an Allow header)
   // or 400 bad_request (a path that is not valid percent-encoding).
   HttpResponse error;
@@ -31,8 +32,9 @@ class Router {
   // Throws std::invalid_argument for a malformed pattern, and std::logic_error for a
   // (method, pattern) already added or a pattern that differs from an existing one only in
   // its parameter names (the two could never be told apart).
+  // `role` names who may call the route, for HttpServerOptions::authorize; "" is anyone.
   void add(std::string method, std::string pattern, Handler handler,
-           std::optional<std::size_t> body_limit = std::nullopt);
+           std::optional<std::size_t> body_limit = std::nullopt, std::string role = "");
 
   // `path` is the request target without its query, still percent-encoded. Where several
   // patterns fit, the one with a literal segment earliest wins ("/v1/jobs/stats" over
@@ -41,6 +43,8 @@ class Router {
 
   // (method, pattern) in the order added.
   std::vector<std::pair<std::string, std::string>> routes() const;
+  // The role of the route (method, pattern); nullopt when there is no such route.
+  std::optional<std::string> role_of(std::string_view method, std::string_view pattern) const;
 
  private:
   struct Segment {
@@ -53,6 +57,7 @@ class Router {
     std::vector<Segment> segments;
     Handler handler;
     std::optional<std::size_t> body_limit;
+    std::string role;
   };
 
   std::vector<Route> routes_;

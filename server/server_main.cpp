@@ -2,12 +2,15 @@
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 
 #include <csignal>
+#include <cstdlib>
+#include <stdexcept>
 #include <fstream>
 #include <memory>
 #include <optional>
 #include <thread>
 
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/address.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -15,6 +18,8 @@
 #include <spdlog/spdlog.h>
 
 #include "common/image_io.hpp"
+#include "common/secret.hpp"
+#include "server/access.hpp"
 #include "server/api_routes.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
@@ -31,7 +36,22 @@ struct ServerOptions {
   int max_tile_attempts = 3;
   std::string log_level = "info";
   std::string port_file;
+  std::string api_token, api_token_file;
+  std::string worker_token, worker_token_file;
+  bool insecure = false;
 };
+
+// A refusal to start that the user can fix with a flag: exit status 2, like a usage error.
+struct StartRefused : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+bool is_loopback(const std::string& host) {
+  if (host == "localhost") return true;
+  boost::system::error_code ec;
+  const auto address = boost::asio::ip::make_address(host, ec);
+  return !ec && address.is_loopback();
+}
 
 // "HOST:PORT" or "[IPv6]:PORT".
 std::pair<std::string, std::uint16_t> split_listen(const std::string& listen) {
@@ -60,6 +80,21 @@ void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& sched
 int run(const ServerOptions& options) {
   using namespace tessera;
   const auto [host, port] = split_listen(options.listen);
+  const AccessTokens tokens{
+      resolve_secret(options.api_token, options.api_token_file, "TESSERA_API_TOKEN", "API token"),
+      resolve_secret(options.worker_token, options.worker_token_file, "TESSERA_WORKER_TOKEN",
+                     "worker token")};
+  if (!is_loopback(host) && (tokens.client.empty() || tokens.worker.empty()) && !options.insecure)
+    throw StartRefused(
+        "refusing to listen on " + host + " without both --api-token and --worker-token: anyone "
+        "who can reach it could submit jobs, read every image and pose as a worker. Set both "
+        "tokens (or TESSERA_API_TOKEN and TESSERA_WORKER_TOKEN, or the --*-token-file options), "
+        "listen on 127.0.0.1, or pass --insecure to accept the risk");
+  if (!is_loopback(host) && (tokens.client.empty() || tokens.worker.empty()))
+    spdlog::warn("--insecure: listening on {} with {} open to anyone who can reach it", host,
+                 tokens.client.empty() && tokens.worker.empty() ? "every route"
+                 : tokens.client.empty()                        ? "the client routes"
+                                                                : "the worker routes");
   // The cores belong to the local workers and the requests; an image file is written by
   // one low-priority thread, not by a pool of OpenEXR threads competing with them.
   encode_images_on_calling_thread();
@@ -88,6 +123,10 @@ int run(const ServerOptions& options) {
   HttpServerOptions http;
   http.address = host;
   http.port = port;
+  const AccessPolicy access(tokens);
+  http.authorize = [&access](std::string_view role, std::string_view authorization) {
+    return access.check(role, authorization);
+  };
   HttpServer server(io, router, http);
   spdlog::info("listening on http://{}:{} with data in {}", host, server.port(), options.data_dir);
   if (!options.port_file.empty()) {
@@ -98,6 +137,9 @@ int run(const ServerOptions& options) {
   }
 
   std::unique_ptr<LocalWorkers> workers;
+  // Local workers take the worker token from the environment they inherit, never from
+  // their command line, which anyone on the machine can read.
+  if (!tokens.worker.empty()) ::setenv("TESSERA_WORKER_TOKEN", tokens.worker.c_str(), 1);
   if (options.local_workers > 0)
     workers = std::make_unique<LocalWorkers>(
         sibling_worker_binary(),
@@ -165,12 +207,24 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,
                  "Write the bound port here once listening (useful with --listen HOST:0)");
+  app.add_option("--api-token", options.api_token,
+                 "Secret clients must send (Authorization: Bearer); also $TESSERA_API_TOKEN");
+  app.add_option("--api-token-file", options.api_token_file, "Read the API token from this file");
+  app.add_option("--worker-token", options.worker_token,
+                 "Secret workers must send; also $TESSERA_WORKER_TOKEN");
+  app.add_option("--worker-token-file", options.worker_token_file,
+                 "Read the worker token from this file");
+  app.add_flag("--insecure", options.insecure,
+               "Allow a non-loopback --listen without both tokens");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(options.log_level));
   try {
     return run(options);
   } catch (const CLI::Error& e) {
     return app.exit(e);
+  } catch (const StartRefused& e) {
+    spdlog::critical("{}", e.what());
+    return 2;
   } catch (const std::exception& e) {
     spdlog::critical("{}", e.what());
     return 1;

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/scene_parser.hpp"
+#include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
 
@@ -207,42 +208,42 @@ void add_worker_routes(Router& router, ApiContext& context) {
     json workers = json::array();
     for (const WorkerInfo& worker : context.scheduler.workers()) workers.push_back(to_json(worker));
     respond(json_response(200, {{"workers", std::move(workers)}}));
-  });
+  }, std::nullopt, role_client);
   router.add("POST", "/v1/workers", [&context](HttpRequest&& request, Respond respond) {
     respond(register_worker(context, request));
-  });
+  }, std::nullopt, role_worker);
   router.add("DELETE", "/v1/workers/{id}", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
     if (!context.scheduler.worker_known(id))
       return respond(error_response(404, "unknown_worker", "no worker " + id));
     context.scheduler.worker_left(id);
     respond(HttpResponse{204, "", "", {}});
-  });
+  }, std::nullopt, role_worker);
   router.add("POST", "/v1/workers/{id}/claim", [&context](HttpRequest&& request, Respond respond) {
     claim(context, request, std::move(respond));
-  });
+  }, std::nullopt, role_worker);
   router.add("GET", "/v1/scenes/{digest}", [&context](HttpRequest&& request, Respond respond) {
     const std::string& digest = request.params.at("digest");
     const auto scene = context.scheduler.scene_json(digest);
     respond(scene ? HttpResponse{200, "application/json", *scene, {}}
                   : error_response(404, "not_found", "no scene " + digest));
-  });
+  }, std::nullopt, role_worker);
   router.add("POST", "/v1/leases/{id}/heartbeat", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
     const auto lease = context.scheduler.heartbeat(id);
     if (lease) context.scheduler.touch_worker(lease->worker_id);
     respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
-  });
+  }, std::nullopt, role_worker);
   router.add("PUT", "/v1/leases/{id}/result",
              [&context](HttpRequest&& request, Respond respond) { respond(upload(context, request)); },
-             max_upload_bytes(context.limits));
+             max_upload_bytes(context.limits), role_worker);
   router.add("POST", "/v1/leases/{id}/fail", [&context](HttpRequest&& request, Respond respond) {
     respond(report_failure(context, request));
-  });
+  }, std::nullopt, role_worker);
   router.add("POST", "/v1/leases/{id}/release", [&context](HttpRequest&& request, Respond respond) {
     context.scheduler.release(request.params.at("id"));
     respond(HttpResponse{204, "", "", {}});
-  });
+  }, std::nullopt, role_worker);
 }
 
 }  // namespace tessera

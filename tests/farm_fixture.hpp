@@ -72,6 +72,8 @@ class Farm {
   Farm(const Farm&) = delete;
   Farm& operator=(const Farm&) = delete;
 
+  // For a coordinator started with --api-token: api() sends it from now on.
+  void use_api_token(const std::string& token) { api_ = std::make_unique<ApiClient>(url(), token); }
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
   int port() const { return port_; }
   ApiClient& api() { return *api_; }

@@ -100,12 +100,31 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   for (const auto& command : configuration)
     ASSERT_TRUE(ip_command(ip, command, setup_log)) << "network setup failed; see " << setup_log;
 
+  // Off loopback and without tokens, the coordinator refuses to start, and says why.
+  {
+    test::Process open_server(ip,
+                              {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0",
+                               "--data-dir", (dir / "open-data").string(), "--local-workers", "0"},
+                              dir / "open-server.log");
+    const auto status = open_server.wait_for(20s);
+    ASSERT_TRUE(status.has_value()) << "a coordinator without tokens listened on 10.77.0.1";
+    EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 2) << "status " << *status;
+    EXPECT_NE(test::read_text(dir / "open-server.log").find("--insecure"), std::string::npos);
+  }
+
+  // Tokens from files, so that no process list shows them.
+  const std::string api_token = "api-" + std::to_string(::getpid()) + "-secret";
+  const std::string worker_token = "worker-" + std::to_string(::getpid()) + "-secret";
+  test::write_text(dir / "api.token", api_token + "\n");
+  test::write_text(dir / "worker.token", worker_token + "\n");
+
   // The coordinator listens on its bridge address only, on an ephemeral port.
   const fs::path port_file = dir / "port";
   test::Process server(ip,
                        {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0",
                         "--data-dir", (dir / "data").string(), "--local-workers", "0", "--port-file",
-                        port_file.string(), "--log-level", "info"},
+                        port_file.string(), "--log-level", "info", "--api-token-file",
+                        (dir / "api.token").string(), "--worker-token-file", (dir / "worker.token").string()},
                        dir / "server.log");
   ASSERT_TRUE(test::eventually([&] { return fs::exists(port_file); }, 20s))
       << "the server did not start; see " << (dir / "server.log");
@@ -117,7 +136,7 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
     return std::make_unique<test::Process>(
         ip,
         std::vector<std::string>{"netns", "exec", ns, TESSERA_WORKER_BIN, "--server", url, "--threads", "1",
-                                 "--name", name},
+                                 "--name", name, "--token-file", (dir / "worker.token").string()},
         dir / (name + ".log"));
   };
   const auto worker_a = start_worker(host_a, "host-a");
@@ -126,7 +145,9 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   // The test talks to the coordinator as a client on host b would: the CLI in that namespace.
   const std::vector<std::string> on_host_b{ip, "netns", "exec", host_b};
   const auto workers = [&] {
-    const test::CliRun run = test::run_cli(dir, {"--server", url, "--json", "workers"}, 30s, on_host_b);
+    const test::CliRun run = test::run_cli(
+        dir, {"--server", url, "--token-file", (dir / "api.token").string(), "--json", "workers"}, 30s,
+        on_host_b);
     if (run.exit_code != 0) return json::array();
     const json reply = json::parse(run.output, nullptr, false);
     return reply.is_discarded() ? json::array() : reply["workers"];
@@ -146,8 +167,10 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   test::write_text(scene_file, scene.dump());
   const fs::path image_file = dir / "out.exr";
   const test::CliRun submitted = test::run_cli(
-      dir, {"--server", url, "submit", scene_file.string(), "--wait", "-o", image_file.string()}, 60s,
-      on_host_b);
+      dir,
+      {"--server", url, "--token-file", (dir / "api.token").string(), "submit", scene_file.string(), "--wait",
+       "-o", image_file.string()},
+      60s, on_host_b);
   ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
   EXPECT_TRUE(test::same_pixels(read_image(image_file), test::render_image(scene, 2)));
 
@@ -159,6 +182,16 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
     total += worker["tiles_rendered"].get<int>();
   }
   EXPECT_EQ(total, 80) << done.dump();
+  // Without the token, a client on the other host is turned away.
+  const test::CliRun stranger = test::run_cli(dir, {"--server", url, "list"}, 30s, on_host_b);
+  EXPECT_EQ(stranger.exit_code, 1) << stranger.output;
+  EXPECT_NE(stranger.output.find("token"), std::string::npos) << stranger.output;
+  // And no log holds a secret.
+  for (const char* log : {"server.log", "host-a.log", "host-b.log"}) {
+    const std::string text = test::read_text(dir / log);
+    EXPECT_EQ(text.find(api_token), std::string::npos) << log;
+    EXPECT_EQ(text.find(worker_token), std::string::npos) << log;
+  }
 }
 
 }  // namespace

@@ -4,8 +4,12 @@
 
 namespace tessera {
 
-LeaseHeartbeat::LeaseHeartbeat(std::string server_url, std::chrono::milliseconds interval)
-    : server_url_(std::move(server_url)), interval_(interval), thread_([this] { run(); }) {}
+LeaseHeartbeat::LeaseHeartbeat(std::string server_url, std::string token,
+                               std::chrono::milliseconds interval)
+    : server_url_(std::move(server_url)),
+      token_(std::move(token)),
+      interval_(interval),
+      thread_([this] { run(); }) {}
 
 LeaseHeartbeat::~LeaseHeartbeat() {
   {
@@ -34,6 +38,7 @@ bool LeaseHeartbeat::end() {
 
 void LeaseHeartbeat::run() {
   HttpClient client(server_url_, std::chrono::seconds(10));
+  client.set_bearer_token(token_);
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     if (lease_id_.empty()) {

@@ -13,7 +13,8 @@ namespace tessera {
 
 class LeaseHeartbeat {
  public:
-  LeaseHeartbeat(std::string server_url, std::chrono::milliseconds interval);
+  // `token`: the worker token to send, "" for none.
+  LeaseHeartbeat(std::string server_url, std::string token, std::chrono::milliseconds interval);
   ~LeaseHeartbeat();
   LeaseHeartbeat(const LeaseHeartbeat&) = delete;
   LeaseHeartbeat& operator=(const LeaseHeartbeat&) = delete;
@@ -29,6 +30,7 @@ class LeaseHeartbeat {
   void run();
 
   std::string server_url_;
+  std::string token_;
   std::chrono::milliseconds interval_;
   std::mutex mutex_;
   std::condition_variable changed_;

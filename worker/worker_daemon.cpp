@@ -47,6 +47,8 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
+  client_.set_bearer_token(options_.token);
+  upload_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
       [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
       kUploadGather, kMaxUploadBytes);
@@ -98,7 +100,8 @@ bool WorkerDaemon::register_self() {
   worker_id_ = reply.at("id").get<std::string>();
   const double interval_s = reply.value("heartbeat_interval_s", 5.0);
   heartbeat_ = std::make_unique<LeaseHeartbeat>(
-      options_.server_url, std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
+      options_.server_url, options_.token,
+      std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
   spdlog::info("registered as {} ({}, {} threads)", worker_id_, options_.name, options_.threads);
   return true;
 }

@@ -23,6 +23,7 @@ namespace tessera {
 struct WorkerOptions {
   std::string server_url = "http://127.0.0.1:8640";
   std::string name;     // default: the host name
+  std::string token;    // the coordinator's worker token; "" for none
   int threads = 0;      // 0: one per core
   double claim_wait_s = 10;
   // Fault injection for the test suite: "crash:N" aborts the process, "error:N" reports

@@ -1,6 +1,7 @@
 // tessera-worker: renders tiles for a coordinator.
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <pthread.h>
 #include <thread>
@@ -9,6 +10,7 @@
 #include <tbb/global_control.h>
 #include <spdlog/spdlog.h>
 
+#include "common/secret.hpp"
 #include "worker/worker_daemon.hpp"
 
 int main(int argc, char** argv) {
@@ -20,7 +22,19 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--name", options.name, "Name shown in `tessera workers` (default: host name)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  std::string token_file;
+  app.add_option("--token", options.token,
+                 "The coordinator's worker token (default: $TESSERA_WORKER_TOKEN; --token-file "
+                 "keeps it out of the process list)");
+  app.add_option("--token-file", token_file, "Read the worker token from this file");
   CLI11_PARSE(app, argc, argv);
+  try {
+    options.token = tessera::resolve_secret(options.token, token_file, "TESSERA_WORKER_TOKEN",
+                                            "worker token");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
   // Not a flag: only the test suite injects faults, and local workers inherit it from their
   // coordinator's environment.
   if (const char* fault = std::getenv("TESSERA_FAULT_INJECTION")) options.fault = fault;
