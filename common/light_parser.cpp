@@ -64,8 +64,9 @@ Light parse_light(const ValueReader& value) {
 std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits) {
   const std::size_t count = lights.array_size("an array of lights");
   if (count > limits.max_lights) {
-    lights.fail("must have <= " + std::to_string(limits.max_lights) +
-                " elements (limit max_lights), got " + std::to_string(count));
+    lights.fail_limit("must have <= " + std::to_string(limits.max_lights) +
+                          " elements (limit max_lights), got " + std::to_string(count),
+                      "max_lights", limits.max_lights);
   }
   std::vector<Light> result;
   result.reserve(count);

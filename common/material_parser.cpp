@@ -52,9 +52,10 @@ MaterialTable::MaterialTable(const Limits& limits)
 void MaterialTable::add_named(const ValueReader& materials) {
   const ObjectReader reader(materials, "an object mapping material names to materials");
   if (reader.members().size() > max_materials_) {
-    materials.fail("must have <= " + std::to_string(max_materials_) +
-                   " entries (limit max_materials), got " +
-                   std::to_string(reader.members().size()));
+    materials.fail_limit("must have <= " + std::to_string(max_materials_) +
+                             " entries (limit max_materials), got " +
+                             std::to_string(reader.members().size()),
+                         "max_materials", max_materials_);
   }
   for (const auto& [name, unused] : reader.members()) {
     const ValueReader value = reader.value().member(name);
@@ -82,8 +83,9 @@ std::uint32_t MaterialTable::resolve(const ValueReader& reference) {
 std::uint32_t MaterialTable::add(Material material, const ValueReader& where) {
   // Index 0 is the built-in default, which the limit does not count.
   if (materials_.size() - 1 >= max_materials_) {
-    where.fail("is one material too many: named and inline materials together must be <= " +
-               std::to_string(max_materials_) + " (limit max_materials)");
+    where.fail_limit("is one material too many: named and inline materials together must be <= " +
+                         std::to_string(max_materials_) + " (limit max_materials)",
+                     "max_materials", max_materials_);
   }
   materials_.push_back(std::move(material));
   return static_cast<std::uint32_t>(materials_.size() - 1);

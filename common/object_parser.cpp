@@ -114,8 +114,9 @@ std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& mat
                                   const Limits& limits) {
   const std::size_t count = objects.array_size("an array of objects");
   if (count > limits.max_objects) {
-    objects.fail("must have <= " + std::to_string(limits.max_objects) +
-                 " elements (limit max_objects), got " + std::to_string(count));
+    objects.fail_limit("must have <= " + std::to_string(limits.max_objects) +
+                           " elements (limit max_objects), got " + std::to_string(count),
+                       "max_objects", limits.max_objects);
   }
   std::vector<Object> result;
   result.reserve(count);
@@ -124,9 +125,11 @@ std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& mat
     result.push_back(parse_object(objects.element(i), materials));
     triangles += triangle_count(result.back().shape);
     if (triangles > limits.max_triangles) {
-      objects.fail("must have <= " + std::to_string(limits.max_triangles) +
-                   " triangles in total (limit max_triangles), got " + std::to_string(triangles) +
-                   " counting up to " + objects.element(i).pointer());
+      objects.fail_limit("must have <= " + std::to_string(limits.max_triangles) +
+                             " triangles in total (limit max_triangles), got " +
+                             std::to_string(triangles) + " counting up to " +
+                             objects.element(i).pointer(),
+                         "max_triangles", limits.max_triangles);
     }
   }
   return result;

@@ -138,6 +138,7 @@ struct Scene {
 struct Limits {
   int max_width = 16384;
   int max_height = 16384;
+  std::uint64_t max_pixels = 16384ull * 16384;  // width x height
   int max_samples_per_pixel = 4096;
   int max_depth = 64;
   int max_tile_size = 4096;
@@ -145,6 +146,9 @@ struct Limits {
   std::size_t max_lights = 1024;
   std::size_t max_materials = 10000;
   std::size_t max_triangles = 20000000;  // summed over meshes, boxes and triangles
+
+  // No limit at all: for a scene already validated against the coordinator's limits.
+  static Limits none();
 };
 
 }  // namespace tessera

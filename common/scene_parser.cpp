@@ -1,5 +1,8 @@
 #include "common/scene_parser.hpp"
 
+#include <cstdint>
+#include <limits>
+
 #include <nlohmann/json.hpp>
 
 #include "common/scene_parser_parts.hpp"
@@ -18,6 +21,11 @@ void parse_image(const ValueReader& value, const Limits& limits, Scene& scene) {
       static_cast<int>(reader.require("width").integer({1, limits.max_width, "limit max_width"}));
   scene.height = static_cast<int>(
       reader.require("height").integer({1, limits.max_height, "limit max_height"}));
+  const std::uint64_t pixels = static_cast<std::uint64_t>(scene.width) * scene.height;
+  if (pixels > limits.max_pixels)
+    value.fail_limit("width x height must be <= " + std::to_string(limits.max_pixels) +
+                         " pixels (limit max_pixels), got " + std::to_string(pixels),
+                     "max_pixels", limits.max_pixels);
 }
 
 Camera parse_camera(const ValueReader& value) {
@@ -63,6 +71,13 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
 }
 
 }  // namespace
+
+Limits Limits::none() {
+  constexpr int most = std::numeric_limits<int>::max();
+  constexpr std::size_t many = std::numeric_limits<std::size_t>::max();
+  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most,
+                many, many, many, many};
+}
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
   const ObjectReader root(ValueReader(document, ""), "a JSON object");

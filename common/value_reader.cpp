@@ -140,7 +140,10 @@ std::int64_t ValueReader::integer(const IntRange& range) const {
   if (v > static_cast<double>(range.max)) {
     std::string detail = "must be <= " + std::to_string(range.max);
     if (!range.max_reason.empty()) detail += " (" + range.max_reason + ")";
-    fail(detail + ", got " + describe(*value_));
+    detail += ", got " + describe(*value_);
+    if (range.max_reason.starts_with("limit "))
+      fail_limit(detail, range.max_reason.substr(6), static_cast<std::uint64_t>(range.max));
+    fail(detail);
   }
   if (value_->is_number_integer()) return value_->get<std::int64_t>();
   return static_cast<std::int64_t>(v);

@@ -38,7 +38,9 @@ struct Range {
 struct IntRange {
   std::int64_t min = std::numeric_limits<std::int64_t>::min();
   std::int64_t max = std::numeric_limits<std::int64_t>::max();
-  std::string max_reason;  // e.g. "limit max_width"
+  // Where the maximum comes from, e.g. "the mesh has 4 positions"; "limit NAME" for the
+  // Limits member NAME, which makes exceeding it a limit error (SceneError::limit()).
+  std::string max_reason;
 };
 
 // RFC 6901: "~" becomes "~0" and "/" becomes "~1", since keys are user-chosen names.
@@ -61,6 +63,11 @@ class ValueReader {
   const std::string& pointer() const { return pointer_; }
 
   [[noreturn]] void fail(const std::string& detail) const { throw SceneError(pointer_, detail); }
+  // Over `limit` (a Limits member's name), whose value is `value`.
+  [[noreturn]] void fail_limit(const std::string& detail, const std::string& limit,
+                               std::uint64_t value) const {
+    throw SceneError(pointer_, detail, limit, value);
+  }
   // "must be <expected>, got <JSON type>"
   [[noreturn]] void fail_type(std::string_view expected) const;
 

@@ -51,7 +51,13 @@ HttpResponse submit(ApiContext& context, const HttpRequest& request) {
     scene = parse_scene(body["scene"], context.limits);
   } catch (const SceneError& e) {
     const std::string path = "/scene" + e.pointer();
-    return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+    if (e.limit().empty()) return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+    // Valid, but more than this server takes: say which limit, so the user can ask for it.
+    HttpResponse response = error_response(422, "over_limit", path + ": " + e.detail(), path);
+    nlohmann::json body = nlohmann::json::parse(response.body);
+    body["error"]["limit"] = e.limit();
+    body["error"]["limit_value"] = e.limit_value();
+    return json_response(422, body);
   }
   const JobStatus job = context.scheduler.submit(name, priority, scene, body["scene"].dump());
   HttpResponse response = json_response(201, to_json(job, context.clock.now_ms()));

@@ -36,6 +36,8 @@ struct ServerOptions {
   int max_tile_attempts = 3;
   std::string log_level = "info";
   std::string port_file;
+  tessera::Limits limits;
+  std::size_t max_job_bytes = 64 << 20;
   std::string api_token, api_token_file;
   std::string worker_token, worker_token_file;
   bool insecure = false;
@@ -114,7 +116,7 @@ int run(const ServerOptions& options) {
   scheduler.on_job_finished([&job_waits] { job_waits.notify(); });
 
   Router router;
-  ApiContext context{scheduler, clock, claims, job_waits, Limits{}, 64 << 20,
+  ApiContext context{scheduler, clock, claims, job_waits, options.limits, options.max_job_bytes,
                      std::filesystem::path(options.data_dir) / "tmp"};
   add_health_routes(router);
   add_job_routes(router, context);
@@ -207,6 +209,25 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,
                  "Write the bound port here once listening (useful with --listen HOST:0)");
+  // What one job may cost; a scene over a limit is refused with 422 naming it.
+  tessera::Limits& limits = options.limits;
+  app.add_option("--max-width", limits.max_width, "Largest image width")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-height", limits.max_height, "Largest image height")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-pixels", limits.max_pixels, "Largest width x height")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-samples", limits.max_samples_per_pixel, "Most samples per pixel")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-depth", limits.max_depth, "Deepest recursion (render.max_depth)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--max-tile-size", limits.max_tile_size, "Largest render.tile_size")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-objects", limits.max_objects, "Most objects")->capture_default_str();
+  app.add_option("--max-lights", limits.max_lights, "Most lights")->capture_default_str();
+  app.add_option("--max-materials", limits.max_materials, "Most materials")->capture_default_str();
+  app.add_option("--max-triangles", limits.max_triangles, "Most triangles, over all objects")
+      ->capture_default_str();
+  app.add_option("--max-job-bytes", options.max_job_bytes,
+                 "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--api-token", options.api_token,
                  "Secret clients must send (Authorization: Bearer); also $TESSERA_API_TOKEN");
   app.add_option("--api-token-file", options.api_token_file, "Read the API token from this file");

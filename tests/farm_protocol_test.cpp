@@ -470,6 +470,43 @@ RawAnswer send_head_only(int port, const std::string& head) {
   return answer;
 }
 
+TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
+  Farm farm("proto-limits", 0,
+            {"--max-samples", "8", "--max-pixels", "10000", "--max-job-bytes", "100000"});
+  HttpClient http(farm.url(), 10s);
+  const auto submit = [&](const json& scene) {
+    return http.request("POST", "/v1/jobs", json{{"name", "big"}, {"scene", scene}}.dump());
+  };
+  const HttpResult samples = submit(test::showcase(16, 16, 16, 16));
+  ASSERT_TRUE(is_error(samples, 422, "over_limit"));
+  json error = json::parse(samples.body)["error"];
+  EXPECT_EQ(error["limit"], "max_samples_per_pixel");
+  EXPECT_EQ(error["limit_value"], 8);
+  EXPECT_EQ(error["path"], "/scene/render/samples_per_pixel");
+  EXPECT_NE(error["message"].get<std::string>().find("got 16"), std::string::npos) << error.dump();
+
+  const HttpResult pixels = submit(test::showcase(200, 100, 1, 16));
+  ASSERT_TRUE(is_error(pixels, 422, "over_limit"));
+  error = json::parse(pixels.body)["error"];
+  EXPECT_EQ(error["limit"], "max_pixels");
+  EXPECT_EQ(error["limit_value"], 10000);
+  EXPECT_EQ(error["path"], "/scene/image");
+
+  // The body limit is a flag too, and answered from the headers.
+  json padded = test::showcase(16, 16, 1, 16);
+  padded["materials"]["padding"] = {{"diffuse", 0.5}};
+  const std::string body = json{{"scene", padded}, {"name", std::string(150000, 'x')}}.dump();
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", body), 413, "body_too_large"));
+
+  // Within the limits, accepted; the CLI reports a limit as a usage error (exit 2).
+  EXPECT_EQ(submit(test::showcase(16, 16, 8, 16)).status, 201);
+  const fs::path scene_file = farm.dir() / "over.json";
+  test::write_text(scene_file, test::showcase(16, 16, 16, 16).dump());
+  const test::CliRun cli = test::run_cli(farm.dir(), {"--server", farm.url(), "submit", scene_file.string()});
+  EXPECT_EQ(cli.exit_code, 2) << cli.output;
+  EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
+}
+
 TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   Farm farm("proto-errors", 0);
   HttpClient http(farm.url(), 10s);

@@ -383,3 +383,56 @@ TEST(SceneValid, CompleteScene) {
 
 }  // namespace
 }  // namespace tessera::scene_test
+
+namespace tessera::scene_test {
+namespace {
+
+// The limit a scene breaks, as SceneError names it: "" when it breaks another rule.
+std::pair<std::string, std::uint64_t> limit_broken(const json& document, const Limits& limits) {
+  try {
+    parse_scene(document, limits);
+  } catch (const SceneError& error) {
+    return {error.limit(), error.limit_value()};
+  }
+  return {"(none: it parsed)", 0};
+}
+
+TEST(SceneLimits, EachLimitIsNamedWithItsValue) {
+  Limits tight;
+  tight.max_width = 100;
+  tight.max_pixels = 30;
+  tight.max_samples_per_pixel = 8;
+  tight.max_depth = 2;
+  tight.max_tile_size = 16;
+  tight.max_objects = 1;
+  tight.max_lights = 1;
+  tight.max_materials = 1;
+  tight.max_triangles = 1;
+  const json scene = minimal_scene();  // 4x3
+  using Broken = std::pair<std::string, std::uint64_t>;
+  EXPECT_EQ(limit_broken(with(scene, "/image/width", 101), tight), (Broken{"max_width", 100}));
+  EXPECT_EQ(limit_broken(with(scene, "/image/width", 11), tight), (Broken{"max_pixels", 30}));
+  EXPECT_EQ(limit_broken(with(scene, "/render/samples_per_pixel", 9), tight),
+            (Broken{"max_samples_per_pixel", 8}));
+  EXPECT_EQ(limit_broken(with(scene, "/render/max_depth", 3), tight), (Broken{"max_depth", 2}));
+  EXPECT_EQ(limit_broken(with(scene, "/render/tile_size", 17), tight), (Broken{"max_tile_size", 16}));
+  EXPECT_EQ(limit_broken(with(scene, "/objects", json::array({sphere(), sphere()})), tight),
+            (Broken{"max_objects", 1}));
+  const json light = {{"type", "directional"}, {"direction", {0, -1, 0}}};
+  EXPECT_EQ(limit_broken(with(scene, "/lights", json::array({light, light})), tight),
+            (Broken{"max_lights", 1}));
+  const json two_materials = {{"a", {{"diffuse", 0.5}}}, {"b", {{"diffuse", 0.5}}}};
+  EXPECT_EQ(limit_broken(with(scene, "/materials", two_materials), tight), (Broken{"max_materials", 1}));
+  const json box = {{"type", "box"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}};
+  EXPECT_EQ(limit_broken(with(scene, "/objects", json::array({box})), tight), (Broken{"max_triangles", 1}));
+  // Other rules are not limits, even where a maximum is involved.
+  EXPECT_EQ(limit_broken(with(scene, "/render/max_depth", -1), tight), (Broken{"", 0}));
+  EXPECT_EQ(limit_broken(with(scene, "/image/width", "wide"), tight), (Broken{"", 0}));
+  // Within every limit, it parses; with none at all, anything goes.
+  EXPECT_EQ(limit_broken(scene, tight).first, "(none: it parsed)");
+  EXPECT_EQ(limit_broken(with(scene, "/render/samples_per_pixel", 100000), Limits::none()).first,
+            "(none: it parsed)");
+}
+
+}  // namespace
+}  // namespace tessera::scene_test

@@ -142,7 +142,10 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   if (!result || result->status != 200)
     throw std::runtime_error("cannot fetch scene " + digest);
   if (renderers_.size() >= kMaxCachedScenes) renderers_.erase(renderers_.begin());
-  auto renderer = std::make_unique<Renderer>(parse_scene(parse_json_text(result->body)));
+  // The coordinator validated the scene against its own limits, which may be above the
+  // defaults: here it is only rebuilt.
+  auto renderer =
+      std::make_unique<Renderer>(parse_scene(parse_json_text(result->body), Limits::none()));
   return *renderers_.emplace(digest, std::move(renderer)).first->second;
 }
 
