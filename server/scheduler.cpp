@@ -58,7 +58,7 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
     auto job = std::make_unique<JobEntry>();
     JobStatus& s = job->status;
     do {
-      s.id = "j-" + random_hex(12);
+      s.id = "j-" + random_hex(32);  // 128 bits: nobody finds a job by guessing its id
     } while (jobs_.contains(s.id));
     s.name = name;
     s.state = JobState::queued;

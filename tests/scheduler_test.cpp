@@ -22,7 +22,7 @@ using namespace test;
 
 TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   const JobStatus submitted = submit(100, 37, 32);
-  EXPECT_TRUE(std::regex_match(submitted.id, std::regex("j-[0-9a-f]{12}")));
+  EXPECT_TRUE(std::regex_match(submitted.id, std::regex("j-[0-9a-f]{32}")));
   EXPECT_EQ(submitted.state, JobState::queued);
   EXPECT_EQ(submitted.tiles_total, 8);
   EXPECT_EQ(submitted.created_at_ms, clock_.now_ms());
