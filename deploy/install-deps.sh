@@ -9,6 +9,7 @@ packages=(
   nlohmann-json3-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
   libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev
+  clang libclang-rt-14-dev  # the scene parser's libFuzzer test (tests/fuzz/run.sh)
   iproute2  # `ip netns`: the multi-host farm test (tests/farm_netns_test.cpp)
 )
 
