@@ -123,25 +123,6 @@ std::string command_line(pid_t pid) {
   return text;
 }
 
-std::vector<pid_t> children_of(pid_t parent) {
-  std::vector<pid_t> children;
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream stat(entry.path() / "stat");
-    std::string text;
-    std::getline(stat, text);
-    const auto close = text.rfind(')');
-    if (close == std::string::npos) continue;
-    std::istringstream rest(text.substr(close + 2));
-    char state = 0;
-    pid_t ppid = 0;
-    rest >> state >> ppid;
-    if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
-  }
-  return children;
-}
-
 TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   const fs::path secrets = test::fresh_dir("auth-render-secrets");
   Farm farm("auth-render", 1, token_args(secrets));
@@ -173,7 +154,7 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   EXPECT_FALSE(farm.worker_named("outsider").has_value());
 
   // Nothing that `ps` shows holds a token: the server's and its local worker's commands.
-  const std::vector<pid_t> locals = children_of(farm.server().pid());
+  const std::vector<pid_t> locals = test::children_of(farm.server().pid());
   ASSERT_EQ(locals.size(), 1u);
   for (const pid_t pid : {farm.server().pid(), locals[0], insider->pid()}) {
     const std::string command = command_line(pid);

@@ -33,17 +33,24 @@ int tiles_rendered_by(const fs::path& log) {
   return count;
 }
 
+// Waits until the worker of that name is rendering, having delivered `delivered` tiles.
+::testing::AssertionResult rendering_after(Farm& farm, const std::string& name, int delivered) {
+  const bool seen = test::eventually(
+      [&] {
+        const auto info = farm.worker_named(name);
+        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= delivered;
+      },
+      30s);
+  if (seen) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << name << " never got to rendering after " << delivered << " tiles";
+}
+
 TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
   Farm farm("fault-kill-worker", 0, quick_leases);
   const json scene = test::showcase(256, 192, 8, 32);  // 48 tiles
   const std::string id = farm.api().submit("kill", 50, scene)["id"];
   auto doomed = farm.start_worker("doomed", 1);
-  ASSERT_TRUE(test::eventually(
-      [&] {
-        const auto info = farm.worker_named("doomed");
-        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= 2;
-      },
-      30s));
+  ASSERT_TRUE(rendering_after(farm, "doomed", 2));
   doomed->signal(SIGKILL);
   ASSERT_TRUE(doomed->wait_for(10s).has_value());
   const int done_at_kill = farm.api().job(id)["tiles"]["done"];
@@ -83,12 +90,7 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
   const json scene = test::showcase(256, 192, 16, 32);  // 48 tiles
   const std::string id = farm.api().submit("fence", 50, scene)["id"];
   auto frozen = farm.start_worker("frozen", 1);
-  ASSERT_TRUE(test::eventually(
-      [&] {
-        const auto info = farm.worker_named("frozen");
-        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= 1;
-      },
-      30s));
+  ASSERT_TRUE(rendering_after(farm, "frozen", 1));
   frozen->signal(SIGSTOP);  // mid-lease: no heartbeats, no uploads
   ASSERT_TRUE(test::eventually([&] { return farm.worker_named("frozen").value()["state"] == "idle"; }, 20s))
       << "the frozen worker's lease did not expire";

@@ -117,6 +117,26 @@ class Farm {
   std::unique_ptr<ApiClient> api_;
 };
 
+// The pids of a process's children, from /proc.
+inline std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> children;
+  for (const auto& entry : farm_fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string text;
+    std::getline(stat, text);
+    const auto close = text.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(text.substr(close + 2));
+    char state = 0;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
+  }
+  return children;
+}
+
 // The showcase scene at a size, sampling and tile size small enough for a test.
 inline nlohmann::json showcase(int width, int height, int spp, int tile_size) {
   nlohmann::json scene = read_json_file(farm_fs::path(TESSERA_SOURCE_DIR) / "examples" / "showcase.json");

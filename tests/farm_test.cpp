@@ -164,35 +164,15 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   again->wait_for(20s);
 }
 
-// The pids of a process's children, from /proc.
-std::vector<pid_t> children_of(pid_t parent) {
-  std::vector<pid_t> children;
-  for (const auto& entry : fs::directory_iterator("/proc")) {
-    const std::string name = entry.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream stat(entry.path() / "stat");
-    std::string text;
-    std::getline(stat, text);
-    const auto close = text.rfind(')');
-    if (close == std::string::npos) continue;
-    std::istringstream rest(text.substr(close + 2));
-    char state = 0;
-    pid_t ppid = 0;
-    rest >> state >> ppid;
-    if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
-  }
-  return children;
-}
-
 TEST(Farm, ALocalWorkerThatDiesIsReplaced) {
   Farm farm("respawn", 1);
   std::vector<pid_t> before;
-  ASSERT_TRUE(test::eventually([&] { return (before = children_of(farm.server().pid())).size() == 1; }, 20s));
+  ASSERT_TRUE(test::eventually([&] { return (before = test::children_of(farm.server().pid())).size() == 1; }, 20s));
   ::kill(before[0], SIGKILL);
   std::vector<pid_t> after;
   ASSERT_TRUE(test::eventually(
       [&] {
-        after = children_of(farm.server().pid());
+        after = test::children_of(farm.server().pid());
         return after.size() == 1 && after[0] != before[0];
       },
       20s))

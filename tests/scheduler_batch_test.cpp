@@ -16,12 +16,6 @@ namespace {
 
 using namespace test;
 
-std::vector<int> indexes_of(const Lease& lease) {
-  std::vector<int> indexes;
-  for (const LeaseTile& tile : lease.tiles) indexes.push_back(tile.index);
-  return indexes;
-}
-
 // The lease's tiles after the first.
 std::vector<int> rest_of(const Lease& lease) {
   std::vector<int> indexes = indexes_of(lease);

@@ -12,12 +12,6 @@ namespace {
 
 using namespace test;
 
-std::vector<int> indexes_of_lease(const Lease& lease) {
-  std::vector<int> indexes;
-  for (const LeaseTile& tile : lease.tiles) indexes.push_back(tile.index);
-  return indexes;
-}
-
 class SchedulerFailureTest : public SchedulerTest {
  protected:
   // Attempts of each tile, as the store has them.
@@ -87,7 +81,7 @@ TEST_F(SchedulerFailureTest, AnExpiryChargesEveryTileStillOwedAndEachGoesOutAlon
   const std::string next = worker("next");
   for (const int tile : {1, 3, 5}) {
     const Lease alone = *s().claim(next, 4);
-    ASSERT_EQ(indexes_of_lease(alone), std::vector<int>{tile});
+    ASSERT_EQ(indexes_of(alone), std::vector<int>{tile});
     ASSERT_EQ(deliver(alone), ResultOutcome::accepted);
   }
   s().worker_left(slow);  // so that the next batch is not cut to a share of two workers

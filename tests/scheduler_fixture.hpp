@@ -62,6 +62,13 @@ inline bool same_bits(std::span<const float> a, std::span<const float> b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
 }
 
+// The indexes of a lease's tiles, in its order.
+inline std::vector<int> indexes_of(const Lease& lease) {
+  std::vector<int> indexes;
+  for (const LeaseTile& tile : lease.tiles) indexes.push_back(tile.index);
+  return indexes;
+}
+
 class SchedulerTest : public ::testing::Test {
  protected:
   void SetUp() override {
