@@ -59,7 +59,12 @@ HttpResponse submit(ApiContext& context, const HttpRequest& request) {
     body["error"]["limit_value"] = e.limit_value();
     return json_response(422, body);
   }
-  const JobStatus job = context.scheduler.submit(name, priority, scene, body["scene"].dump());
+  JobStatus job;
+  try {
+    job = context.scheduler.submit(name, priority, scene, body["scene"].dump());
+  } catch (const std::exception& e) {  // the store refused: a full disk, say
+    return error_response(507, "storage_failed", std::string("cannot store the job: ") + e.what());
+  }
   HttpResponse response = json_response(201, to_json(job, context.clock.now_ms()));
   response.headers.emplace_back("Location", "/v1/jobs/" + job.id);
   return response;

@@ -105,6 +105,7 @@ enum class ResultOutcome {
   stale,       // the lease expired, was withdrawn or given to another worker; refused
   wrong_size,  // pixel count does not match a tile; refused
   wrong_tile,  // a tile that this lease never held, or named twice; refused
+  unstored,    // the store could not take the pixels (a full disk); the job has failed
 };
 
 enum class CancelOutcome { canceled, not_found, already_finished };
@@ -204,6 +205,12 @@ class Scheduler {
 
   // The one way state changes: write `change` in one transaction, then apply it.
   void commit(StagedChange& change);
+  void write(const StagedChange& change);  // throws what the store throws; memory untouched
+  void apply(StagedChange& change);
+  // The store refused a result (a full disk, say): the job fails with `error`, in the
+  // store if it still takes that much, in memory at least. A restart, with room again,
+  // resumes the job from what was stored.
+  void fail_unstorable(JobEntry& job, const std::string& error);
   void apply_job(JobEntry& job, const JobStatus& next);
   void apply_tile(JobEntry& job, int index, TileSlot next);
   // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and

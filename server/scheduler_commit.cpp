@@ -12,6 +12,11 @@
 namespace tessera {
 
 void Scheduler::commit(StagedChange& change) {
+  write(change);
+  apply(change);
+}
+
+void Scheduler::write(const StagedChange& change) {
   {
     Transaction tx = store_.transaction();
     for (const auto& [job, status] : change.jobs) store_.update_job(job_row(status));
@@ -26,6 +31,9 @@ void Scheduler::commit(StagedChange& change) {
     for (const auto& [worker, staged] : change.workers) store_.upsert_worker(worker_row(staged));
     tx.commit();
   }
+}
+
+void Scheduler::apply(StagedChange& change) {
   // Jobs before tiles: apply_job keeps the tile counters, which apply_tile then moves.
   for (auto& [job, status] : change.jobs) apply_job(*job, status);
   for (auto& [key, tile] : change.tiles) apply_tile(*key.first, key.second, std::move(tile));

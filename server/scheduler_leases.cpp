@@ -208,7 +208,14 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
       }
     }
   }
-  commit(change);
+  try {
+    write(change);
+  } catch (const std::exception& e) {
+    fail_unstorable(job, "cannot store the result of tile " +
+                             std::to_string(fresh.front()->tile_index) + ": " + e.what());
+    return ResultOutcome::unstored;
+  }
+  apply(change);
   // After the commit, so that a canvas made now from the store already holds them.
   Image& canvas = canvas_of(job);
   for (const TileResult* result : fresh)
@@ -329,6 +336,25 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
   // Its other tiles are withdrawn from their workers, as for a cancel.
   for (const auto& [lease_id, entry] : leases_)
     if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+}
+
+void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {
+  spdlog::error("job {}: {}", job.status.id, error);
+  if (is_finished(job.status.state)) return;
+  StagedChange change;
+  JobStatus& status = change.job(job);
+  status.state = JobState::failed;
+  status.finished_at_ms = clock_.now_ms();
+  status.error = error;
+  for (const auto& [lease_id, entry] : leases_)
+    if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+  try {
+    write(change);
+  } catch (const std::exception& e) {
+    spdlog::error("job {}: the failure could not be stored either ({}); it is kept in memory",
+                  job.status.id, e.what());
+  }
+  apply(change);
 }
 
 bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {

@@ -176,6 +176,10 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
                             "lease " + id + " is no longer held; the result was refused");
     case ResultOutcome::wrong_size:
       return error_response(400, "wrong_size", "the pixel count does not match the tiles");
+    case ResultOutcome::unstored:
+      return error_response(507, "storage_failed",
+                            "the coordinator could not store the result (is its disk full?), so "
+                            "the job has failed; its status says why");
     case ResultOutcome::wrong_tile:
       return error_response(400, "wrong_tile",
                             "a tile named in X-Tessera-Tiles is not this lease's, or is named twice");

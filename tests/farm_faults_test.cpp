@@ -254,5 +254,68 @@ TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob
   EXPECT_GE(reporters, 2) << "the tile was not retried on another worker";
 }
 
+// Runs a command to completion; true when it exited 0.
+bool run_command(const std::string& binary, const std::vector<std::string>& args, const fs::path& log) {
+  test::Process process(binary, args, log);
+  const auto status = process.wait_for(20s);
+  return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
+}
+
+TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
+  const fs::path dir = test::fresh_dir("fault-disk-full");
+  const fs::path data = dir / "data";
+  fs::create_directories(data);
+  // A 2 MiB file system for the data dir: as root, a tmpfs of that size.
+  if (::geteuid() != 0 || !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=2m", "tmpfs", data.string()},
+                                       dir / "mount.log"))
+    GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
+                 << (dir / "mount.log");
+  struct Unmount {
+    fs::path path;
+    ~Unmount() { run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log"); }
+  } unmount{data};
+
+  auto server = std::make_unique<test::Process>(
+      TESSERA_SERVER_BIN,
+      std::vector<std::string>{"--listen", "127.0.0.1:0", "--data-dir", data.string(), "--local-workers", "1",
+                               "--worker-threads", "1", "--port-file", (dir / "port").string(),
+                               "--log-level", "info"},
+      dir / "server.log");
+  ASSERT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s)) << test::read_text(dir / "server.log");
+  int port = 0;
+  std::ifstream(dir / "port") >> port;
+  const std::string url = "http://127.0.0.1:" + std::to_string(port);
+  ApiClient api(url);
+  // 256 tiles of 12 KiB of pixels: 3 MiB, more than the disk holds.
+  const std::string id = api.submit("too big for the disk", 50, test::showcase(512, 512, 1, 32))["id"];
+  json job;
+  ASSERT_TRUE(test::eventually(
+      [&] {
+        job = api.job(id);
+        return job["state"] != "queued" && job["state"] != "running";
+      },
+      60s))
+      << job.dump();
+  EXPECT_EQ(job["state"], "failed") << job.dump();
+  const std::string error = job["error"].is_string() ? job["error"].get<std::string>() : "";
+  EXPECT_NE(error.find("cannot store the result of tile"), std::string::npos) << error;
+  EXPECT_NE(error.find("full"), std::string::npos) << error;
+
+  // Still serving: status, lists, health; a new job gets an answer, stored or refused clearly.
+  EXPECT_FALSE(server->wait_for(0ms).has_value()) << "the coordinator died";
+  HttpClient http(url, 10s);
+  EXPECT_EQ(http.request("GET", "/healthz").status, 200);
+  EXPECT_EQ(http.request("GET", "/v1/jobs").status, 200);
+  const HttpResult again = http.request("POST", "/v1/jobs",
+                                        json{{"name", "small"}, {"scene", test::showcase(16, 16, 1, 16)}}.dump());
+  EXPECT_TRUE(again.status == 201 || again.status == 507) << again.status << " " << again.body;
+  if (again.status == 507) {
+    EXPECT_NE(again.body.find("storage_failed"), std::string::npos) << again.body;
+  }
+  server->signal(SIGTERM);
+  const auto status = server->wait_for(30s);
+  ASSERT_TRUE(status.has_value());
+}
+
 }  // namespace
 }  // namespace tessera
