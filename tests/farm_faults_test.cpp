@@ -317,5 +317,32 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   ASSERT_TRUE(status.has_value());
 }
 
+TEST(FarmFaults, AWorkerThatKeepsFailingOnAJobIsKeptOffIt) {
+  const json scene = test::showcase(256, 192, 4, 32);  // 48 tiles
+  Farm farm("fault-kept-off", 0);
+  std::unique_ptr<test::Process> flaky;
+  {
+    // It fails on three tiles; after two failures it gets no more of this job's tiles.
+    const ScopedEnv fault("TESSERA_FAULT_INJECTION", "error:" + std::to_string(first_tile_of(scene)) + ",0,47");
+    flaky = farm.start_worker("flaky", 1);
+  }
+  auto sound = farm.start_worker("sound", 1);
+  ASSERT_TRUE(test::eventually([&] { return farm.api().workers()["workers"].size() == 2; }, 20s));
+  const std::string id = farm.api().submit("kept off", 50, scene)["id"];
+  const json done = farm.wait_finished(id, 60s);
+  ASSERT_EQ(done["state"], "completed") << done.dump();
+  EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
+  // Whatever it got before, it failed at most twice: then the sound worker took the rest.
+  const std::string log = test::read_text(farm.dir() / "flaky.log");
+  int failures = 0;
+  for (std::size_t at = log.find("failed: fault injection"); at != std::string::npos;
+       at = log.find("failed: fault injection", at + 1))
+    ++failures;
+  EXPECT_LE(failures, 2) << log;
+  EXPECT_EQ(farm.worker_named("flaky").value()["tiles_rendered"].get<int>() +
+                farm.worker_named("sound").value()["tiles_rendered"].get<int>(),
+            48);
+}
+
 }  // namespace
 }  // namespace tessera

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <mutex>
+#include <sstream>
 #include <cstring>
 #include <thread>
 #include <unistd.h>
@@ -249,7 +250,13 @@ void WorkerDaemon::report_failure(const std::string& lease_id, int tile_index,
 void WorkerDaemon::inject_fault(int tile_index) const {
   if (options_.fault.empty()) return;
   const auto colon = options_.fault.find(':');
-  if (colon == std::string::npos || std::stoi(options_.fault.substr(colon + 1)) != tile_index) return;
+  if (colon == std::string::npos) return;
+  // "KIND:N" or "KIND:N,M,...": the tiles it applies to.
+  bool listed = false;
+  std::stringstream tiles(options_.fault.substr(colon + 1));
+  for (std::string item; std::getline(tiles, item, ',');)
+    listed = listed || (!item.empty() && std::stoi(item) == tile_index);
+  if (!listed) return;
   const std::string kind = options_.fault.substr(0, colon);
   if (kind == "crash") {
     spdlog::error("fault injection: crashing on tile {}", tile_index);

@@ -27,7 +27,8 @@ struct WorkerOptions {
   int threads = 0;      // 0: one per core
   double claim_wait_s = 10;
   // Fault injection for the test suite: "crash:N" aborts the process, "error:N" reports
-  // a failure, whenever tile N of any job is about to be rendered. Empty: none.
+  // a failure, whenever tile N of any job is about to be rendered ("error:N,M" for
+  // several tiles). Empty: none.
   std::string fault;
 };
 
