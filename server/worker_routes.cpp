@@ -132,7 +132,8 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
     rays = *parsed;
   }
   std::vector<float> pixels(request.body.size() / sizeof(float));
-  std::memcpy(pixels.data(), request.body.data(), request.body.size());
+  if (!pixels.empty())  // memcpy from or to a null pointer is undefined, even for 0 bytes
+    std::memcpy(pixels.data(), request.body.data(), request.body.size());
 
   ResultOutcome outcome{};
   if (const std::string* text = header("x-tessera-tiles")) {
