@@ -2,6 +2,7 @@
 // the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
 // every tile and job change.
 #include <algorithm>
+#include <set>
 
 #include <spdlog/spdlog.h>
 
@@ -12,7 +13,17 @@
 namespace tessera {
 
 void Scheduler::commit(StagedChange& change) {
-  write(change);
+  try {
+    write(change);
+  } catch (const std::exception& e) {
+    // The store refused (a full disk, say). Every job the change was for fails and says
+    // why, rather than workers retrying it forever; the caller still gets the error.
+    std::set<JobEntry*> touched;
+    for (const auto& [job, status] : change.jobs) touched.insert(job);
+    for (const auto& [key, tile] : change.tiles) touched.insert(key.first);
+    for (JobEntry* job : touched) fail_unstorable(*job, std::string("cannot store a change: ") + e.what());
+    throw;
+  }
   apply(change);
 }
 
