@@ -36,6 +36,11 @@ HttpResponse submit(ApiContext& context, const HttpRequest& request) {
     if (!body["name"].is_string())
       return error_response(400, "invalid_request", "must be a string", "/name");
     name = body["name"].get<std::string>();
+    if (name.size() > max_name_bytes)
+      return error_response(400, "invalid_request",
+                            "must be at most " + std::to_string(max_name_bytes) + " bytes, got " +
+                                std::to_string(name.size()),
+                            "/name");
   }
   int priority = 50;
   if (body.contains("priority")) {

@@ -64,6 +64,10 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
       return error_response(400, "invalid_request", "must be a string", "/host");
     host = body["host"].get<std::string>();
   }
+  for (const auto& [key, value] : {std::pair{"/name", body["name"].get<std::string>()}, std::pair{"/host", host}})
+    if (value.size() > max_name_bytes)
+      return error_response(400, "invalid_request",
+                            "must be at most " + std::to_string(max_name_bytes) + " bytes", key);
   int threads = 1;
   if (body.contains("threads")) {
     if (!body["threads"].is_number_integer() || body["threads"].get<int>() < 1)

@@ -46,6 +46,8 @@ std::vector<BadRequest> bad_requests() {
       {"negative radius", "POST", "/v1/jobs", with_scene("/objects/1/radius", -1), 400},
       {"huge string", "POST", "/v1/jobs",
        json{{"name", std::string(2 << 20, 'x')}, {"scene", scene}}.dump().substr(0, 60) + "\"}", 400},
+      {"a huge name", "POST", "/v1/jobs", json{{"name", std::string(1 << 20, 'x')}, {"scene", scene}}.dump(), 400},
+      {"a huge worker name", "POST", "/v1/workers", json{{"name", std::string(100000, 'w')}}.dump(), 400},
       {"a huge array of zeros", "POST", "/v1/jobs", with_scene("/objects", json(std::vector<int>(50000, 0))), 400},
       {"not an object", "POST", "/v1/jobs", "[1, 2, 3]", 400},
       {"unknown route", "GET", "/v1/nope", "", 404},
