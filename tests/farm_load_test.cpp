@@ -110,8 +110,14 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   EXPECT_EQ(errors.load(), 0);
   EXPECT_GT(submissions.load(), 0);
   // Flat: the jobs submitted meanwhile are kept in memory, a few KiB each; nothing else grows.
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer holds freed memory in quarantine (up to 256 MiB), so resident memory
+  // says nothing here; LeakSanitizer checks for leaks when the coordinator exits instead.
+  std::printf("load: memory growth not checked under AddressSanitizer\n");
+#else
   EXPECT_LT(peak_kib - warm_kib, 32 * 1024 + submissions.load() * 8)
       << "the coordinator grew from " << warm_kib << " KiB to " << peak_kib << " KiB";
+#endif
   // And it still answers at once.
   HttpClient http(farm.url(), 10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
