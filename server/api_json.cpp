@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <ctime>
 
+#include "common/scene_parser.hpp"
+
 namespace tessera {
 
 std::string format_timestamp(std::int64_t ms) {
@@ -14,6 +16,29 @@ std::string format_timestamp(std::int64_t ms) {
                 utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
                 static_cast<int>(ms % 1000));
   return text;
+}
+
+std::variant<nlohmann::json, HttpResponse> json_body(const HttpRequest& request) {
+  try {
+    return parse_json_text(request.body);
+  } catch (const SceneError& e) {
+    return error_response(400, "malformed_json", e.detail());
+  }
+}
+
+std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, double fallback_s) {
+  double wait_s = fallback_s;
+  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
+    try {
+      std::size_t used = 0;
+      wait_s = std::stod(it->second, &used);
+      if (used != it->second.size()) return std::nullopt;
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+  }
+  if (!(wait_s >= 0 && wait_s <= 60)) return std::nullopt;
+  return std::chrono::milliseconds(static_cast<long>(wait_s * 1000));
 }
 
 namespace {

@@ -20,12 +20,9 @@ HttpResponse not_found(const std::string& id) {
 
 // The submission envelope around the scene: {"name", "priority", "scene"}.
 HttpResponse submit(ApiContext& context, const HttpRequest& request) {
-  json body;
-  try {
-    body = parse_json_text(request.body);
-  } catch (const SceneError& e) {
-    return error_response(400, "malformed_json", e.detail());
-  }
+  auto parsed = json_body(request);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  json& body = std::get<json>(parsed);
   if (!body.is_object()) return error_response(400, "invalid_request", "the body must be a JSON object");
   for (const auto& [key, value] : body.items())
     if (key != "name" && key != "priority" && key != "scene")
@@ -104,18 +101,8 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
 // is the job's status either way: `tessera submit --wait` learns of the end at once.
 void status(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string id = request.params.at("id");
-  double wait_s = 0;
-  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
-    try {
-      std::size_t used = 0;
-      wait_s = std::stod(it->second, &used);
-      if (used != it->second.size()) wait_s = -1;
-    } catch (const std::exception&) {
-      wait_s = -1;
-    }
-    if (!(wait_s >= 0 && wait_s <= 60))
-      return respond(error_response(400, "invalid_request", "wait_s must be a number from 0 to 60"));
-  }
+  const auto wait = wait_of(request, 0);
+  if (!wait) return respond(bad_wait());
   if (!context.scheduler.job(id)) return respond(not_found(id));
   // Shared by the attempt and the timeout, which between them call it exactly once.
   auto shared_respond = std::make_shared<Respond>(std::move(respond));
@@ -125,8 +112,7 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
     (*shared_respond)(job ? json_response(200, to_json(*job, context.clock.now_ms())) : not_found(id));
     return true;
   };
-  context.job_waits.wait(std::chrono::milliseconds(static_cast<long>(wait_s * 1000)),
-                         [answer] { return answer(true); }, [answer] { answer(false); });
+  context.job_waits.wait(*wait, [answer] { return answer(true); }, [answer] { answer(false); });
 }
 
 struct ImageFormat {

@@ -49,12 +49,9 @@ HttpResponse lease_lost(const std::string& id) {
 }
 
 HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
-  json body;
-  try {
-    body = parse_json_text(request.body);
-  } catch (const SceneError& e) {
-    return error_response(400, "malformed_json", e.detail());
-  }
+  auto parsed = json_body(request);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  json& body = std::get<json>(parsed);
   if (!body.is_object() || !body.contains("name") || !body["name"].is_string())
     return error_response(400, "invalid_request", "name is required and must be a string", "/name");
   // The peer's address without its port: "10.0.0.7:51234" -> "10.0.0.7".
@@ -95,21 +92,13 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
                                         std::to_string(max_batch_tiles)));
     max_tiles = static_cast<int>(parsed->front());
   }
-  double wait_s = 20;
-  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
-    try {
-      wait_s = std::stod(it->second);
-    } catch (const std::exception&) {
-      wait_s = -1;
-    }
-    if (!(wait_s >= 0 && wait_s <= 60))
-      return respond(error_response(400, "invalid_request", "wait_s must be a number from 0 to 60"));
-  }
+  const auto wait = wait_of(request, 20);
+  if (!wait) return respond(bad_wait());
   context.scheduler.touch_worker(worker);
   // Shared by the attempt and the timeout, which between them call it exactly once.
   auto shared_respond = std::make_shared<Respond>(std::move(respond));
   context.claims.wait(
-      std::chrono::milliseconds(static_cast<long>(wait_s * 1000)),
+      *wait,
       [&context, worker, max_tiles, shared_respond] {
         const auto lease = context.scheduler.claim(worker, max_tiles);
         if (!lease) return false;
@@ -194,12 +183,9 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
 
 // {"tile": 17, "error": "..."}: the worker could not render that tile of its lease.
 HttpResponse report_failure(ApiContext& context, const HttpRequest& request) {
-  json body;
-  try {
-    body = parse_json_text(request.body);
-  } catch (const SceneError& e) {
-    return error_response(400, "malformed_json", e.detail());
-  }
+  auto parsed = json_body(request);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  json& body = std::get<json>(parsed);
   if (!body.is_object() || !body.contains("tile") || !body["tile"].is_number_integer())
     return error_response(400, "invalid_request", "tile is required and must be an integer", "/tile");
   if (!body.contains("error") || !body["error"].is_string())
