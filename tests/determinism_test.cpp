@@ -60,6 +60,27 @@ TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
     }
 }
 
+TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
+  // render_tile intersects primary rays, and their shadow rays, sixteen at a time; the
+  // tracer's single-ray path must give every pixel the very same bits.
+  json scene = busy_scene();
+  scene["render"]["samples_per_pixel"] = 1;
+  const Renderer renderer(parse_scene(scene));
+  const Image image = render_local(renderer, 1, 16).image;
+  int differing = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      RayCounts counts;
+      const Color single =
+          renderer.tracer().trace(renderer.camera().ray_through(x + 0.5, y + 0.5), 0, counts);
+      const float* pixel = image.pixel(x, y);
+      differing += pixel[0] != static_cast<float>(single.r) ||
+                   pixel[1] != static_cast<float>(single.g) ||
+                   pixel[2] != static_cast<float>(single.b);
+    }
+  EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels";
+}
+
 TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
   // As when a worker on another machine, with a freshly built BVH, renders one tile.
   const json scene = busy_scene();

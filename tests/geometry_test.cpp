@@ -31,6 +31,27 @@ TEST(Geometry, NonUniformlyScaledSphereIsAnEllipsoid) {
   EXPECT_EQ(render_pixel(scene).r, 0.0);
 }
 
+TEST(Geometry, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
+  // Such a transform takes the renderer's world-space shortcut for spheres. Scaled by 2
+  // about the origin, then moved to (0, 0, -3): a sphere of radius 2 at (0, 0, -3),
+  // rotated about its own centre, which changes nothing. A ray along -z at x = 1.2 meets
+  // it at z = -3 + √(4 - 1.44) with the normal (1.2, 0, √2.56) / 2.
+  json scene = pinhole_scene({1.2, 0, 10}, {1.2, 0, 0});
+  scene["lights"].push_back({{"type", "directional"}, {"direction", {0, 0, -1}}, {"intensity", 1}});
+  scene["objects"].push_back(
+      {{"type", "sphere"},
+       {"center", {0, 0, 0}},
+       {"radius", 1},
+       {"transform",
+        {{{"rotate", {{"axis", {1, 1, 0}}, {"degrees", 37}}}}, {{"scale", 2}}, {{"translate", {0, 0, -3}}}}},
+       {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
+  EXPECT_NEAR(render_pixel(scene).r, 0.5 * std::sqrt(4.0 - 1.44) / 2.0, 1e-6);
+  // Just outside the radius, the ray passes by.
+  scene["camera"]["eye"] = {2.001, 0, 10};
+  scene["camera"]["look_at"] = {2.001, 0, 0};
+  EXPECT_EQ(render_pixel(scene).r, 0.0);
+}
+
 TEST(Geometry, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.

@@ -16,11 +16,4 @@ PinholeCamera::PinholeCamera(const Camera& camera, int width, int height)
   up_ = half_height * v;
 }
 
-Ray PinholeCamera::ray_through(double x, double y) const {
-  const double sx = 2.0 * x * inv_width_ - 1.0;
-  const double sy = 1.0 - 2.0 * y * inv_height_;
-  const Vec3 direction = glm::normalize(forward_ + sx * right_ + sy * up_);
-  return Ray{glm::vec3(eye_), glm::vec3(direction)};
-}
-
 }  // namespace tessera

@@ -13,7 +13,13 @@ class PinholeCamera {
 
   // The primary ray through image-plane position (x, y), measured in pixels from the
   // top-left corner of the image: the centre of pixel (i, j) is (i + 0.5, j + 0.5).
-  Ray ray_through(double x, double y) const;
+  // Inline: the renderer computes sixteen of these at a time, and they overlap.
+  Ray ray_through(double x, double y) const {
+    const double sx = 2.0 * x * inv_width_ - 1.0;
+    const double sy = 1.0 - 2.0 * y * inv_height_;
+    const Vec3 direction = glm::normalize(forward_ + sx * right_ + sy * up_);
+    return Ray{glm::vec3(eye_), glm::vec3(direction)};
+  }
 
  private:
   Vec3 eye_;

@@ -19,6 +19,9 @@ class Renderer {
   explicit Renderer(Scene scene);
 
   const Scene& scene() const { return scene_; }
+  const SceneGeometry& geometry() const { return geometry_; }
+  const PinholeCamera& camera() const { return camera_; }
+  const Tracer& tracer() const { return tracer_; }
 
   // Renders `tile` into `out` (tile.width * tile.height RGB float triples, row-major).
   // A pixel's value depends only on the scene and the pixel's coordinates.

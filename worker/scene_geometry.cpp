@@ -1,5 +1,6 @@
 #include "worker/scene_geometry.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -35,17 +36,29 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
+    const Color& transmission = scene.materials[object.material].transmission;
+    const bool transmissive = transmission.r != 0.0 || transmission.g != 0.0 || transmission.b != 0.0;
+    const unsigned mask = transmissive ? kTransmissiveMask : kOpaqueMask;
+    const std::size_t geometries_before = records_.size();
     std::visit(
         [&](const auto& shape) {
           using T = std::decay_t<decltype(shape)>;
           if constexpr (std::is_same_v<T, Sphere>)
-            add_sphere(shape, object.transform, i);
+            add_sphere(shape, object.transform, i, mask);
           else if constexpr (std::is_same_v<T, Plane>)
-            add_plane(shape, object.transform, i);
+            add_plane(shape, object.transform, i, mask);
           else
-            add_triangles(triangulate(shape, object.transform), i);
+            add_triangles(triangulate(shape, object.transform), i, mask);
         },
         object.shape);
+    if (transmissive)
+      for (std::size_t id = geometries_before; id < records_.size(); ++id) {
+        RTCBounds bounds = geometry_bounds(records_[id]);
+        transmissive_lo_ = glm::min(transmissive_lo_, glm::vec3(bounds.lower_x, bounds.lower_y,
+                                                                bounds.lower_z));
+        transmissive_hi_ = glm::max(transmissive_hi_, glm::vec3(bounds.upper_x, bounds.upper_y,
+                                                                bounds.upper_z));
+      }
   }
   // Robust traversal closes the hairline cracks between neighbouring mesh triangles.
   rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
@@ -53,9 +66,11 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
   device_.check("building the scene's BVH");
 }
 
-void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object) {
+void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object,
+                                      unsigned mask) {
   RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_USER);
   rtcSetGeometryUserPrimitiveCount(geometry, 1);
+  rtcSetGeometryMask(geometry, mask);
   if (kind == Kind::sphere) {
     rtcSetGeometryUserData(geometry, spheres_[index].get());
     set_sphere_callbacks(geometry);
@@ -71,22 +86,44 @@ void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint3
   records_.push_back({kind, index, object});
 }
 
-void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object) {
-  spheres_.push_back(std::make_unique<PreparedSphere>(
-      PreparedSphere{sphere.center, sphere.radius, transform, glm::inverse(transform)}));
-  add_user_geometry(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object);
+void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
+                               unsigned mask) {
+  auto prepared = std::make_unique<PreparedSphere>();
+  prepared->center = sphere.center;
+  prepared->radius = sphere.radius;
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  // A similarity has orthogonal columns of one common length: MᵀM = s²·I.
+  const glm::dmat3 linear(transform);
+  const glm::dmat3 gram = glm::transpose(linear) * linear;
+  const double scale2 = (gram[0][0] + gram[1][1] + gram[2][2]) / 3.0;
+  bool similarity = scale2 > 0.0;
+  for (int i = 0; i < 3 && similarity; ++i)
+    for (int j = 0; j < 3; ++j)
+      similarity = similarity && std::fabs(gram[i][j] - (i == j ? scale2 : 0.0)) <= 1e-12 * scale2;
+  if (similarity) {
+    prepared->world_sphere = true;
+    prepared->world_center = Vec3(transform * glm::dvec4(sphere.center, 1.0));
+    prepared->world_radius = sphere.radius * std::sqrt(scale2);
+  }
+  spheres_.push_back(std::move(prepared));
+  add_user_geometry(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object, mask);
 }
 
-void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object) {
+void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
+                              unsigned mask) {
   const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
+  const Vec3 point(transform * glm::dvec4(plane.point, 1.0));
+  const Vec3 normal = glm::normalize(normal_matrix * plane.normal);
   planes_.push_back(
-      std::make_unique<PreparedPlane>(PreparedPlane{Vec3(transform * glm::dvec4(plane.point, 1.0)),
-                                                    glm::normalize(normal_matrix * plane.normal)}));
-  add_user_geometry(Kind::plane, static_cast<std::uint32_t>(planes_.size() - 1), object);
+      std::make_unique<PreparedPlane>(PreparedPlane{point, normal, glm::dot(normal, point)}));
+  add_user_geometry(Kind::plane, static_cast<std::uint32_t>(planes_.size() - 1), object, mask);
 }
 
-void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object) {
+void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object,
+                                  unsigned mask) {
   RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryMask(geometry, mask);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
                                                                RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                                                triangles.positions.size()));
@@ -109,9 +146,65 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
       {Kind::triangles, static_cast<std::uint32_t>(triangle_sets_.size() - 1), object});
 }
 
-std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+RTCBounds SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
+  RTCBounds bounds{};
+  switch (record.kind) {
+    case Kind::sphere: {
+      RTCBoundsFunctionArguments args{};
+      args.geometryUserPtr = spheres_[record.index].get();
+      args.bounds_o = &bounds;
+      sphere_bounds(&args);
+      break;
+    }
+    case Kind::plane:
+      bounds = {-kInfinity, -kInfinity, -kInfinity, 0.0f, kInfinity, kInfinity, kInfinity, 0.0f};
+      break;
+    case Kind::triangles: {
+      glm::dvec3 lo(std::numeric_limits<double>::max());
+      glm::dvec3 hi(std::numeric_limits<double>::lowest());
+      for (const Vec3& p : triangle_sets_[record.index].positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+      // Rounded outwards, so that the float box holds every vertex.
+      const glm::dvec3 pad = 1e-6 * (glm::abs(lo) + glm::abs(hi)) + 1e-9;
+      lo -= pad;
+      hi += pad;
+      bounds = {static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
+                static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
+      break;
+    }
+  }
+  return bounds;
+}
+
+bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {
+  float t_near = 0.0f;
+  float t_far = t_max;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float o = ray.origin[axis];
+    const float d = ray.direction[axis];
+    const float lo = transmissive_lo_[axis];
+    const float hi = transmissive_hi_[axis];
+    if (d == 0.0f) {
+      if (o < lo || o > hi) return false;
+      continue;
+    }
+    // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
+    float t0 = (lo - o) / d;
+    float t1 = (hi - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    t_near = std::max(t_near, t0 * (1.0f - 1e-5f));
+    t_far = std::min(t_far, t1 * (1.0f + 1e-5f));
+    if (t_near > t_far) return false;
+  }
+  return true;
+}
+
+std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
+                                                   unsigned mask) const {
+  HitContext context;
+  rtcInitIntersectContext(&context.embree);
   RTCRayHit rayhit{};
   rayhit.ray.org_x = ray.origin.x;
   rayhit.ray.org_y = ray.origin.y;
@@ -121,15 +214,79 @@ std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max) 
   rayhit.ray.dir_z = ray.direction.z;
   rayhit.ray.tnear = 0.0f;
   rayhit.ray.tfar = t_max;
-  rayhit.ray.mask = ~0u;
+  rayhit.ray.mask = mask;
   rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(scene_.get(), &context, &rayhit);
+  rtcIntersect1(scene_.get(), &context.embree, &rayhit);
   if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  return finish_hit(ray, rayhit);
+  std::optional<SurfaceHit> hit(std::in_place);
+  finish_hit(ray, rayhit.hit.geomID, rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u,
+             rayhit.hit.v, context.t[0], *hit);
+  return hit;
 }
 
-bool SceneGeometry::occluded(const Ray& ray, float t_max) const {
+void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
+                              bool (&found)[kPacketSize]) const {
+  HitContext context;
+  rtcInitIntersectContext(&context.embree);
+  context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[kPacketSize];
+  alignas(64) RTCRayHit16 rayhit;
+  for (int i = 0; i < kPacketSize; ++i) {
+    const Ray& ray = packet.rays[i];
+    valid[i] = packet.active[i] ? -1 : 0;
+    rayhit.ray.org_x[i] = ray.origin.x;
+    rayhit.ray.org_y[i] = ray.origin.y;
+    rayhit.ray.org_z[i] = ray.origin.z;
+    rayhit.ray.dir_x[i] = ray.direction.x;
+    rayhit.ray.dir_y[i] = ray.direction.y;
+    rayhit.ray.dir_z[i] = ray.direction.z;
+    rayhit.ray.tnear[i] = 0.0f;
+    rayhit.ray.tfar[i] = kInfinity;
+    rayhit.ray.time[i] = 0.0f;
+    rayhit.ray.mask[i] = kAnyMask;
+    rayhit.ray.id[i] = static_cast<unsigned>(i);
+    rayhit.ray.flags[i] = 0;
+    rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  rtcIntersect16(valid, scene_.get(), &context.embree, &rayhit);
+  for (int i = 0; i < kPacketSize; ++i) {
+    found[i] = packet.active[i] && rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+    if (found[i])
+      finish_hit(packet.rays[i], rayhit.hit.geomID[i], rayhit.hit.primID[i], rayhit.ray.tfar[i],
+                 rayhit.hit.u[i], rayhit.hit.v[i], context.t[i], hits[i]);
+  }
+}
+
+void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPacketSize],
+                             unsigned mask, bool (&blocked)[kPacketSize]) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[kPacketSize];
+  alignas(64) RTCRay16 rays;
+  for (int i = 0; i < kPacketSize; ++i) {
+    const Ray& ray = packet.rays[i];
+    valid[i] = packet.active[i] ? -1 : 0;
+    rays.org_x[i] = ray.origin.x;
+    rays.org_y[i] = ray.origin.y;
+    rays.org_z[i] = ray.origin.z;
+    rays.dir_x[i] = ray.direction.x;
+    rays.dir_y[i] = ray.direction.y;
+    rays.dir_z[i] = ray.direction.z;
+    rays.tnear[i] = 0.0f;
+    rays.tfar[i] = packet.active[i] ? t_max[i] : 0.0f;
+    rays.time[i] = 0.0f;
+    rays.mask[i] = mask;
+    rays.id[i] = static_cast<unsigned>(i);
+    rays.flags[i] = 0;
+  }
+  rtcOccluded16(valid, scene_.get(), &context, &rays);
+  for (int i = 0; i < kPacketSize; ++i) blocked[i] = packet.active[i] && rays.tfar[i] < 0.0f;
+}
+
+bool SceneGeometry::occluded(const Ray& ray, float t_max, unsigned mask) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r{};
@@ -141,21 +298,27 @@ bool SceneGeometry::occluded(const Ray& ray, float t_max) const {
   r.dir_z = ray.direction.z;
   r.tnear = 0.0f;
   r.tfar = t_max;
-  r.mask = ~0u;
+  r.mask = mask;
   rtcOccluded1(scene_.get(), &context, &r);
   return r.tfar < 0.0f;
 }
 
-SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) const {
-  const GeometryRecord& record = records_[rayhit.hit.geomID];
-  SurfaceHit hit;
+void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t,
+                               float u, float v, double exact_t, SurfaceHit& hit) const {
+  const GeometryRecord& record = records_[geometry];
   hit.object = record.object;
-  const double inf = std::numeric_limits<double>::infinity();
   switch (record.kind) {
     case Kind::sphere: {
       const PreparedSphere& sphere = *spheres_[record.index];
-      hit.t =
-          intersect_sphere(sphere, ray.origin, ray.direction, 0.0, inf).value_or(rayhit.ray.tfar);
+      hit.t = exact_t;
+      if (sphere.world_sphere) {
+        const Vec3 n = glm::normalize(Vec3(ray.origin) + hit.t * Vec3(ray.direction) -
+                                      sphere.world_center);
+        hit.position = sphere.world_center + sphere.world_radius * n;
+        hit.normal = n;
+        hit.shading_normal = n;
+        break;
+      }
       const Vec3 o = Vec3(sphere.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
       const Vec3 d = glm::dmat3(sphere.world_to_object) * Vec3(ray.direction);
       const Vec3 n = glm::normalize(o + hit.t * d - sphere.center);
@@ -168,7 +331,7 @@ SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) co
     }
     case Kind::plane: {
       const PreparedPlane& plane = *planes_[record.index];
-      hit.t = intersect_plane(plane, ray.origin, ray.direction, 0.0, inf).value_or(rayhit.ray.tfar);
+      hit.t = exact_t;
       const Vec3 p = Vec3(ray.origin) + hit.t * Vec3(ray.direction);
       hit.position = p - glm::dot(p - plane.point, plane.normal) * plane.normal;
       hit.normal = plane.normal;
@@ -177,13 +340,13 @@ SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) co
     }
     case Kind::triangles: {
       const PreparedTriangles& set = triangle_sets_[record.index];
-      const auto& tri = set.triangles[rayhit.hit.primID];
+      const auto& tri = set.triangles[primitive];
       const Vec3& v0 = set.positions[tri[0]];
       const Vec3& v1 = set.positions[tri[1]];
       const Vec3& v2 = set.positions[tri[2]];
       const TriangleHit th =
           intersect_triangle(v0, v1, v2, ray)
-              .value_or(TriangleHit{rayhit.ray.tfar, rayhit.hit.u, rayhit.hit.v});
+              .value_or(TriangleHit{t, u, v});
       hit.t = th.t;
       // Barycentric reconstruction keeps the point on the triangle's own plane.
       hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;
@@ -197,7 +360,6 @@ SurfaceHit SceneGeometry::finish_hit(const Ray& ray, const RTCRayHit& rayhit) co
       break;
     }
   }
-  return hit;
 }
 
 }  // namespace tessera

@@ -23,17 +23,31 @@ struct SurfaceHit {
   std::uint32_t object = 0;  // index into Scene::objects
 };
 
+// A secondary ray leaving the surface at `hit`, its origin moved off the surface to the
+// side it leaves by.
+inline Ray ray_from(const SurfaceHit& hit, const Vec3& direction) {
+  return Ray{offset_ray_origin(hit.position, hit.normal, direction),
+             glm::vec3(glm::normalize(direction))};
+}
+
 // An ellipsoid: the object-space sphere seen through its object-to-world transform.
 struct PreparedSphere {
   Vec3 center{0.0};  // object space
   double radius = 1.0;
   Mat4 object_to_world{1.0};
   Mat4 world_to_object{1.0};
+  // Set when the transform is a similarity (rotation, uniform scale, translation), as it
+  // almost always is: the shape is then a sphere in world space too, and is intersected
+  // there without a matrix product per ray.
+  bool world_sphere = false;
+  Vec3 world_center{0.0};
+  double world_radius = 1.0;
 };
 
 struct PreparedPlane {
-  Vec3 point{0.0};   // world space
-  Vec3 normal{0.0};  // world space, unit
+  Vec3 point{0.0};    // world space
+  Vec3 normal{0.0};   // world space, unit
+  double offset = 0;  // normal · point: the plane is normal · p = offset
 };
 
 struct PreparedTriangles {
@@ -47,14 +61,54 @@ std::optional<double> intersect_sphere(const PreparedSphere& sphere, const glm::
 std::optional<double> intersect_plane(const PreparedPlane& plane, const glm::vec3& origin,
                                       const glm::vec3& direction, double t_min, double t_max);
 
+// Embree geometry masks: shadow rays first ask whether anything opaque blocks the light,
+// and only then walk through the transmissive surfaces.
+inline constexpr unsigned kOpaqueMask = 1u;
+inline constexpr unsigned kTransmissiveMask = 2u;
+inline constexpr unsigned kAnyMask = kOpaqueMask | kTransmissiveMask;
+
+// Primary rays go to Embree sixteen at a time, as a 4x4 block of pixels.
+inline constexpr int kPacketSide = 4;
+inline constexpr int kPacketSize = kPacketSide * kPacketSide;
+
+// Embree's intersect context, extended as Embree's tutorials do: the sphere and plane
+// callbacks leave here the exact (double) distance of the hit they report for each ray,
+// indexed by the ray's id, so that it need not be computed a second time.
+struct HitContext {
+  RTCIntersectContext embree;
+  double t[kPacketSize];
+};
+
+struct RayPacket {
+  Ray rays[kPacketSize];
+  bool active[kPacketSize] = {};
+};
+
 class SceneGeometry {
  public:
   SceneGeometry(const Scene& scene, const EmbreeDevice& device);
 
   // The closest hit with 0 < t < t_max, if any.
-  std::optional<SurfaceHit> intersect(const Ray& ray, float t_max) const;
+  std::optional<SurfaceHit> intersect(const Ray& ray, float t_max,
+                                      unsigned mask = kAnyMask) const;
   // Whether anything lies on the ray with 0 < t < t_max.
-  bool occluded(const Ray& ray, float t_max) const;
+  bool occluded(const Ray& ray, float t_max, unsigned mask = kAnyMask) const;
+  // The Embree scene itself, for the benchmark that traces it with nothing around.
+  RTCScene embree_scene() const { return scene_.get(); }
+
+  // False when the ray certainly meets no transmissive surface before t_max: a slab test
+  // against the box around all of them, which spares most shadow rays the walk through
+  // transmissive surfaces.
+  bool may_meet_transmissive(const Ray& ray, float t_max) const;
+  // The closest hit of every active ray of a coherent packet (unbounded t). The lanes
+  // Embree sees, and so the hits, depend only on the packet's contents.
+  // found[i] says whether hits[i] was written.
+  void intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
+                 bool (&found)[kPacketSize]) const;
+  // Whether anything under `mask` lies on each active ray of a coherent packet, with
+  // 0 < t < t_max[i].
+  void occluded(const RayPacket& packet, const float (&t_max)[kPacketSize], unsigned mask,
+                bool (&blocked)[kPacketSize]) const;
 
  private:
   enum class Kind : std::uint8_t { sphere, plane, triangles };
@@ -64,15 +118,23 @@ class SceneGeometry {
     std::uint32_t object;  // into Scene::objects
   };
 
-  void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object);
-  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object);
-  void add_triangles(PreparedTriangles triangles, std::uint32_t object);
-  void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object);
-  SurfaceHit finish_hit(const Ray& ray, const RTCRayHit& rayhit) const;
+  void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
+                  unsigned mask);
+  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, unsigned mask);
+  void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
+  void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
+  RTCBounds geometry_bounds(const GeometryRecord& record) const;
+  // `exact_t` is the callback's distance, for spheres and planes.
+  void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u,
+                  float v, double exact_t, SurfaceHit& hit) const;
 
   const EmbreeDevice& device_;
   EmbreeScene scene_;
   std::vector<GeometryRecord> records_;  // by Embree geometry id
+  // Around every transmissive object (empty when there is none; everything when one is
+  // a plane).
+  glm::vec3 transmissive_lo_{kInfinity};
+  glm::vec3 transmissive_hi_{-kInfinity};
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
   std::vector<std::unique_ptr<PreparedPlane>> planes_;

@@ -19,24 +19,37 @@ double attenuate(const Attenuation& a, double distance) {
 
 Vec3 reflect(const Vec3& d, const Vec3& n) { return d - 2.0 * glm::dot(d, n) * n; }
 
-Ray make_ray(const SurfaceHit& hit, const Vec3& direction) {
-  return Ray{offset_ray_origin(hit.position, hit.normal, direction),
-             glm::vec3(glm::normalize(direction))};
-}
-
 // The checkerboard is sampled a little below the surface, on the side opposite its
 // geometric normal: a floor lying exactly on a cell boundary (y = 0) then falls in one
 // cell consistently instead of flickering between two with rounding.
 bool in_odd_checker_cell(const Checker& checker, const SurfaceHit& hit) {
   const Vec3 p = (hit.position - (1e-4 * checker.size) * hit.normal) / checker.size;
   const double sum = std::floor(p.x) + std::floor(p.y) + std::floor(p.z);
-  return std::fmod(std::fabs(sum), 2.0) == 1.0;
+  // An odd integer halves to a fraction (fmod does the same, slowly).
+  const double half = 0.5 * sum;
+  return half != std::floor(half);
 }
 
 }  // namespace
 
 Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry)
     : scene_(scene), geometry_(geometry) {
+  for (const Light& light : scene.lights) {
+    PreparedLight prepared{};
+    if (const auto* point = std::get_if<PointLight>(&light)) {
+      prepared = {PreparedLight::Kind::point, point->position, Vec3(0.0), point->intensity,
+                  point->attenuation, 0.0, 1.0};
+    } else if (const auto* directional = std::get_if<DirectionalLight>(&light)) {
+      prepared = {PreparedLight::Kind::directional, Vec3(0.0), directional->direction,
+                  directional->intensity, Attenuation{}, 0.0, 1.0};
+    } else {
+      const auto& spot = std::get<SpotLight>(light);
+      prepared = {PreparedLight::Kind::spot, spot.position, spot.direction, spot.intensity,
+                  spot.attenuation, std::cos(glm::radians(spot.cutoff_degrees)), spot.exponent};
+    }
+    // A light of zero intensity lights nothing, and casts no shadow rays.
+    if (!is_zero(prepared.intensity)) lights_.push_back(prepared);
+  }
   solid_.reserve(scene.objects.size());
   for (const Object& object : scene.objects) {
     solid_.push_back(is_solid(object));
@@ -51,56 +64,64 @@ const Material& Tracer::material_of(std::uint32_t object) const {
 Color Tracer::trace(const Ray& ray, int depth, RayCounts& counts) const {
   (depth == 0 ? counts.primary : counts.secondary) += 1;
   const auto hit = geometry_.intersect(ray, kInfinity);
+  return trace_found(ray, hit ? &*hit : nullptr, depth, counts);
+}
+
+Color Tracer::trace_found(const Ray& ray, const SurfaceHit* hit, int depth,
+                          RayCounts& counts) const {
   if (!hit) return scene_.background;
   return shade(ray, *hit, depth, counts);
 }
 
-Tracer::LightSample Tracer::sample_light(const Light& light, const Vec3& point) const {
+Tracer::LightSample Tracer::sample_light(const PreparedLight& light, const Vec3& point) const {
   LightSample sample;
-  if (const auto* directional = std::get_if<DirectionalLight>(&light)) {
-    sample.to_light = -directional->direction;
+  if (light.kind == PreparedLight::Kind::directional) {
+    sample.to_light = -light.direction;
     sample.distance = std::numeric_limits<double>::infinity();
-    sample.intensity = directional->intensity;
+    sample.intensity = light.intensity;
     return sample;
   }
-  const Vec3 position = std::holds_alternative<PointLight>(light)
-                            ? std::get<PointLight>(light).position
-                            : std::get<SpotLight>(light).position;
-  const Vec3 offset = position - point;
+  const Vec3 offset = light.position - point;
   sample.distance = glm::length(offset);
   if (sample.distance == 0.0) return sample;  // a light inside the surface lights nothing
   sample.to_light = offset / sample.distance;
-  if (const auto* point_light = std::get_if<PointLight>(&light)) {
-    sample.intensity =
-        point_light->intensity / attenuate(point_light->attenuation, sample.distance);
+  if (light.kind == PreparedLight::Kind::point) {
+    sample.intensity = light.intensity / attenuate(light.attenuation, sample.distance);
     return sample;
   }
-  const auto& spot = std::get<SpotLight>(light);
-  const double cos_angle = glm::dot(spot.direction, -sample.to_light);  // D·L'
-  if (cos_angle <= 0.0 || cos_angle < std::cos(glm::radians(spot.cutoff_degrees))) return sample;
-  sample.intensity = spot.intensity * std::pow(cos_angle, spot.exponent) /
-                     attenuate(spot.attenuation, sample.distance);
+  const double cos_angle = glm::dot(light.direction, -sample.to_light);  // D·L'
+  if (cos_angle <= 0.0 || cos_angle < light.cos_cutoff) return sample;
+  sample.intensity = light.intensity * std::pow(cos_angle, light.exponent) /
+                     attenuate(light.attenuation, sample.distance);
   return sample;
+}
+
+float Tracer::shadow_reach(const SurfaceHit& hit, const LightSample& light, const Ray& from) {
+  if (!std::isfinite(light.distance)) return kInfinity;
+  return kShadowReach * static_cast<float>(glm::length(
+                            hit.position + light.distance * light.to_light - Vec3(from.origin)));
 }
 
 Color Tracer::shadow_factor(const SurfaceHit& hit, const LightSample& light,
                             RayCounts& counts) const {
-  Ray ray = make_ray(hit, light.to_light);
-  const bool finite = std::isfinite(light.distance);
-  auto reach = [&](const Ray& from) {
-    if (!finite) return kInfinity;
-    return kShadowReach * static_cast<float>(glm::length(
-                              hit.position + light.distance * light.to_light - Vec3(from.origin)));
-  };
-  if (!any_transmissive_) {
-    counts.shadow += 1;
-    return geometry_.occluded(ray, reach(ray)) ? Color(0.0) : Color(1.0);
-  }
-  // Walk front to back so that the product is taken in one fixed order.
+  const Ray ray = ray_from(hit, light.to_light);
+  // Anything opaque on the way leaves the point in shadow whatever else is there.
+  counts.shadow += 1;
+  if (geometry_.occluded(ray, shadow_reach(hit, light, ray), kOpaqueMask)) return Color(0.0);
+  return unblocked_factor(hit, light, ray, counts);
+}
+
+Color Tracer::unblocked_factor(const SurfaceHit& hit, const LightSample& light, Ray ray,
+                               RayCounts& counts) const {
+  if (!any_transmissive_ || !geometry_.may_meet_transmissive(ray, shadow_reach(hit, light, ray)))
+    return Color(1.0);
+  // Walk the transmissive surfaces front to back, so that the product is taken in one
+  // fixed order.
   Color factor(1.0);
   for (int crossing = 0; crossing < kMaxShadowCrossings; ++crossing) {
     counts.shadow += 1;
-    const auto blocker = geometry_.intersect(ray, reach(ray));
+    const auto blocker =
+        geometry_.intersect(ray, shadow_reach(hit, light, ray), kTransmissiveMask);
     if (!blocker) return factor;
     factor *= material_of(blocker->object).transmission;
     if (is_zero(factor)) return factor;
@@ -109,47 +130,72 @@ Color Tracer::shadow_factor(const SurfaceHit& hit, const LightSample& light,
   return factor;
 }
 
-Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const {
+Tracer::Shading Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit) const {
+  Shading shading;
   const Material& material = material_of(hit.object);
-  const Vec3 d(ray.direction);
-  const bool front = glm::dot(d, hit.normal) < 0.0;
-  const Vec3 n = front ? hit.shading_normal : -hit.shading_normal;  // faces the ray
-  const Vec3 v = -d;
+  shading.material = &material;
+  shading.d = Vec3(ray.direction);
+  shading.front = glm::dot(shading.d, hit.normal) < 0.0;
+  shading.n = shading.front ? hit.shading_normal : -hit.shading_normal;  // faces the ray
 
   Color ambient = material.ambient;
-  Color diffuse = material.diffuse;
+  shading.diffuse = material.diffuse;
   if (material.checker && in_odd_checker_cell(*material.checker, hit)) {
     ambient = material.checker->ambient;
-    diffuse = material.checker->diffuse;
+    shading.diffuse = material.checker->diffuse;
   }
+  shading.result = material.emission + ambient * scene_.ambient_light;
+  return shading;
+}
 
-  Color result = material.emission + ambient * scene_.ambient_light;
-  for (const Light& light : scene_.lights) {
-    const LightSample sample = sample_light(light, hit.position);
-    const double n_dot_l = glm::dot(n, sample.to_light);
-    if (n_dot_l <= 0.0 || is_zero(sample.intensity)) continue;
-    const Color shadow = shadow_factor(hit, sample, counts);
-    if (is_zero(shadow)) continue;
-    const Vec3 r = 2.0 * n_dot_l * n - sample.to_light;
-    const double v_dot_r = std::max(0.0, glm::dot(v, r));
-    const Color specular = material.specular * std::pow(v_dot_r, material.shininess);
-    result += (diffuse * n_dot_l + specular) * shadow * sample.intensity;
+bool Tracer::lit_by(const Shading& shading, const SurfaceHit& hit, const PreparedLight& light,
+                    LightSample& sample, double& n_dot_l) const {
+  sample = sample_light(light, hit.position);
+  n_dot_l = glm::dot(shading.n, sample.to_light);
+  return n_dot_l > 0.0 && !is_zero(sample.intensity);
+}
+
+void Tracer::add_light(Shading& shading, const LightSample& sample, double n_dot_l,
+                       const Color& shadow) const {
+  if (is_zero(shadow)) return;
+  const Material& material = *shading.material;
+  const Vec3 r = 2.0 * n_dot_l * shading.n - sample.to_light;
+  const double v_dot_r = std::max(0.0, glm::dot(-shading.d, r));
+  const Color specular = material.specular * std::pow(v_dot_r, material.shininess);
+  shading.result += (shading.diffuse * n_dot_l + specular) * shadow * sample.intensity;
+}
+
+Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const {
+  Shading shading = begin_shading(ray, hit);
+  for (const PreparedLight& light : lights_) {
+    LightSample sample;
+    double n_dot_l;
+    if (!lit_by(shading, hit, light, sample, n_dot_l)) continue;
+    add_light(shading, sample, n_dot_l, shadow_factor(hit, sample, counts));
   }
+  return finish_shading(shading, hit, depth, counts);
+}
 
+Color Tracer::finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
+                             RayCounts& counts) const {
+  Color result = shading.result;
   if (depth >= scene_.render.max_depth) return result;
+  const Material& material = *shading.material;
+  const Vec3& d = shading.d;
+  const Vec3& n = shading.n;
   if (!is_zero(material.reflection))
-    result += material.reflection * trace(make_ray(hit, reflect(d, n)), depth + 1, counts);
+    result += material.reflection * trace(ray_from(hit, reflect(d, n)), depth + 1, counts);
   if (!is_zero(material.transmission)) {
     Vec3 transmitted = d;  // thin surfaces let the ray pass unbent
     if (solid_[hit.object]) {
       // Snell's law, entering from air or leaving into it.
-      const double eta = front ? 1.0 / material.ior : material.ior;
-      const double cos_i = glm::dot(v, n);
+      const double eta = shading.front ? 1.0 / material.ior : material.ior;
+      const double cos_i = glm::dot(-d, n);
       const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
       transmitted = sin2_t > 1.0 ? reflect(d, n)  // total internal reflection
                                  : eta * d + (eta * cos_i - std::sqrt(1.0 - sin2_t)) * n;
     }
-    result += material.transmission * trace(make_ray(hit, transmitted), depth + 1, counts);
+    result += material.transmission * trace(ray_from(hit, transmitted), depth + 1, counts);
   }
   return result;
 }

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <vector>
 
 #include "common/scene.hpp"
 #include "worker/ray.hpp"
@@ -31,6 +33,19 @@ class Tracer {
 
   // The radiance arriving along `ray`; `depth` is the number of bounces before it.
   Color trace(const Ray& ray, int depth, RayCounts& counts) const;
+  // The same for a ray whose closest hit (or miss) is already known, as for the primary
+  // rays that the renderer intersects as a packet. Counts no ray for `ray` itself.
+  // `hit` is null for a miss.
+  Color trace_found(const Ray& ray, const SurfaceHit* hit, int depth, RayCounts& counts) const;
+
+  // The radiance along each primary ray of a packet whose hits are known (found[i]: hits[i]
+  // holds one). Shadow rays towards each light go to Embree as one packet; everything
+  // else is as trace_found() does it, with the same arithmetic in the same order, so a
+  // pixel gets the same bits either way. Only the lanes in `keep` are shaded in full and
+  // counted: the others are in the packet only so that its contents never change.
+  void shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPacketSize],
+                    const bool (&found)[kPacketSize], const bool (&keep)[kPacketSize],
+                    Color (&out)[kPacketSize], RayCounts& counts) const;
 
  private:
   struct LightSample {
@@ -38,16 +53,51 @@ class Tracer {
     double distance = 0;   // to the light; infinite for directional lights
     Color intensity{0.0};  // I_L at the point, before shadowing
   };
+  // A light with everything that does not depend on the shaded point worked out once.
+  struct PreparedLight {
+    enum class Kind : std::uint8_t { point, directional, spot } kind;
+    Vec3 position{0.0};
+    Vec3 direction{0.0};  // unit: where a directional or spot light shines
+    Color intensity{0.0};
+    Attenuation attenuation;
+    double cos_cutoff = 0.0;
+    double exponent = 1.0;
+  };
+
+  // A surface point part way through being shaded.
+  struct Shading {
+    const Material* material = nullptr;
+    Vec3 d{0.0};  // the ray's direction
+    Vec3 n{0.0};  // the shading normal, turned to face the ray
+    bool front = false;
+    Color diffuse{0.0};
+    Color result{0.0};  // I_E + K_A·I_A, then each light's term as it is added
+  };
 
   Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
-  LightSample sample_light(const Light& light, const Vec3& point) const;
+  Shading begin_shading(const Ray& ray, const SurfaceHit& hit) const;
+  // False when the light cannot reach the side of the surface facing the ray.
+  bool lit_by(const Shading& shading, const SurfaceHit& hit, const PreparedLight& light,
+              LightSample& sample, double& n_dot_l) const;
+  void add_light(Shading& shading, const LightSample& sample, double n_dot_l,
+                 const Color& shadow) const;
+  // Adds the reflected and transmitted light.
+  Color finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
+                       RayCounts& counts) const;
+  LightSample sample_light(const PreparedLight& light, const Vec3& point) const;
   // S_L: 1 when nothing blocks the light, the product of the K_T of every transmissive
   // surface crossed, 0 behind an opaque one.
   Color shadow_factor(const SurfaceHit& hit, const LightSample& light, RayCounts& counts) const;
+  // S_L once nothing opaque is known to lie on `ray`, the shadow ray from `hit`.
+  Color unblocked_factor(const SurfaceHit& hit, const LightSample& light, Ray ray,
+                         RayCounts& counts) const;
+  // How far a shadow ray starting at `from` may go towards the light.
+  static float shadow_reach(const SurfaceHit& hit, const LightSample& light, const Ray& from);
   const Material& material_of(std::uint32_t object) const;
 
   const Scene& scene_;
   const SceneGeometry& geometry_;
+  std::vector<PreparedLight> lights_;
   std::vector<bool> solid_;  // by object
   bool any_transmissive_ = false;
 };

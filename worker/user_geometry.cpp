@@ -8,36 +8,79 @@
 
 namespace tessera {
 
-std::optional<double> intersect_sphere(const PreparedSphere& sphere, const glm::vec3& origin,
-                                       const glm::vec3& direction, double t_min, double t_max) {
-  const Vec3 o = Vec3(sphere.world_to_object * glm::dvec4(Vec3(origin), 1.0));
-  const Vec3 d = glm::dmat3(sphere.world_to_object) * Vec3(direction);
-  const Vec3 f = o - sphere.center;
+namespace {
+
+// The shape tests proper, inlined into the callbacks: true and the distance when the ray
+// meets the shape with t_min < t < t_max.
+inline bool sphere_distance(const PreparedSphere& sphere, const glm::vec3& origin,
+                            const glm::vec3& direction, double t_min, double t_max, double& t) {
+  Vec3 f;
+  Vec3 d;
+  double radius;
+  if (sphere.world_sphere) {
+    f = Vec3(origin) - sphere.world_center;
+    d = Vec3(direction);
+    radius = sphere.world_radius;
+  } else {
+    f = Vec3(sphere.world_to_object * glm::dvec4(Vec3(origin), 1.0)) - sphere.center;
+    d = glm::dmat3(sphere.world_to_object) * Vec3(direction);
+    radius = sphere.radius;
+  }
   const double a = glm::dot(d, d);
   const double b = glm::dot(f, d);
+  const double r2 = radius * radius;
+  // Most rays that reach this test pass the sphere by: |f|²·a - b² = |q|²·a, q as below,
+  // says so without a division. Cancellation makes it inexact, so it only rejects with a
+  // margin far above its rounding error, and the exact test decides everything else.
+  const double ff = glm::dot(f, f);
+  if (ff * a - b * b > a * r2 + 1e-12 * ff * a) return false;
   // |q| is the distance from the centre to the ray's line; computing the discriminant from
   // it (instead of b² - ac) avoids cancellation for small spheres seen from far away.
   const Vec3 q = f - (b / a) * d;
-  const double r2 = sphere.radius * sphere.radius;
   const double discriminant = a * (r2 - glm::dot(q, q));
-  if (discriminant < 0.0) return std::nullopt;
-  const double c = glm::dot(f, f) - r2;
+  if (discriminant < 0.0) return false;
+  const double c = ff - r2;
   const double h = -b - std::copysign(std::sqrt(discriminant), b);
   double t0 = c / h;
   double t1 = h / a;
   if (h == 0.0) t0 = t1 = 0.0;
   if (t0 > t1) std::swap(t0, t1);
-  if (t0 > t_min && t0 < t_max) return t0;
-  if (t1 > t_min && t1 < t_max) return t1;
+  if (t0 > t_min && t0 < t_max) {
+    t = t0;
+    return true;
+  }
+  if (t1 > t_min && t1 < t_max) {
+    t = t1;
+    return true;
+  }
+  return false;
+}
+
+inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
+                           const glm::vec3& direction, double t_min, double t_max, double& t) {
+  const double denominator = glm::dot(Vec3(direction), plane.normal);
+  const double numerator = plane.offset - glm::dot(Vec3(origin), plane.normal);
+  // Most rays that miss a plane point away from it: the signs tell, without a division.
+  if (t_min >= 0.0 && !(numerator > 0.0 ? denominator > 0.0 : numerator < 0.0 && denominator < 0.0))
+    return false;
+  if (denominator == 0.0) return false;
+  t = numerator / denominator;
+  return t > t_min && t < t_max;
+}
+
+}  // namespace
+
+std::optional<double> intersect_sphere(const PreparedSphere& sphere, const glm::vec3& origin,
+                                       const glm::vec3& direction, double t_min, double t_max) {
+  double t;
+  if (sphere_distance(sphere, origin, direction, t_min, t_max, t)) return t;
   return std::nullopt;
 }
 
 std::optional<double> intersect_plane(const PreparedPlane& plane, const glm::vec3& origin,
                                       const glm::vec3& direction, double t_min, double t_max) {
-  const double denominator = glm::dot(Vec3(direction), plane.normal);
-  if (denominator == 0.0) return std::nullopt;
-  const double t = glm::dot(plane.point - Vec3(origin), plane.normal) / denominator;
-  if (t > t_min && t < t_max) return t;
+  double t;
+  if (plane_distance(plane, origin, direction, t_min, t_max, t)) return t;
   return std::nullopt;
 }
 
@@ -47,50 +90,74 @@ namespace {
 constexpr float kPlaneExtent = 1e18f;
 
 template <typename Shape>
-std::optional<double> intersect_any(const Shape& shape, const glm::vec3& o, const glm::vec3& d,
-                                    double t_min, double t_max) {
+bool distance(const Shape& shape, const glm::vec3& o, const glm::vec3& d, double t_min,
+              double t_max, double& t) {
   if constexpr (std::is_same_v<Shape, PreparedSphere>)
-    return intersect_sphere(shape, o, d, t_min, t_max);
+    return sphere_distance(shape, o, d, t_min, t_max, t);
   else
-    return intersect_plane(shape, o, d, t_min, t_max);
+    return plane_distance(shape, o, d, t_min, t_max, t);
 }
 
+// Embree hands over up to 16 rays at once. The tests of all of them run first, in a loop of
+// their own, so that their divisions and square roots overlap instead of waiting on each
+// other's branches; the hits are recorded after.
 template <typename Shape>
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
   const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
-  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
-  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
-  for (unsigned i = 0; i < args->N; ++i) {
-    if (args->valid[i] != -1) continue;
-    const glm::vec3 o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
-                      RTCRayN_org_z(ray, args->N, i));
-    const glm::vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
-                      RTCRayN_dir_z(ray, args->N, i));
-    float& tfar = RTCRayN_tfar(ray, args->N, i);
-    const auto t = intersect_any(shape, o, d, RTCRayN_tnear(ray, args->N, i), tfar);
-    if (!t) continue;
-    tfar = static_cast<float>(*t);
-    RTCHitN_u(hit, args->N, i) = 0.0f;
-    RTCHitN_v(hit, args->N, i) = 0.0f;
-    RTCHitN_primID(hit, args->N, i) = args->primID;
-    RTCHitN_geomID(hit, args->N, i) = args->geomID;
-    RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
+  const unsigned n = args->N;
+  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, n);
+  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, n);
+  auto* context = reinterpret_cast<HitContext*>(args->context);
+  // Embree's packets hold at most 16 rays; chunks keep this right for any N all the same.
+  for (unsigned base = 0; base < n; base += kPacketSize) {
+    const unsigned end = std::min(n, base + kPacketSize);
+    double t[kPacketSize];
+    bool found[kPacketSize];
+    for (unsigned i = base; i < end; ++i) {
+      found[i - base] = false;
+      if (args->valid[i] != -1) continue;
+      const glm::vec3 o(RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i),
+                        RTCRayN_org_z(ray, n, i));
+      const glm::vec3 d(RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i),
+                        RTCRayN_dir_z(ray, n, i));
+      found[i - base] =
+          distance(shape, o, d, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i), t[i - base]);
+    }
+    for (unsigned i = base; i < end; ++i) {
+      if (!found[i - base]) continue;
+      RTCRayN_tfar(ray, n, i) = static_cast<float>(t[i - base]);
+      context->t[RTCRayN_id(ray, n, i)] = t[i - base];
+      RTCHitN_u(hit, n, i) = 0.0f;
+      RTCHitN_v(hit, n, i) = 0.0f;
+      RTCHitN_primID(hit, n, i) = args->primID;
+      RTCHitN_geomID(hit, n, i) = args->geomID;
+      RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
+    }
   }
 }
 
 template <typename Shape>
 void occluded_callback(const RTCOccludedFunctionNArguments* args) {
   const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
-  for (unsigned i = 0; i < args->N; ++i) {
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] != -1) continue;
-    const glm::vec3 o(RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
-                      RTCRayN_org_z(args->ray, args->N, i));
-    const glm::vec3 d(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
-                      RTCRayN_dir_z(args->ray, args->N, i));
-    float& tfar = RTCRayN_tfar(args->ray, args->N, i);
-    if (intersect_any(shape, o, d, RTCRayN_tnear(args->ray, args->N, i), tfar)) tfar = -kInfinity;
+    const glm::vec3 o(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i),
+                      RTCRayN_org_z(args->ray, n, i));
+    const glm::vec3 d(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i),
+                      RTCRayN_dir_z(args->ray, n, i));
+    float& tfar = RTCRayN_tfar(args->ray, n, i);
+    double t;
+    if (distance(shape, o, d, RTCRayN_tnear(args->ray, n, i), tfar, t)) tfar = -kInfinity;
   }
 }
+
+void plane_bounds(const RTCBoundsFunctionArguments* args) {
+  *args->bounds_o = {-kPlaneExtent, -kPlaneExtent, -kPlaneExtent, 0.0f,
+                     kPlaneExtent,  kPlaneExtent,  kPlaneExtent,  0.0f};
+}
+
+}  // namespace
 
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
@@ -113,13 +180,6 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
       static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
       static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
 }
-
-void plane_bounds(const RTCBoundsFunctionArguments* args) {
-  *args->bounds_o = {-kPlaneExtent, -kPlaneExtent, -kPlaneExtent, 0.0f,
-                     kPlaneExtent,  kPlaneExtent,  kPlaneExtent,  0.0f};
-}
-
-}  // namespace
 
 void set_sphere_callbacks(RTCGeometry geometry) {
   rtcSetGeometryBoundsFunction(geometry, &sphere_bounds, nullptr);

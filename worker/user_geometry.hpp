@@ -9,4 +9,7 @@ namespace tessera {
 void set_sphere_callbacks(RTCGeometry geometry);
 void set_plane_callbacks(RTCGeometry geometry);
 
+// The box Embree is given for a sphere: its args' user pointer is a PreparedSphere.
+void sphere_bounds(const RTCBoundsFunctionArguments* args);
+
 }  // namespace tessera
