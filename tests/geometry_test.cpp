@@ -52,6 +52,21 @@ TEST(Geometry, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
   EXPECT_EQ(render_pixel(scene).r, 0.0);
 }
 
+TEST(Geometry, TheNearestOfSeveralPlanesIsHit) {
+  // All the planes of a scene share one Embree primitive; the nearest must win whatever the
+  // order of the objects, and a transmissive plane in front lets the next one show through.
+  auto plane_at = [](double z, double emission, json material_extra = json::object()) {
+    json material = {{"ambient", 0}, {"diffuse", 0}, {"emission", emission}};
+    material.update(material_extra);
+    return json{{"type", "plane"}, {"point", {0, 0, z}}, {"normal", {0, 0, 1}}, {"material", material}};
+  };
+  json scene = pinhole_scene({0, 0, 10}, {0, 0, 0});
+  scene["objects"] = {plane_at(-4, 0.25), plane_at(2, 0.5), plane_at(-1, 0.75)};
+  EXPECT_EQ(render_pixel(scene).r, 0.5f);
+  scene["objects"][1] = plane_at(2, 0.0, {{"transmission", 0.5}});  // now see-through
+  EXPECT_NEAR(render_pixel(scene).r, 0.5 * 0.75, 1e-12);
+}
+
 TEST(Geometry, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.

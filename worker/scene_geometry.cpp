@@ -46,11 +46,15 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
           if constexpr (std::is_same_v<T, Sphere>)
             add_sphere(shape, object.transform, i, mask);
           else if constexpr (std::is_same_v<T, Plane>)
-            add_plane(shape, object.transform, i, mask);
+            add_plane(shape, object.transform, i, transmissive);
           else
             add_triangles(triangulate(shape, object.transform), i, mask);
         },
         object.shape);
+    if (transmissive && std::holds_alternative<Plane>(object.shape)) {
+      transmissive_lo_ = glm::vec3(-kInfinity);
+      transmissive_hi_ = glm::vec3(kInfinity);
+    }
     if (transmissive)
       for (std::size_t id = geometries_before; id < records_.size(); ++id) {
         RTCBounds bounds = geometry_bounds(records_[id]);
@@ -60,6 +64,9 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
                                                                 bounds.upper_z));
       }
   }
+  for (std::uint32_t set = 0; set < 2; ++set)
+    if (!plane_sets_[set].planes.empty())
+      add_user_geometry(Kind::plane, set, 0, set == 0 ? kOpaqueMask : kTransmissiveMask);
   // Robust traversal closes the hairline cracks between neighbouring mesh triangles.
   rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
   rtcCommitScene(scene_.get());
@@ -75,7 +82,7 @@ void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint3
     rtcSetGeometryUserData(geometry, spheres_[index].get());
     set_sphere_callbacks(geometry);
   } else {
-    rtcSetGeometryUserData(geometry, planes_[index].get());
+    rtcSetGeometryUserData(geometry, &plane_sets_[index]);
     set_plane_callbacks(geometry);
   }
   rtcCommitGeometry(geometry);
@@ -111,13 +118,13 @@ void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std:
 }
 
 void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
-                              unsigned mask) {
+                              bool transmissive) {
   const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
   const Vec3 point(transform * glm::dvec4(plane.point, 1.0));
   const Vec3 normal = glm::normalize(normal_matrix * plane.normal);
-  planes_.push_back(
-      std::make_unique<PreparedPlane>(PreparedPlane{point, normal, glm::dot(normal, point)}));
-  add_user_geometry(Kind::plane, static_cast<std::uint32_t>(planes_.size() - 1), object, mask);
+  PlaneSet& set = plane_sets_[transmissive ? 1 : 0];
+  set.planes.push_back(PreparedPlane{point, normal, glm::dot(normal, point)});
+  set.objects.push_back(object);
 }
 
 void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object,
@@ -330,7 +337,9 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       break;
     }
     case Kind::plane: {
-      const PreparedPlane& plane = *planes_[record.index];
+      const PlaneSet& set = plane_sets_[record.index];
+      const PreparedPlane& plane = set.planes[primitive];
+      hit.object = set.objects[primitive];
       hit.t = exact_t;
       const Vec3 p = Vec3(ray.origin) + hit.t * Vec3(ray.direction);
       hit.position = p - glm::dot(p - plane.point, plane.normal) * plane.normal;

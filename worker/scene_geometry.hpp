@@ -56,10 +56,13 @@ struct PreparedTriangles {
   std::vector<Vec3> normals;                            // world space, unit; may be empty
 };
 
-std::optional<double> intersect_sphere(const PreparedSphere& sphere, const glm::vec3& origin,
-                                       const glm::vec3& direction, double t_min, double t_max);
-std::optional<double> intersect_plane(const PreparedPlane& plane, const glm::vec3& origin,
-                                      const glm::vec3& direction, double t_min, double t_max);
+// Every plane of one mask, as a single Embree primitive whose callback tests them all in one
+// loop: planes are infinite, so every ray would visit each of them anyway, and one call per
+// ray costs less than one per plane.
+struct PlaneSet {
+  std::vector<PreparedPlane> planes;
+  std::vector<std::uint32_t> objects;  // into Scene::objects, by plane
+};
 
 // Embree geometry masks: shadow rays first ask whether anything opaque blocks the light,
 // and only then walk through the transmissive surfaces.
@@ -114,13 +117,13 @@ class SceneGeometry {
   enum class Kind : std::uint8_t { sphere, plane, triangles };
   struct GeometryRecord {
     Kind kind;
-    std::uint32_t index;   // into the vector of its kind
-    std::uint32_t object;  // into Scene::objects
+    std::uint32_t index;   // into the vector of its kind (for planes: which PlaneSet)
+    std::uint32_t object;  // into Scene::objects (for planes: see the PlaneSet)
   };
 
   void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
                   unsigned mask);
-  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, unsigned mask);
+  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
   void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
   RTCBounds geometry_bounds(const GeometryRecord& record) const;
@@ -137,7 +140,7 @@ class SceneGeometry {
   glm::vec3 transmissive_hi_{-kInfinity};
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
-  std::vector<std::unique_ptr<PreparedPlane>> planes_;
+  PlaneSet plane_sets_[2];  // opaque, transmissive
   std::vector<PreparedTriangles> triangle_sets_;
 };
 

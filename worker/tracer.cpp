@@ -81,6 +81,7 @@ Tracer::LightSample Tracer::sample_light(const PreparedLight& light, const Vec3&
     sample.intensity = light.intensity;
     return sample;
   }
+  sample.position = light.position;
   const Vec3 offset = light.position - point;
   sample.distance = glm::length(offset);
   if (sample.distance == 0.0) return sample;  // a light inside the surface lights nothing
@@ -96,36 +97,40 @@ Tracer::LightSample Tracer::sample_light(const PreparedLight& light, const Vec3&
   return sample;
 }
 
-float Tracer::shadow_reach(const SurfaceHit& hit, const LightSample& light, const Ray& from) {
+float Tracer::shadow_reach(const LightSample& light, const Ray& from) {
   if (!std::isfinite(light.distance)) return kInfinity;
-  return kShadowReach * static_cast<float>(glm::length(
-                            hit.position + light.distance * light.to_light - Vec3(from.origin)));
+  return kShadowReach * static_cast<float>(glm::length(light.position - Vec3(from.origin)));
+}
+
+Ray Tracer::shadow_ray(const SurfaceHit& hit, const LightSample& light) {
+  return Ray{offset_ray_origin(hit.position, hit.normal, light.to_light),
+             glm::vec3(light.to_light)};
 }
 
 Color Tracer::shadow_factor(const SurfaceHit& hit, const LightSample& light,
                             RayCounts& counts) const {
-  const Ray ray = ray_from(hit, light.to_light);
+  const Ray ray = shadow_ray(hit, light);
+  const float reach = shadow_reach(light, ray);
   // Anything opaque on the way leaves the point in shadow whatever else is there.
   counts.shadow += 1;
-  if (geometry_.occluded(ray, shadow_reach(hit, light, ray), kOpaqueMask)) return Color(0.0);
-  return unblocked_factor(hit, light, ray, counts);
+  if (geometry_.occluded(ray, reach, kOpaqueMask)) return Color(0.0);
+  return unblocked_factor(light, ray, reach, counts);
 }
 
-Color Tracer::unblocked_factor(const SurfaceHit& hit, const LightSample& light, Ray ray,
+Color Tracer::unblocked_factor(const LightSample& light, Ray ray, float reach,
                                RayCounts& counts) const {
-  if (!any_transmissive_ || !geometry_.may_meet_transmissive(ray, shadow_reach(hit, light, ray)))
-    return Color(1.0);
+  if (!any_transmissive_ || !geometry_.may_meet_transmissive(ray, reach)) return Color(1.0);
   // Walk the transmissive surfaces front to back, so that the product is taken in one
   // fixed order.
   Color factor(1.0);
   for (int crossing = 0; crossing < kMaxShadowCrossings; ++crossing) {
     counts.shadow += 1;
-    const auto blocker =
-        geometry_.intersect(ray, shadow_reach(hit, light, ray), kTransmissiveMask);
+    const auto blocker = geometry_.intersect(ray, reach, kTransmissiveMask);
     if (!blocker) return factor;
     factor *= material_of(blocker->object).transmission;
     if (is_zero(factor)) return factor;
     ray.origin = offset_ray_origin(blocker->position, blocker->normal, light.to_light);
+    reach = shadow_reach(light, ray);
   }
   return factor;
 }

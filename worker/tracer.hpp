@@ -51,6 +51,7 @@ class Tracer {
   struct LightSample {
     Vec3 to_light{0.0};    // unit, from the surface point towards the light
     double distance = 0;   // to the light; infinite for directional lights
+    Vec3 position{0.0};    // of a point or spot light
     Color intensity{0.0};  // I_L at the point, before shadowing
   };
   // A light with everything that does not depend on the shaded point worked out once.
@@ -88,11 +89,13 @@ class Tracer {
   // S_L: 1 when nothing blocks the light, the product of the K_T of every transmissive
   // surface crossed, 0 behind an opaque one.
   Color shadow_factor(const SurfaceHit& hit, const LightSample& light, RayCounts& counts) const;
-  // S_L once nothing opaque is known to lie on `ray`, the shadow ray from `hit`.
-  Color unblocked_factor(const SurfaceHit& hit, const LightSample& light, Ray ray,
-                         RayCounts& counts) const;
+  // S_L once nothing opaque is known to lie on `ray`, a shadow ray that may go as far as
+  // `reach`.
+  Color unblocked_factor(const LightSample& light, Ray ray, float reach, RayCounts& counts) const;
   // How far a shadow ray starting at `from` may go towards the light.
-  static float shadow_reach(const SurfaceHit& hit, const LightSample& light, const Ray& from);
+  static float shadow_reach(const LightSample& light, const Ray& from);
+  // The shadow ray from `hit` towards the light (to_light is unit already).
+  static Ray shadow_ray(const SurfaceHit& hit, const LightSample& light);
   const Material& material_of(std::uint32_t object) const;
 
   const Scene& scene_;

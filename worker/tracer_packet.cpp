@@ -19,8 +19,8 @@ void Tracer::shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPac
     for (int i = 0; i < kPacketSize; ++i) {
       shadows.active[i] = found[i] && lit_by(shading[i], hits[i], light, samples[i], n_dot_l[i]);
       if (!shadows.active[i]) continue;
-      shadows.rays[i] = ray_from(hits[i], samples[i].to_light);
-      reach[i] = shadow_reach(hits[i], samples[i], shadows.rays[i]);
+      shadows.rays[i] = shadow_ray(hits[i], samples[i]);
+      reach[i] = shadow_reach(samples[i], shadows.rays[i]);
     }
     // Anything opaque on the way leaves the point in shadow whatever else is there.
     bool blocked[kPacketSize];
@@ -29,7 +29,7 @@ void Tracer::shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPac
       if (!shadows.active[i] || !keep[i]) continue;
       counts.shadow += 1;
       const Color shadow = blocked[i] ? Color(0.0)
-                                      : unblocked_factor(hits[i], samples[i], shadows.rays[i], counts);
+                                      : unblocked_factor(samples[i], shadows.rays[i], reach[i], counts);
       add_light(shading[i], samples[i], n_dot_l[i], shadow);
     }
   }

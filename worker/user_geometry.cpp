@@ -12,7 +12,7 @@ namespace {
 
 // The shape tests proper, inlined into the callbacks: true and the distance when the ray
 // meets the shape with t_min < t < t_max.
-inline bool sphere_distance(const PreparedSphere& sphere, const glm::vec3& origin,
+[[gnu::always_inline]] inline bool sphere_distance(const PreparedSphere& sphere, const glm::vec3& origin,
                             const glm::vec3& direction, double t_min, double t_max, double& t) {
   Vec3 f;
   Vec3 d;
@@ -56,7 +56,7 @@ inline bool sphere_distance(const PreparedSphere& sphere, const glm::vec3& origi
   return false;
 }
 
-inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
+[[gnu::always_inline]] inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
                            const glm::vec3& direction, double t_min, double t_max, double& t) {
   const double denominator = glm::dot(Vec3(direction), plane.normal);
   const double numerator = plane.offset - glm::dot(Vec3(origin), plane.normal);
@@ -70,32 +70,29 @@ inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
 
 }  // namespace
 
-std::optional<double> intersect_sphere(const PreparedSphere& sphere, const glm::vec3& origin,
-                                       const glm::vec3& direction, double t_min, double t_max) {
-  double t;
-  if (sphere_distance(sphere, origin, direction, t_min, t_max, t)) return t;
-  return std::nullopt;
-}
-
-std::optional<double> intersect_plane(const PreparedPlane& plane, const glm::vec3& origin,
-                                      const glm::vec3& direction, double t_min, double t_max) {
-  double t;
-  if (plane_distance(plane, origin, direction, t_min, t_max, t)) return t;
-  return std::nullopt;
-}
-
 namespace {
 
 // Planes are infinite; Embree needs finite boxes, so they get one far beyond any scene.
 constexpr float kPlaneExtent = 1e18f;
 
-template <typename Shape>
-bool distance(const Shape& shape, const glm::vec3& o, const glm::vec3& d, double t_min,
-              double t_max, double& t) {
-  if constexpr (std::is_same_v<Shape, PreparedSphere>)
-    return sphere_distance(shape, o, d, t_min, t_max, t);
-  else
-    return plane_distance(shape, o, d, t_min, t_max, t);
+// The nearest hit with t_min < t < t_max, and which primitive of the geometry it is on.
+bool distance(const PreparedSphere& sphere, const glm::vec3& o, const glm::vec3& d, double t_min,
+              double t_max, double& t, unsigned& primitive) {
+  primitive = 0;
+  return sphere_distance(sphere, o, d, t_min, t_max, t);
+}
+
+bool distance(const PlaneSet& set, const glm::vec3& o, const glm::vec3& d, double t_min,
+              double t_max, double& t, unsigned& primitive) {
+  bool found = false;
+  for (unsigned i = 0; i < set.planes.size(); ++i) {
+    double t_plane;
+    if (!plane_distance(set.planes[i], o, d, t_min, t_max, t_plane)) continue;
+    t = t_max = t_plane;  // nearer planes only from here on; on a tie the first one stays
+    primitive = i;
+    found = true;
+  }
+  return found;
 }
 
 // Embree hands over up to 16 rays at once. The tests of all of them run first, in a loop of
@@ -112,6 +109,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
   for (unsigned base = 0; base < n; base += kPacketSize) {
     const unsigned end = std::min(n, base + kPacketSize);
     double t[kPacketSize];
+    unsigned primitive[kPacketSize];
     bool found[kPacketSize];
     for (unsigned i = base; i < end; ++i) {
       found[i - base] = false;
@@ -120,8 +118,8 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
                         RTCRayN_org_z(ray, n, i));
       const glm::vec3 d(RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i),
                         RTCRayN_dir_z(ray, n, i));
-      found[i - base] =
-          distance(shape, o, d, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i), t[i - base]);
+      found[i - base] = distance(shape, o, d, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i),
+                                 t[i - base], primitive[i - base]);
     }
     for (unsigned i = base; i < end; ++i) {
       if (!found[i - base]) continue;
@@ -129,7 +127,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
       context->t[RTCRayN_id(ray, n, i)] = t[i - base];
       RTCHitN_u(hit, n, i) = 0.0f;
       RTCHitN_v(hit, n, i) = 0.0f;
-      RTCHitN_primID(hit, n, i) = args->primID;
+      RTCHitN_primID(hit, n, i) = primitive[i - base];
       RTCHitN_geomID(hit, n, i) = args->geomID;
       RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
     }
@@ -148,7 +146,9 @@ void occluded_callback(const RTCOccludedFunctionNArguments* args) {
                       RTCRayN_dir_z(args->ray, n, i));
     float& tfar = RTCRayN_tfar(args->ray, n, i);
     double t;
-    if (distance(shape, o, d, RTCRayN_tnear(args->ray, n, i), tfar, t)) tfar = -kInfinity;
+    unsigned primitive;
+    if (distance(shape, o, d, RTCRayN_tnear(args->ray, n, i), tfar, t, primitive))
+      tfar = -kInfinity;
   }
 }
 
@@ -189,8 +189,8 @@ void set_sphere_callbacks(RTCGeometry geometry) {
 
 void set_plane_callbacks(RTCGeometry geometry) {
   rtcSetGeometryBoundsFunction(geometry, &plane_bounds, nullptr);
-  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PreparedPlane>);
-  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PreparedPlane>);
+  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PlaneSet>);
+  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PlaneSet>);
 }
 
 }  // namespace tessera

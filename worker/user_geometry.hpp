@@ -5,7 +5,7 @@
 namespace tessera {
 
 // Install bounds, intersect and occluded callbacks; the geometry's user pointer must be a
-// PreparedSphere or PreparedPlane respectively.
+// PreparedSphere or a PlaneSet respectively.
 void set_sphere_callbacks(RTCGeometry geometry);
 void set_plane_callbacks(RTCGeometry geometry);
 
