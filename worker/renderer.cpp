@@ -47,8 +47,6 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) cons
   // the tile: a block cut by the tile's edge is traced whole and only its pixels inside the
   // tile are kept, so that Embree always sees the same packet for a pixel and its hit
   // cannot depend on how the image was tiled.
-  SurfaceHit hits[kPacketSize];
-  bool found[kPacketSize];
   Color colors[kPacketSize];
   const int x_end = tile.x + tile.width;
   const int y_end = tile.y + tile.height;
@@ -72,13 +70,9 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) cons
           const SampleOffset offset = sample_offset(x, y, s, samples);
           packet.rays[i] = camera_.ray_through(x + offset.x, y + offset.y);
         }
-        geometry_.intersect(packet, hits, found);
-        tracer_.shade_packet(packet, hits, found, in_tile, colors, counts);
-        for (int i = 0; i < kPacketSize; ++i) {
-          if (!in_tile[i]) continue;
-          counts.primary += 1;
-          sums[i] += colors[i];
-        }
+        tracer_.trace_packet(packet, 0, in_tile, colors, counts);
+        for (int i = 0; i < kPacketSize; ++i)
+          if (in_tile[i]) sums[i] += colors[i];
       }
       for (int i = 0; i < kPacketSize; ++i) {
         if (!in_tile[i]) continue;

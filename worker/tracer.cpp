@@ -64,11 +64,6 @@ const Material& Tracer::material_of(std::uint32_t object) const {
 Color Tracer::trace(const Ray& ray, int depth, RayCounts& counts) const {
   (depth == 0 ? counts.primary : counts.secondary) += 1;
   const auto hit = geometry_.intersect(ray, kInfinity);
-  return trace_found(ray, hit ? &*hit : nullptr, depth, counts);
-}
-
-Color Tracer::trace_found(const Ray& ray, const SurfaceHit* hit, int depth,
-                          RayCounts& counts) const {
   if (!hit) return scene_.background;
   return shade(ray, *hit, depth, counts);
 }
@@ -181,6 +176,19 @@ Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts&
   return finish_shading(shading, hit, depth, counts);
 }
 
+Vec3 Tracer::transmitted_direction(const Shading& shading, const SurfaceHit& hit) const {
+  const Vec3& d = shading.d;
+  if (!solid_[hit.object]) return d;  // thin surfaces let the ray pass unbent
+  // Snell's law, entering from air or leaving into it.
+  const Material& material = *shading.material;
+  const Vec3& n = shading.n;
+  const double eta = shading.front ? 1.0 / material.ior : material.ior;
+  const double cos_i = glm::dot(-d, n);
+  const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+  return sin2_t > 1.0 ? reflect(d, n)  // total internal reflection
+                      : eta * d + (eta * cos_i - std::sqrt(1.0 - sin2_t)) * n;
+}
+
 Color Tracer::finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
                              RayCounts& counts) const {
   Color result = shading.result;
@@ -190,18 +198,9 @@ Color Tracer::finish_shading(const Shading& shading, const SurfaceHit& hit, int 
   const Vec3& n = shading.n;
   if (!is_zero(material.reflection))
     result += material.reflection * trace(ray_from(hit, reflect(d, n)), depth + 1, counts);
-  if (!is_zero(material.transmission)) {
-    Vec3 transmitted = d;  // thin surfaces let the ray pass unbent
-    if (solid_[hit.object]) {
-      // Snell's law, entering from air or leaving into it.
-      const double eta = shading.front ? 1.0 / material.ior : material.ior;
-      const double cos_i = glm::dot(-d, n);
-      const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-      transmitted = sin2_t > 1.0 ? reflect(d, n)  // total internal reflection
-                                 : eta * d + (eta * cos_i - std::sqrt(1.0 - sin2_t)) * n;
-    }
-    result += material.transmission * trace(ray_from(hit, transmitted), depth + 1, counts);
-  }
+  if (!is_zero(material.transmission))
+    result += material.transmission *
+              trace(ray_from(hit, transmitted_direction(shading, hit)), depth + 1, counts);
   return result;
 }
 

@@ -33,18 +33,13 @@ class Tracer {
 
   // The radiance arriving along `ray`; `depth` is the number of bounces before it.
   Color trace(const Ray& ray, int depth, RayCounts& counts) const;
-  // The same for a ray whose closest hit (or miss) is already known, as for the primary
-  // rays that the renderer intersects as a packet. Counts no ray for `ray` itself.
-  // `hit` is null for a miss.
-  Color trace_found(const Ray& ray, const SurfaceHit* hit, int depth, RayCounts& counts) const;
-
-  // The radiance along each primary ray of a packet whose hits are known (found[i]: hits[i]
-  // holds one). Shadow rays towards each light go to Embree as one packet; everything
-  // else is as trace_found() does it, with the same arithmetic in the same order, so a
-  // pixel gets the same bits either way. Only the lanes in `keep` are shaded in full and
-  // counted: the others are in the packet only so that its contents never change.
-  void shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPacketSize],
-                    const bool (&found)[kPacketSize], const bool (&keep)[kPacketSize],
+  // The radiance along each active ray of a packet, `depth` bounces after the camera. The
+  // packet's hits, the shadow rays of its hits towards each light, and its reflected and
+  // transmitted rays go to Embree sixteen at a time; the arithmetic of each lane is
+  // trace()'s own, in the same order, so a pixel gets the same bits either way. Only the
+  // lanes in `keep` are shaded in full and counted: the others are traced only so that the
+  // packets Embree sees never depend on which of their lanes a tile holds.
+  void trace_packet(const RayPacket& packet, int depth, const bool (&keep)[kPacketSize],
                     Color (&out)[kPacketSize], RayCounts& counts) const;
 
  private:
@@ -82,6 +77,8 @@ class Tracer {
               LightSample& sample, double& n_dot_l) const;
   void add_light(Shading& shading, const LightSample& sample, double n_dot_l,
                  const Color& shadow) const;
+  // Where a ray refracted (or totally reflected) at the surface goes on.
+  Vec3 transmitted_direction(const Shading& shading, const SurfaceHit& hit) const;
   // Adds the reflected and transmitted light.
   Color finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
                        RayCounts& counts) const;

@@ -1,15 +1,27 @@
-// Shading the primary hits of a packet: the shadow rays of all sixteen towards one light
-// make one coherent packet, the rest is Tracer::shade's own code, lane by lane.
+// The tracer sixteen rays at a time: a packet's hits, their shadow rays towards each light,
+// and their reflected and transmitted rays each make one packet for Embree. Lane by lane,
+// the arithmetic is Tracer::trace's own, in the same order.
 #include "worker/tracer.hpp"
 
 namespace tessera {
+namespace {
 
-void Tracer::shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPacketSize],
-                          const bool (&found)[kPacketSize], const bool (&keep)[kPacketSize],
+bool is_zero(const Color& c) { return c.r == 0.0 && c.g == 0.0 && c.b == 0.0; }
+
+Vec3 reflect(const Vec3& d, const Vec3& n) { return d - 2.0 * glm::dot(d, n) * n; }
+
+}  // namespace
+
+void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)[kPacketSize],
                           Color (&out)[kPacketSize], RayCounts& counts) const {
+  SurfaceHit hits[kPacketSize];
+  bool found[kPacketSize];
+  geometry_.intersect(packet, hits, found);
   Shading shading[kPacketSize];
-  for (int i = 0; i < kPacketSize; ++i)
+  for (int i = 0; i < kPacketSize; ++i) {
+    if (packet.active[i] && keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (found[i]) shading[i] = begin_shading(packet.rays[i], hits[i]);
+  }
 
   for (const PreparedLight& light : lights_) {
     LightSample samples[kPacketSize];
@@ -28,15 +40,43 @@ void Tracer::shade_packet(const RayPacket& packet, const SurfaceHit (&hits)[kPac
     for (int i = 0; i < kPacketSize; ++i) {
       if (!shadows.active[i] || !keep[i]) continue;
       counts.shadow += 1;
-      const Color shadow = blocked[i] ? Color(0.0)
-                                      : unblocked_factor(samples[i], shadows.rays[i], reach[i], counts);
+      const Color shadow =
+          blocked[i] ? Color(0.0) : unblocked_factor(samples[i], shadows.rays[i], reach[i], counts);
       add_light(shading[i], samples[i], n_dot_l[i], shadow);
     }
   }
 
+  for (int i = 0; i < kPacketSize; ++i)
+    if (packet.active[i]) out[i] = found[i] ? shading[i].result : scene_.background;
+  if (depth >= scene_.render.max_depth) return;
+
+  // I_R, then I_T, added in that order as finish_shading() does.
+  RayPacket bounce;
+  bool any = false;
   for (int i = 0; i < kPacketSize; ++i) {
-    if (!keep[i]) continue;
-    out[i] = found[i] ? finish_shading(shading[i], hits[i], 0, counts) : scene_.background;
+    bounce.active[i] = found[i] && !is_zero(shading[i].material->reflection);
+    if (!bounce.active[i]) continue;
+    bounce.rays[i] = ray_from(hits[i], reflect(shading[i].d, shading[i].n));
+    any = true;
+  }
+  if (any) {
+    Color reflected[kPacketSize];
+    trace_packet(bounce, depth + 1, keep, reflected, counts);
+    for (int i = 0; i < kPacketSize; ++i)
+      if (bounce.active[i]) out[i] += shading[i].material->reflection * reflected[i];
+  }
+  any = false;
+  for (int i = 0; i < kPacketSize; ++i) {
+    bounce.active[i] = found[i] && !is_zero(shading[i].material->transmission);
+    if (!bounce.active[i]) continue;
+    bounce.rays[i] = ray_from(hits[i], transmitted_direction(shading[i], hits[i]));
+    any = true;
+  }
+  if (any) {
+    Color transmitted[kPacketSize];
+    trace_packet(bounce, depth + 1, keep, transmitted, counts);
+    for (int i = 0; i < kPacketSize; ++i)
+      if (bounce.active[i]) out[i] += shading[i].material->transmission * transmitted[i];
   }
 }
 
