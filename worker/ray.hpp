@@ -13,9 +13,11 @@
 
 namespace tessera {
 
+// No default values: packets hold sixteen of these, filled only where a lane is active, and
+// zeroing them first costs more than tracing a ray.
 struct Ray {
-  glm::vec3 origin{0.0f};
-  glm::vec3 direction{0.0f, 0.0f, -1.0f};  // unit
+  glm::vec3 origin;
+  glm::vec3 direction;  // unit
 };
 
 inline constexpr float kInfinity = std::numeric_limits<float>::infinity();

@@ -10,6 +10,8 @@
 namespace tessera {
 namespace {
 
+constexpr Ray kIdleRay{glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f)};
+
 struct TriangleHit {
   double t, u, v;
 };
@@ -240,7 +242,8 @@ void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacke
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRayHit16 rayhit;
   for (int i = 0; i < kPacketSize; ++i) {
-    const Ray& ray = packet.rays[i];
+    // An inactive lane's ray is unset; Embree still reads it, so it gets a harmless one.
+    const Ray& ray = packet.active[i] ? packet.rays[i] : kIdleRay;
     valid[i] = packet.active[i] ? -1 : 0;
     rayhit.ray.org_x[i] = ray.origin.x;
     rayhit.ray.org_y[i] = ray.origin.y;
@@ -274,7 +277,8 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRay16 rays;
   for (int i = 0; i < kPacketSize; ++i) {
-    const Ray& ray = packet.rays[i];
+    // An inactive lane's ray is unset; Embree still reads it, so it gets a harmless one.
+    const Ray& ray = packet.active[i] ? packet.rays[i] : kIdleRay;
     valid[i] = packet.active[i] ? -1 : 0;
     rays.org_x[i] = ray.origin.x;
     rays.org_y[i] = ray.origin.y;

@@ -15,12 +15,13 @@
 
 namespace tessera {
 
+// No default values: finish_hit() writes every member, and packets hold sixteen.
 struct SurfaceHit {
-  double t = 0.0;
-  Vec3 position{0.0};
-  Vec3 normal{0.0};          // geometric, unit: outward for solids, as built for thin shapes
-  Vec3 shading_normal{0.0};  // unit; interpolated on smooth meshes, else `normal`
-  std::uint32_t object = 0;  // index into Scene::objects
+  double t;
+  Vec3 position;
+  Vec3 normal;          // geometric, unit: outward for solids, as built for thin shapes
+  Vec3 shading_normal;  // unit; interpolated on smooth meshes, else `normal`
+  std::uint32_t object;  // index into Scene::objects
 };
 
 // A secondary ray leaving the surface at `hit`, its origin moved off the surface to the

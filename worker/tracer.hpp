@@ -61,13 +61,14 @@ class Tracer {
   };
 
   // A surface point part way through being shaded.
+  // Left uninitialised until begin_shading() fills it in: packets hold sixteen.
   struct Shading {
-    const Material* material = nullptr;
-    Vec3 d{0.0};  // the ray's direction
-    Vec3 n{0.0};  // the shading normal, turned to face the ray
-    bool front = false;
-    Color diffuse{0.0};
-    Color result{0.0};  // I_E + K_A·I_A, then each light's term as it is added
+    const Material* material;
+    Vec3 d;  // the ray's direction
+    Vec3 n;  // the shading normal, turned to face the ray
+    bool front;
+    Color diffuse;
+    Color result;  // I_E + K_A·I_A, then each light's term as it is added
   };
 
   Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
