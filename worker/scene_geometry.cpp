@@ -150,9 +150,18 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
   rtcReleaseGeometry(geometry);
   device_.check("adding a triangle mesh");
   if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
-  triangle_sets_.push_back(std::move(triangles));
-  records_.push_back(
-      {Kind::triangles, static_cast<std::uint32_t>(triangle_sets_.size() - 1), object});
+  TriangleMesh mesh;
+  mesh.triangles.reserve(triangles.triangles.size());
+  if (!triangles.normals.empty()) mesh.normals.reserve(triangles.triangles.size());
+  for (const auto& tri : triangles.triangles) {
+    MeshTriangle& corners = mesh.triangles.emplace_back();
+    for (int k = 0; k < 3; ++k) corners.corners[k] = glm::vec3(triangles.positions[tri[k]]);
+    if (triangles.normals.empty()) continue;
+    MeshTriangleNormals& normals = mesh.normals.emplace_back();
+    for (int k = 0; k < 3; ++k) normals.corners[k] = glm::vec3(triangles.normals[tri[k]]);
+  }
+  meshes_.push_back(std::move(mesh));
+  records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
 }
 
 RTCBounds SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
@@ -171,10 +180,11 @@ RTCBounds SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
     case Kind::triangles: {
       glm::dvec3 lo(std::numeric_limits<double>::max());
       glm::dvec3 hi(std::numeric_limits<double>::lowest());
-      for (const Vec3& p : triangle_sets_[record.index].positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-      }
+      for (const MeshTriangle& triangle : meshes_[record.index].triangles)
+        for (const glm::vec3& p : triangle.corners) {
+          lo = glm::min(lo, glm::dvec3(p));
+          hi = glm::max(hi, glm::dvec3(p));
+        }
       // Rounded outwards, so that the float box holds every vertex.
       const glm::dvec3 pad = 1e-6 * (glm::abs(lo) + glm::abs(hi)) + 1e-9;
       lo -= pad;
@@ -352,22 +362,21 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       break;
     }
     case Kind::triangles: {
-      const PreparedTriangles& set = triangle_sets_[record.index];
-      const auto& tri = set.triangles[primitive];
-      const Vec3& v0 = set.positions[tri[0]];
-      const Vec3& v1 = set.positions[tri[1]];
-      const Vec3& v2 = set.positions[tri[2]];
-      const TriangleHit th =
-          intersect_triangle(v0, v1, v2, ray)
-              .value_or(TriangleHit{t, u, v});
+      const TriangleMesh& mesh = meshes_[record.index];
+      const MeshTriangle& triangle = mesh.triangles[primitive];
+      const Vec3 v0(triangle.corners[0]);
+      const Vec3 v1(triangle.corners[1]);
+      const Vec3 v2(triangle.corners[2]);
+      const TriangleHit th = intersect_triangle(v0, v1, v2, ray).value_or(TriangleHit{t, u, v});
       hit.t = th.t;
       // Barycentric reconstruction keeps the point on the triangle's own plane.
       hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;
       hit.normal = glm::normalize(glm::cross(v1 - v0, v2 - v0));
       hit.shading_normal = hit.normal;
-      if (!set.normals.empty()) {
-        const Vec3 n = (1.0 - th.u - th.v) * set.normals[tri[0]] + th.u * set.normals[tri[1]] +
-                       th.v * set.normals[tri[2]];
+      if (!mesh.normals.empty()) {
+        const MeshTriangleNormals& normals = mesh.normals[primitive];
+        const Vec3 n = (1.0 - th.u - th.v) * Vec3(normals.corners[0]) +
+                       th.u * Vec3(normals.corners[1]) + th.v * Vec3(normals.corners[2]);
         if (glm::dot(n, n) > 0.0) hit.shading_normal = glm::normalize(n);
       }
       break;

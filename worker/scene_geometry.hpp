@@ -51,6 +51,21 @@ struct PreparedPlane {
   double offset = 0;  // normal · point: the plane is normal · p = offset
 };
 
+// A mesh as the tracer reads it after Embree has found a hit: each triangle's corners
+// together, in the single precision Embree intersects (so the hit is recomputed on the very
+// triangle Embree saw), and one or two cache lines per hit instead of one per index and
+// corner.
+struct MeshTriangle {
+  glm::vec3 corners[3];
+};
+struct MeshTriangleNormals {
+  glm::vec3 corners[3];  // unit
+};
+struct TriangleMesh {
+  std::vector<MeshTriangle> triangles;
+  std::vector<MeshTriangleNormals> normals;  // by triangle; empty for flat shading
+};
+
 struct PreparedTriangles {
   std::vector<Vec3> positions;                          // world space
   std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside
@@ -142,7 +157,7 @@ class SceneGeometry {
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
   PlaneSet plane_sets_[2];  // opaque, transmissive
-  std::vector<PreparedTriangles> triangle_sets_;
+  std::vector<TriangleMesh> meshes_;
 };
 
 }  // namespace tessera
