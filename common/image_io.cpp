@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -27,18 +28,67 @@ FileKind kind_of(const std::filesystem::path& path) {
 
 // Quantises in our own code, not OIIO's, so that the bytes never depend on its version.
 template <typename T>
-std::vector<T> encode(const Image& image, OutputTransfer transfer) {
+T quantise(float v, OutputTransfer transfer) {
   constexpr float max_code = static_cast<float>(std::numeric_limits<T>::max());
+  float c = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+  if (transfer == OutputTransfer::srgb) c = linear_to_srgb(c);
+  return static_cast<T>(std::lround(c * max_code));
+}
+
+// 8-bit sRGB by table: thresholds[k] is the least value in [0, 1] that quantise() takes to
+// code k + 1 or above, found by bisection over the floats themselves, so a search through
+// the table gives quantise()'s own answer without a pow() per channel.
+class Srgb8Table {
+ public:
+  Srgb8Table() {
+    for (int k = 0; k < 255; ++k) {
+      std::uint32_t lo = std::bit_cast<std::uint32_t>(0.0f);  // code <= k
+      std::uint32_t hi = std::bit_cast<std::uint32_t>(1.0f);  // code >= k + 1
+      while (hi - lo > 1) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        (code(mid) > k ? hi : lo) = mid;
+      }
+      thresholds_[k] = std::bit_cast<float>(hi);
+    }
+  }
+  std::uint8_t operator()(float v) const {
+    if (!(v > 0.0f)) return 0;  // NaN too
+    return static_cast<std::uint8_t>(
+        std::upper_bound(thresholds_, thresholds_ + 255, v) - thresholds_);
+  }
+
+ private:
+  static int code(std::uint32_t bits) {
+    return quantise<std::uint8_t>(std::bit_cast<float>(bits), OutputTransfer::srgb);
+  }
+  float thresholds_[255];
+};
+
+template <typename T>
+std::vector<T> encode(const Image& image, OutputTransfer transfer) {
   std::vector<T> out(image.pixels().size());
-  std::transform(image.pixels().begin(), image.pixels().end(), out.begin(), [&](float v) {
-    float c = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-    if (transfer == OutputTransfer::srgb) c = linear_to_srgb(c);
-    return static_cast<T>(std::lround(c * max_code));
-  });
+  if constexpr (std::is_same_v<T, std::uint8_t>) {
+    if (transfer == OutputTransfer::srgb) {
+      static const Srgb8Table table;
+      std::transform(image.pixels().begin(), image.pixels().end(), out.begin(), table);
+      return out;
+    }
+  }
+  std::transform(image.pixels().begin(), image.pixels().end(), out.begin(),
+                 [&](float v) { return quantise<T>(v, transfer); });
   return out;
 }
 
 }  // namespace
+
+std::uint8_t srgb8_by_table(float linear) {
+  static const Srgb8Table table;
+  return table(linear);
+}
+
+std::uint8_t srgb8_by_formula(float linear) {
+  return quantise<std::uint8_t>(linear, OutputTransfer::srgb);
+}
 
 float linear_to_srgb(float linear) {
   if (linear <= 0.0031308f) return 12.92f * linear;

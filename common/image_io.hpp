@@ -1,6 +1,8 @@
 // Image files through OpenImageIO; the format follows the file extension.
 #pragma once
 
+#include <cstdint>
+
 #include <filesystem>
 
 #include "common/image.hpp"
@@ -27,5 +29,10 @@ bool is_supported_image_path(const std::filesystem::path& path);
 
 // The sRGB transfer function (IEC 61966-2-1) of a linear value in [0,1].
 float linear_to_srgb(float linear);
+
+// A linear value as the 8-bit sRGB code a PNG holds: by the table write_image() uses, and by
+// the formula the table is built from (the test checks that they agree everywhere).
+std::uint8_t srgb8_by_table(float linear);
+std::uint8_t srgb8_by_formula(float linear);
 
 }  // namespace tessera

@@ -1,6 +1,10 @@
 #include <filesystem>
 #include <set>
 
+#include <bit>
+#include <cstdint>
+#include <limits>
+
 #include <gtest/gtest.h>
 
 #include "common/image.hpp"
@@ -82,6 +86,35 @@ TEST(ImageIo, PngIsClampedAndSrgbEncoded) {
 
   write_image(image, dir / "b.png", OutputTransfer::linear);
   EXPECT_FLOAT_EQ(read_image(dir / "b.png").pixel(0, 0)[0], 128.0f / 255.0f);
+}
+
+TEST(ImageIo, SrgbTableGivesTheFormulasCodes) {
+  // PNGs are encoded by table; it must give pow()'s codes bit for bit. Every 61st float in
+  // [0, 1], and every float within 200 ulps of each point where the code steps up.
+  int differing = 0;
+  const auto one = std::bit_cast<std::uint32_t>(1.0f);
+  for (std::uint32_t bits = 0; bits <= one; bits += 61) {
+    const float v = std::bit_cast<float>(bits);
+    differing += srgb8_by_table(v) != srgb8_by_formula(v);
+  }
+  // The steps, found by bisection on the formula alone.
+  int steps = 0;
+  for (int code = 1; code <= 255; ++code) {
+    std::uint32_t lo = 0, hi = one;  // formula(lo) < code <= formula(hi)
+    while (hi - lo > 1) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      (srgb8_by_formula(std::bit_cast<float>(mid)) >= code ? hi : lo) = mid;
+    }
+    ++steps;
+    for (std::uint32_t near = hi - 200; near <= hi + 200 && near <= one; ++near)
+      differing += srgb8_by_table(std::bit_cast<float>(near)) !=
+                   srgb8_by_formula(std::bit_cast<float>(near));
+  }
+  EXPECT_EQ(steps, 255);
+  for (float v : {-1.0f, -0.0f, 0.0f, 1.0f, 2.0f, std::numeric_limits<float>::infinity(),
+                  -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()})
+    differing += srgb8_by_table(v) != srgb8_by_formula(v);
+  EXPECT_EQ(differing, 0);
 }
 
 TEST(ImageIo, TiffIsSixteenBitAndJpegWorks) {
