@@ -8,6 +8,7 @@
 #include "common/scene.hpp"
 #include "server/long_polls.hpp"
 #include "server/clock.hpp"
+#include "server/readiness.hpp"
 #include "server/router.hpp"
 #include "server/scheduler.hpp"
 
@@ -26,6 +27,8 @@ struct ApiContext {
 
 void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
 void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers, scenes, leases
-void add_health_routes(Router& router);                       // /healthz
+// /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
+// that knows start-up is over (server_main) can say so.
+void add_health_routes(Router& router, const Readiness* readiness = nullptr);
 
 }  // namespace tessera

@@ -50,6 +50,10 @@ struct HttpServerOptions {
   std::chrono::milliseconds idle_timeout{60'000};
   std::uint32_t max_header_bytes = 16 * 1024;  // larger: 431
   std::size_t default_body_limit = 1 << 20;    // for routes added without a limit; larger: 413
+  // Bodies announced larger than this are read only while all of them together stay within
+  // body_budget_bytes (see BodyBudget); smaller ones, and chunked ones, are read at once.
+  std::size_t budgeted_body_bytes = 64 * 1024;
+  std::size_t body_budget_bytes = 64 << 20;
   // Asked once a request's header is read and its route known, before any body is read:
   // the route's role and the Authorization header ("" when absent). An answer refuses the
   // request with it. Unset: everyone may call everything.

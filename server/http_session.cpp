@@ -5,6 +5,7 @@
 #include <cctype>
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <optional>
@@ -59,6 +60,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   ~HttpSession() {
+    release_body_budget();
     {
       std::lock_guard lock(shared_->mutex);
       shared_->sessions.erase(this);
@@ -164,8 +166,27 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     parser_->body_limit(limit);  // also caps a chunked body, whose size is not announced
 
     if (!body_follows) return dispatch();
-    if (beast::iequals(request[http::field::expect], "100-continue")) return do_continue();
+    const auto length = parser_->content_length();
+    if (!length || *length <= shared_->options.budgeted_body_bytes) return read_body_now();
+    // Waits, without a timer, until the body fits in the server's budget for bodies.
+    stream_.expires_never();
+    shared_->body_budget.acquire(*length, [self = shared_from_this(), bytes = *length] {
+      net::dispatch(self->stream_.get_executor(), [self, bytes] {
+        self->budget_held_ = bytes;
+        self->read_body_now();
+      });
+    });
+  }
+
+  void read_body_now() {
+    if (beast::iequals(parser_->get()[http::field::expect], "100-continue")) return do_continue();
     do_read_body();
+  }
+
+  void release_body_budget() {
+    if (budget_held_ == 0) return;
+    shared_->body_budget.release(budget_held_);
+    budget_held_ = 0;
   }
 
   // The client waits for this before sending a body it announced with Expect.
@@ -188,6 +209,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void on_read_body(error_code ec, std::size_t) {
+    if (ec) release_body_budget();
     if (ec == http::error::body_limit)
       return send(too_large(route_.body_limit.value_or(shared_->options.default_body_limit)), true);
     if (ec) return on_read_error(ec, "body");
@@ -224,20 +246,51 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       spdlog::error("http {} {}: handler answered with status {}", route_.pattern, path_, response.status);
       response = error_response(500, "internal_error", "the handler answered an invalid status");
     }
+    if (!response.file.empty() && !has_no_body(response.status)) {
+      // Opened here, so that a temporary file can go from its directory at once: the open
+      // descriptor keeps its bytes until they are sent.
+      http::file_body::value_type file;
+      error_code ec;
+      file.open(response.file.c_str(), beast::file_mode::scan, ec);
+      if (response.file_is_temporary) {
+        std::error_code ignored;
+        std::filesystem::remove(response.file, ignored);
+      }
+      if (!ec) {
+        file_response_.emplace();
+        auto& message = *file_response_;
+        fill_header(message, response, close_after);
+        message.body() = std::move(file);
+        message.prepare_payload();
+        return write(message, close_after);
+      }
+      spdlog::error("http {} {}: cannot open {} to answer: {}", route_.pattern, path_, response.file,
+                    ec.message());
+      response = error_response(500, "internal_error", "the answer's file cannot be read");
+    }
     response_.emplace();
     auto& message = *response_;
+    fill_header(message, response, close_after);
+    if (!has_no_body(response.status)) {
+      message.body() = std::move(response.body);
+      message.prepare_payload();
+    }
+    write(message, close_after);
+  }
+
+  template <typename Message>
+  static void fill_header(Message& message, const HttpResponse& response, bool close_after) {
     message.version(11);
     message.result(static_cast<unsigned>(response.status));
     message.set(http::field::server, "tessera");
     if (!response.content_type.empty() && !has_no_body(response.status))
       message.set(http::field::content_type, response.content_type);
     for (auto& [name, value] : response.headers) message.insert(name, value);
-    if (!has_no_body(response.status)) {
-      message.body() = std::move(response.body);
-      message.prepare_payload();
-    }
     message.keep_alive(!close_after);
+  }
 
+  template <typename Message>
+  void write(Message& message, bool close_after) {
     phase_ = Phase::writing;
     stream_.expires_after(shared_->options.write_timeout);
     http::async_write(stream_, message,
@@ -246,6 +299,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void on_write(bool close_after, error_code ec, std::size_t) {
     response_.reset();
+    file_response_.reset();
     if (ec) {
       spdlog::debug("http {}: writing the response failed: {}", remote_address_, ec.message());
       return close();
@@ -272,7 +326,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void do_drain() {
-    stream_.async_read_some(net::buffer(drain_), [self = shared_from_this()](error_code ec, std::size_t) {
+    if (!drain_) drain_ = std::make_unique<std::array<char, 4096>>();
+    stream_.async_read_some(net::buffer(*drain_), [self = shared_from_this()](error_code ec, std::size_t) {
       if (ec) return self->close();
       self->do_drain();
     });
@@ -289,8 +344,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::shared_ptr<ServerShared> shared_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
-  std::optional<http::response<http::string_body>> response_;  // alive while being written
-  std::array<char, 4096> drain_{};
+  // The answer, alive while being written: in memory, or streamed from a file.
+  std::optional<http::response<http::string_body>> response_;
+  std::optional<http::response<http::file_body>> file_response_;
+  std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
+  std::size_t budget_held_ = 0;  // of shared_->body_budget, for the body being read or served
   std::string remote_address_;
   Phase phase_ = Phase::idle;
   bool first_request_ = true;
@@ -352,6 +410,10 @@ void HttpSession::dispatch() {
   request.body = std::move(message.body());
   request.remote_address = remote_address_;
   parser_.reset();
+  // A body is read through buffer_, which then keeps its largest size (64 KiB): with a
+  // thousand workers parked on a claim, that memory would idle with them. Empty, it is
+  // given back; the next request's first read allocates a small one again.
+  if (buffer_.size() == 0) buffer_.shrink_to_fit();
 
   auto pending = std::make_shared<PendingResponse>(shared_from_this(), shared_->io);
   Respond respond = [pending](HttpResponse response) { pending->answer(std::move(response)); };
@@ -361,6 +423,9 @@ void HttpSession::dispatch() {
     spdlog::error("http {}: handler threw: {}", route_.pattern, e.what());
     pending->answer(error_response(500, "internal_error", "internal error"));
   }
+  // What the handler did not take of the body goes now, and with it its share of the budget.
+  request.body = std::string();
+  release_body_budget();
 }
 
 void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {

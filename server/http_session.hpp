@@ -13,6 +13,7 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 
+#include "server/body_budget.hpp"
 #include "server/http_server.hpp"
 
 namespace tessera {
@@ -24,11 +25,15 @@ class HttpSession;
 struct ServerShared {
   ServerShared(boost::asio::io_context& io_context, const Router& router_ref,
                HttpServerOptions server_options)
-      : io(io_context), router(router_ref), options(std::move(server_options)) {}
+      : io(io_context),
+        router(router_ref),
+        options(std::move(server_options)),
+        body_budget(options.body_budget_bytes) {}
 
   boost::asio::io_context& io;
   const Router& router;
   const HttpServerOptions options;
+  BodyBudget body_budget;
   std::atomic<bool> stopping{false};
   std::atomic<std::size_t> connection_count{0};
 

@@ -23,10 +23,22 @@ struct HttpRequest {
 };
 
 struct HttpResponse {
+  using Headers = std::vector<std::pair<std::string, std::string>>;
+  HttpResponse() = default;
+  HttpResponse(int status_code, std::string type, std::string text, Headers extra_headers = {})
+      : status(status_code),
+        content_type(std::move(type)),
+        body(std::move(text)),
+        headers(std::move(extra_headers)) {}
+
   int status = 200;
   std::string content_type = "application/json";  // empty: no Content-Type header
   std::string body;
-  std::vector<std::pair<std::string, std::string>> headers;  // added as given
+  Headers headers;  // added as given
+  // When set, the body is this file's bytes, sent from the disk rather than held in memory
+  // (a big image), and `body` is ignored. A temporary file is removed once it is opened.
+  std::string file;
+  bool file_is_temporary = false;
 };
 
 // Answers a request. May be called later and from any thread, but exactly once: a second

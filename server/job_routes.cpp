@@ -1,7 +1,5 @@
 #include <chrono>
-#include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "common/image_io.hpp"
 #include "common/scene_parser.hpp"
@@ -158,21 +156,27 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
     return error_response(409, "not_ready",
                           "job " + id + " is " + to_string(job->state) +
                               "; add ?partial=1 for the tiles rendered so far");
+  HttpResponse response{200, format->content_type, "", {}};
+  // A completed job's EXR is the file the image thread wrote: sent as it is, with no
+  // image assembled in memory (3 GiB for a 16384x16384 frame).
+  if (format->extension == ".exr" && job->state == JobState::completed) {
+    if (const auto written = context.scheduler.image_file(id)) {
+      response.file = written->string();
+      return response;
+    }
+  }
   const auto assembled = context.scheduler.assemble(id);
   const auto scene_json = context.scheduler.scene_json(job->scene_digest);
   if (!assembled || !scene_json) return not_found(id);
 
-  // OpenImageIO writes files; encode into a private temporary one and send its bytes.
+  // OpenImageIO writes files; encode into a private temporary one, which is sent from the
+  // disk and removed once opened.
   std::filesystem::create_directories(context.temp_dir);
   const auto path =
       context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) + format->extension);
   write_image(*assembled, path, transfer_of(*scene_json));
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  std::error_code ignored;
-  std::filesystem::remove(path, ignored);
-  HttpResponse response{200, format->content_type, bytes.str(), {}};
+  response.file = path.string();
+  response.file_is_temporary = true;
   return response;
 }
 
@@ -213,9 +217,18 @@ void add_job_routes(Router& router, ApiContext& context) {
   }, std::nullopt, role_client);
 }
 
-void add_health_routes(Router& router) {
+void add_health_routes(Router& router, const Readiness* readiness) {
   router.add("GET", "/healthz", [](HttpRequest&&, Respond respond) {
     respond(json_response(200, {{"status", "ok"}}));
+  });
+  // 503 both before start-up is over and once shutdown has begun: either way, requests
+  // should go elsewhere (or wait), though the process is alive.
+  router.add("GET", "/readyz", [readiness](HttpRequest&&, Respond respond) {
+    const Readiness::State state = readiness ? readiness->state() : Readiness::State::starting;
+    if (state == Readiness::State::ready) return respond(json_response(200, {{"status", "ready"}}));
+    if (state == Readiness::State::draining)
+      return respond(error_response(503, "shutting_down", "the coordinator is shutting down"));
+    respond(error_response(503, "starting", "the coordinator is still starting"));
   });
 }
 

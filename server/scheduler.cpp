@@ -13,6 +13,7 @@
 
 #include "server/ids.hpp"
 #include "server/scheduler_entries.hpp"
+#include "server/tile_order.hpp"
 
 namespace tessera {
 
@@ -50,6 +51,8 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
   const std::string digest = sha256_hex(scene_json);
   const std::vector<TileRect> rects =
       split_into_tiles(scene.width, scene.height, scene.render.tile_size);
+  // Also outside: sorting a million tiles takes a while too.
+  std::vector<int> order = centre_first_order(rects, scene.width, scene.height);
 
   Callbacks notify;
   JobStatus result;
@@ -69,18 +72,17 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
     s.created_at_ms = clock_.now_ms();
     s.scene_digest = digest;
 
-    std::vector<TileRow> rows;
-    rows.reserve(rects.size());
-    job->tiles.reserve(rects.size());
-    for (const TileRect& rect : rects) {
-      TileSlot& tile = job->tiles.emplace_back();
-      tile.rect = rect;
-      rows.push_back(tile_row(s.id, static_cast<int>(rows.size()), tile));
-    }
-    store_.insert_job(job_row(s), scene_json, rows);
+    job->tiles.resize(rects.size());
+    for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
+    // In hand-out order: a lease's tiles are then neighbours in the database too.
+    const JobEntry& made = *job;
+    store_.insert_job(job_row(s), scene_json, order.size(), [&](std::size_t position, TileRow& row) {
+      const int index = order[position];
+      row = tile_row(made.status.id, index, made.tiles[index]);
+    });
 
     JobEntry& entry = *jobs_.emplace(s.id, std::move(job)).first->second;
-    index_tiles(entry);
+    index_tiles(entry, std::move(order));
     result = entry.status;
     notify = callbacks_;
   }
@@ -158,13 +160,44 @@ std::shared_ptr<const Image> Scheduler::assemble(const std::string& id) const {
   return std::make_shared<const Image>(assemble_locked(*job));
 }
 
-Image& Scheduler::canvas_of(JobEntry& job) {
-  if (!job.canvas) job.canvas = std::make_shared<Image>(assemble_locked(job));
-  return *job.canvas;
+std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  const JobEntry* job = find_job(id);
+  // The file appears whole (it is written beside its place and renamed), so once it is
+  // there it can be sent.
+  if (!job || job->status.state != JobState::completed || !store_.has_image(id))
+    return std::nullopt;
+  return store_.image_path(id);
+}
+
+void Scheduler::make_canvas(std::unique_lock<std::mutex>& lock, const std::string& id) {
+  JobEntry* job = find_job(id);
+  if (!job || job->canvas || job->canvas_coming) return;
+  job->canvas_coming = true;
+  const int width = job->status.width;
+  const int height = job->status.height;
+  lock.unlock();
+  auto canvas = std::make_shared<Image>(width, height);
+  lock.lock();
+  job = find_job(id);  // it may have been removed meanwhile
+  if (!job) return;
+  job->canvas_coming = false;
+  images_changed_.notify_all();  // the image thread may wait for it
+  // A failed or canceled job's image comes from the store; a completed one's canvas is
+  // taken by the image thread, which waited for it.
+  if (job->status.state == JobState::failed || job->status.state == JobState::canceled) return;
+  // Every result accepted so far is stored, those of the requests served meanwhile too.
+  paste_stored(*canvas, *job);
+  job->canvas = std::move(canvas);
 }
 
 Image Scheduler::assemble_locked(const JobEntry& job) const {
   Image image(job.status.width, job.status.height);
+  paste_stored(image, job);
+  return image;
+}
+
+void Scheduler::paste_stored(Image& image, const JobEntry& job) const {
   store_.for_each_tile_pixels(job.status.id, [&](int index, std::span<const float> pixels) {
     if (index < 0 || index >= static_cast<int>(job.tiles.size()))
       throw std::runtime_error("job " + job.status.id + ": stored pixels for unknown tile " +
@@ -172,7 +205,6 @@ Image Scheduler::assemble_locked(const JobEntry& job) const {
     // Only a done tile's pixels are the accepted result.
     if (job.tiles[index].state == TileState::done) image.paste(job.tiles[index].rect, pixels);
   });
-  return image;
 }
 
 void Scheduler::wait_for_images() {
@@ -189,9 +221,18 @@ void Scheduler::write_images() {
     if (images_to_write_.empty()) return;  // stopping, and nothing is left to write
     const std::string id = std::move(images_to_write_.front());
     images_to_write_.pop_front();
-    const JobEntry* job = find_job(id);
-    if (!job || job->status.state != JobState::completed) continue;
     writing_image_ = true;
+    // A canvas on its way is waited for, rather than assembling a second one from the store.
+    const JobEntry* job = find_job(id);
+    while (job && job->canvas_coming) {
+      images_changed_.wait(lock);
+      job = find_job(id);
+    }
+    if (!job || job->status.state != JobState::completed) {
+      writing_image_ = false;
+      images_changed_.notify_all();
+      continue;
+    }
     std::string error;
     try {
       // A completed job's canvas changes no more, so it can be read outside the lock.

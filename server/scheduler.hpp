@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -139,6 +140,8 @@ class Scheduler {
   // keeps its image in memory as tiles arrive, until its image file is written, so that
   // previews and the download right after completion need not read every tile back.
   std::shared_ptr<const Image> assemble(const std::string& id) const;
+  // The image file of a completed job, once the image thread has written it.
+  std::optional<std::filesystem::path> image_file(const std::string& id) const;
   // Waits until the image file of every job completed so far is written (or has failed).
   void wait_for_images();
 
@@ -189,6 +192,9 @@ class Scheduler {
     std::string job_id;
     std::vector<int> live;  // in no particular order
     std::vector<int> delivered;
+    // When the live tiles expire; they all share one expiry (claim(), heartbeat() and
+    // load_and_reconcile() set it for every live tile at once). Indexed in expiries_.
+    std::int64_t expires_ms = 0;
   };
   using Callbacks = std::vector<std::function<void()>>;
 
@@ -197,8 +203,11 @@ class Scheduler {
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
   Image assemble_locked(const JobEntry& job) const;
-  // The job's in-memory image, made from the stored tiles when it has none yet.
-  Image& canvas_of(JobEntry& job);
+  // Pastes every done tile's stored pixels into `image`.
+  void paste_stored(Image& image, const JobEntry& job) const;
+  // Gives job `id` its canvas, made with `lock` released: zeroing the 3 GiB of a 16384x16384
+  // frame takes a second or more, which every other request would otherwise wait out.
+  void make_canvas(std::unique_lock<std::mutex>& lock, const std::string& id);
   // The image thread: writes each completed job's image file, off the path of the request
   // that completed it, and fails a job whose image cannot be written.
   void write_images();
@@ -216,11 +225,13 @@ class Scheduler {
   // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and
   // leases_.
   void track_tile(JobEntry& job, int index, int sign);
-  // Adds (+1) or removes (-1) one tile from a lease's `live` or `delivered` list.
+  // Adds (+1) or removes (-1) one tile from a lease's `live` or `delivered` list; a live
+  // tile also moves the lease in expiries_ to `expires_ms`.
   void index_lease_tile(const std::string& lease_id, const std::string& job_id, int index, int sign,
-                        std::vector<int> LeaseTiles::*list);
-  // Computes the tile order of a freshly built job and tracks all its tiles.
-  void index_tiles(JobEntry& job);
+                        std::vector<int> LeaseTiles::*list, std::int64_t expires_ms = 0);
+  // Takes the tile order of a freshly built job (computes it when `order` is empty) and
+  // tracks all its tiles.
+  void index_tiles(JobEntry& job, std::vector<int> order = {});
 
   // Stages taking the lease off its live tiles and its worker. An expired lease counts a
   // failure against each tile it still owed.
@@ -249,6 +260,11 @@ class Scheduler {
   // Every lease id that binds a tile, live or delivered. A lease is live while `live` is
   // not empty.
   std::unordered_map<std::string, LeaseTiles> leases_;
+  // The live leases by expiry, soonest first, so that a claim finds the expired ones
+  // without looking at every lease (leases_ keeps every lease that delivered a tile).
+  std::set<std::pair<std::int64_t, std::string>> expiries_;
+  // Workers that have not left ("gone"), for batch_size() on every claim.
+  int present_workers_ = 0;
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;

@@ -49,6 +49,8 @@ void Scheduler::apply(StagedChange& change) {
   for (auto& [job, status] : change.jobs) apply_job(*job, status);
   for (auto& [key, tile] : change.tiles) apply_tile(*key.first, key.second, std::move(tile));
   for (auto& [worker, staged] : change.workers) {
+    present_workers_ += static_cast<int>(staged.info.state != worker_gone) -
+                        static_cast<int>(worker->info.state != worker_gone);
     *worker = std::move(staged);
     worker->persisted_seen_ms = worker->info.last_seen_ms;
   }
@@ -99,37 +101,50 @@ void Scheduler::track_tile(JobEntry& job, int index, int sign) {
   if (tile.state == TileState::done) job.status.tiles_done += sign;
   if (!tile.lease_id.empty()) {
     job.status.tiles_rendering += sign;
-    index_lease_tile(tile.lease_id, job.status.id, index, sign, &LeaseTiles::live);
+    index_lease_tile(tile.lease_id, job.status.id, index, sign, &LeaseTiles::live,
+                     tile.lease_expires_ms);
   }
   if (!tile.result_lease_id.empty())
     index_lease_tile(tile.result_lease_id, job.status.id, index, sign, &LeaseTiles::delivered);
 }
 
 void Scheduler::index_lease_tile(const std::string& lease_id, const std::string& job_id, int index,
-                                 int sign, std::vector<int> LeaseTiles::*list) {
+                                 int sign, std::vector<int> LeaseTiles::*list,
+                                 std::int64_t expires_ms) {
+  const bool live = list == &LeaseTiles::live;
   if (sign > 0) {
     LeaseTiles& entry = leases_[lease_id];
     entry.job_id = job_id;
+    if (live && (entry.live.empty() || entry.expires_ms != expires_ms)) {
+      if (!entry.live.empty()) expiries_.erase({entry.expires_ms, lease_id});
+      entry.expires_ms = expires_ms;
+      expiries_.emplace(expires_ms, lease_id);
+    }
     (entry.*list).push_back(index);
     return;
   }
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return;
   std::vector<int>& tiles = it->second.*list;
-  if (const auto found = std::find(tiles.begin(), tiles.end(), index); found != tiles.end())
+  if (const auto found = std::find(tiles.begin(), tiles.end(), index); found != tiles.end()) {
     tiles.erase(found);
+    if (live && tiles.empty()) expiries_.erase({it->second.expires_ms, lease_id});
+  }
   if (it->second.live.empty() && it->second.delivered.empty()) leases_.erase(it);
 }
 
-void Scheduler::index_tiles(JobEntry& job) {
-  std::vector<TileRect> rects;
-  rects.reserve(job.tiles.size());
-  for (const TileSlot& tile : job.tiles) rects.push_back(tile.rect);
-  job.order = centre_first_order(rects, job.status.width, job.status.height);
+void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {
+  if (order.empty()) {
+    std::vector<TileRect> rects;
+    rects.reserve(job.tiles.size());
+    for (const TileSlot& tile : job.tiles) rects.push_back(tile.rect);
+    order = centre_first_order(rects, job.status.width, job.status.height);
+  }
+  job.order = std::move(order);
   job.rank.assign(job.order.size(), 0);
   for (std::size_t position = 0; position < job.order.size(); ++position)
     job.rank[job.order[position]] = static_cast<int>(position);
-  job.pending.clear();
+  job.pending.reset(job.order.size());
   job.status.tiles_total = static_cast<int>(job.tiles.size());
   job.status.tiles_done = 0;
   job.status.tiles_rendering = 0;

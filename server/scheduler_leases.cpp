@@ -25,9 +25,7 @@ int Scheduler::batch_size(const JobEntry& job, int max_tiles) const {
   if (max_tiles <= 1 || pending <= 1) return 1;
   // At most half of an even share of what is left, so that batches shrink as the job nears
   // its end and its last tiles spread over every worker instead of queueing behind one.
-  int workers = 0;
-  for (const auto& [id, worker] : workers_) workers += worker->info.state != worker_gone;
-  const int share = pending / (2 * std::max(1, workers));
+  const int share = pending / (2 * std::max(1, present_workers_));
   return std::clamp(share, 1, std::min(max_tiles, pending));
 }
 
@@ -65,9 +63,9 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
         if (chosen) {
           const std::string lease_id = new_lease_id();
           const int count = batch_size(*chosen, max_tiles);
-          auto position = chosen->pending.begin();  // staging leaves the pending set alone
-          for (int i = 0; i < count; ++i, ++position) {
-            const int index = chosen->order[*position];
+          int position = chosen->pending.first_from(0);  // staging leaves the pending set alone
+          for (int i = 0; i < count; ++i, position = chosen->pending.first_from(position + 1)) {
+            const int index = chosen->order[position];
             // A tile that failed before goes out alone, so that another failure is
             // charged to it and not to tiles that happened to share its batch.
             if (i > 0 && chosen->tiles[index].attempts > 0) break;
@@ -148,7 +146,7 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const f
 }
 
 ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const TileResult> results) {
-  std::lock_guard lock(mutex_);
+  std::unique_lock lock(mutex_);
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return ResultOutcome::stale;
   const LeaseTiles entry = it->second;  // commit() rewrites the index
@@ -216,16 +214,19 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
     return ResultOutcome::unstored;
   }
   apply(change);
-  // After the commit, so that a canvas made now from the store already holds them.
-  Image& canvas = canvas_of(job);
-  for (const TileResult* result : fresh)
-    canvas.paste(job.tiles[result->tile_index].rect, result->pixels);
+  // Without a canvas (the job's first result, or the first since a restart), these tiles
+  // are only stored: the canvas, made next, starts from the store.
+  if (job.canvas)
+    for (const TileResult* result : fresh)
+      job.canvas->paste(job.tiles[result->tile_index].rect, result->pixels);
   // Should the write fail or the process die, the tiles are stored and a restart writes
   // the image again.
   if (job_done) {
     images_to_write_.push_back(job.status.id);
     images_changed_.notify_all();
   }
+  // The job's last result needs none: the image thread assembles from the store.
+  if (!job.canvas && !job_done) make_canvas(lock, job.status.id);
   return ResultOutcome::accepted;
 }
 
@@ -267,10 +268,8 @@ void Scheduler::expire_leases() {
 
 bool Scheduler::expire_locked(std::int64_t now) {
   std::vector<std::string> expired;
-  for (const auto& [lease_id, entry] : leases_)
-    if (!entry.live.empty() &&
-        now >= jobs_.at(entry.job_id)->tiles[entry.live.front()].lease_expires_ms)
-      expired.push_back(lease_id);
+  for (auto it = expiries_.begin(); it != expiries_.end() && it->first <= now; ++it)
+    expired.push_back(it->second);
   if (expired.empty()) return false;
   StagedChange change;
   for (const std::string& lease_id : expired) {

@@ -35,6 +35,7 @@ void Scheduler::load_and_reconcile() {
     worker->info.tiles_rendered = row.tiles_rendered;
     worker->info.last_seen_ms = row.last_seen_ms;
     worker->persisted_seen_ms = row.last_seen_ms;
+    present_workers_ += worker->info.state != worker_gone;
     workers_.emplace(row.id, std::move(worker));
   }
 
@@ -115,8 +116,9 @@ void Scheduler::load_and_reconcile() {
         continue;
       }
       // The lease stands: its worker re-claims and gets it back, or it expires as usual.
-      // Its clock restarts, since no heartbeat could reach a coordinator that was down.
-      if (tile.lease_expires_ms < now + config_.lease_timeout_ms)
+      // Its clock restarts, since no heartbeat could reach a coordinator that was down;
+      // every tile of it alike, as a lease has one expiry.
+      if (tile.lease_expires_ms != now + config_.lease_timeout_ms)
         change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
       WorkerEntry& staged = change.worker(*worker);
       if (held == holders.end() || job.rank[index] < job.rank[staged.info.current_tile]) {

@@ -33,6 +33,7 @@ WorkerInfo Scheduler::register_worker(const std::string& name, const std::string
   worker->persisted_seen_ms = info.last_seen_ms;
   const WorkerInfo result = info;
   workers_.emplace(result.id, std::move(worker));
+  ++present_workers_;
   spdlog::info("worker {} joined: {} on {}, {} thread(s)", result.id, name, host, threads);
   return result;
 }

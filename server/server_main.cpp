@@ -115,10 +115,11 @@ int run(const ServerOptions& options) {
   scheduler.on_work_available([&claims] { claims.notify(); });
   scheduler.on_job_finished([&job_waits] { job_waits.notify(); });
 
+  Readiness readiness;
   Router router;
   ApiContext context{scheduler, clock, claims, job_waits, options.limits, options.max_job_bytes,
                      std::filesystem::path(options.data_dir) / "tmp"};
-  add_health_routes(router);
+  add_health_routes(router, &readiness);
   add_job_routes(router, context);
   add_worker_routes(router, context);
 
@@ -150,6 +151,8 @@ int run(const ServerOptions& options) {
         options.local_workers, options.worker_threads, options.log_level);
   boost::asio::steady_timer expiry(io);
   schedule_upkeep(expiry, scheduler, workers.get());
+  // The Store is open and the Scheduler has reconciled it (its constructor): /readyz says so.
+  readiness.mark_ready();
 
   // Shutdown: local workers first (they finish or release their tiles while the server
   // still answers), then the server drains its in-flight requests and io.run() returns.
@@ -158,6 +161,7 @@ int run(const ServerOptions& options) {
   signals.async_wait([&](const boost::system::error_code& ec, int signal) {
     if (ec) return;
     spdlog::info("signal {}: shutting down", signal);
+    readiness.mark_draining();  // /readyz answers 503 while the rest below runs
     stopper = std::thread([&] {
       if (workers) workers->signal_stop();
       claims.close();  // parked claims answer now; the workers see their signal and leave

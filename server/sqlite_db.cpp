@@ -87,7 +87,7 @@ void Statement::reset() {
   sqlite3_clear_bindings(stmt_);
 }
 
-SqliteDb::SqliteDb(const std::filesystem::path& file) {
+SqliteDb::SqliteDb(const std::filesystem::path& file) : file_(file) {
   const int rc =
       sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
   if (rc != SQLITE_OK) {
@@ -100,9 +100,27 @@ SqliteDb::SqliteDb(const std::filesystem::path& file) {
 }
 
 SqliteDb::~SqliteDb() {
-  // Unfinalized statements would make close fail.
+  // Unfinalized statements would make close fail. The checkpointer's connection closes
+  // first, so that this one, the last, checkpoints the whole WAL on close.
   statements_.clear();
+  checkpointer_.reset();
   sqlite3_close(db_);
+}
+
+void SqliteDb::checkpoint_in_background() {
+  checkpointer_ = std::make_unique<WalCheckpointer>(file_);
+  exec("PRAGMA wal_autocheckpoint=0");
+  sqlite3_wal_hook(db_, &SqliteDb::on_wal_commit, this);
+}
+
+int SqliteDb::on_wal_commit(void* self, sqlite3* db, const char* name, int pages) {
+  auto& owner = *static_cast<SqliteDb*>(self);
+  owner.checkpointer_->wal_grew(pages);
+  // Far behind (a reader held it back, or the disk is slow): what SQLite's own automatic
+  // checkpoint would have done, in this commit.
+  if (pages >= 8 * WalCheckpointer::restart_pages)
+    sqlite3_wal_checkpoint_v2(db, name, SQLITE_CHECKPOINT_PASSIVE, nullptr, nullptr);
+  return SQLITE_OK;
 }
 
 void SqliteDb::exec(std::string_view sql) {

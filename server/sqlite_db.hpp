@@ -13,6 +13,8 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "server/wal_checkpointer.hpp"
+
 struct sqlite3;
 struct sqlite3_stmt;
 
@@ -85,9 +87,18 @@ class SqliteDb {
   // pragmas.
   std::string query_text(std::string_view sql);
 
+  // For a database in WAL mode: from now on its checkpoints run on a thread of their own
+  // (see WalCheckpointer), not inside a commit. Should that thread fall far behind, a
+  // commit checkpoints as SQLite would, so that the WAL cannot grow without bound.
+  void checkpoint_in_background();
+
  private:
+  static int on_wal_commit(void* self, sqlite3* db, const char* name, int pages);
+
   sqlite3* db_ = nullptr;
+  std::filesystem::path file_;
   std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;
+  std::unique_ptr<WalCheckpointer> checkpointer_;
 };
 
 // A SAVEPOINT: nests, so a Store operation that is atomic on its own can also be part of

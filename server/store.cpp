@@ -16,7 +16,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little);
 static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559);
 
-constexpr int schema_version = 2;
+constexpr int schema_version = 3;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -53,8 +53,8 @@ CREATE TABLE tiles (
   attempts INTEGER NOT NULL DEFAULT 0,
   rays INTEGER NOT NULL DEFAULT 0,
   result_lease_id TEXT NOT NULL DEFAULT '',
-  pixels BLOB,
   last_error TEXT NOT NULL DEFAULT '',
+  pixels_id INTEGER,  -- tile_pixels(id) of its accepted pixels; NULL before there are any
   PRIMARY KEY (job_id, tile_index)
 );
 CREATE TABLE workers (
@@ -67,6 +67,32 @@ CREATE TABLE workers (
   last_seen_ms INTEGER NOT NULL
 );
 )sql";
+
+// A done tile's pixels live apart from its row (schema version 3), in a table with no
+// index but its integer key: storing a result appends there, and the tile row (small, and
+// beside the rows of the same lease, since rows are stored in hand-out order) notes the
+// key. Stored in the tile row itself, each result grew a small row to a whole page in
+// place, which rewrote that page and its neighbours: about five pages per tile went through
+// the WAL, and again into the database at the checkpoint. A key (job_id, tile_index) would
+// scatter its index's updates over the whole job instead. The triggers drop pixels that
+// their tile no longer points to.
+constexpr const char* pixels_table_sql = R"sql(
+CREATE TABLE tile_pixels (
+  id INTEGER PRIMARY KEY,
+  pixels BLOB NOT NULL
+);
+CREATE TRIGGER tile_pixels_replaced AFTER UPDATE OF pixels_id ON tiles
+  WHEN old.pixels_id IS NOT NULL AND old.pixels_id IS NOT new.pixels_id
+  BEGIN DELETE FROM tile_pixels WHERE id = old.pixels_id; END;
+CREATE TRIGGER tile_pixels_deleted AFTER DELETE ON tiles
+  WHEN old.pixels_id IS NOT NULL
+  BEGIN DELETE FROM tile_pixels WHERE id = old.pixels_id; END;
+)sql";
+
+// The SQLite page cache, at most (a negative cache_size is KiB). The tiles being handed
+// out and delivered stay in it; the default 2 MiB read them back from the file again and
+// again on a big job.
+constexpr int cache_kib = 32 * 1024;
 
 // Creates the directories before the database file is opened in them.
 std::filesystem::path prepare_data_dir(const std::filesystem::path& data_dir) {
@@ -95,25 +121,33 @@ Store::Store(const std::filesystem::path& data_dir)
   db_.exec("PRAGMA journal_mode=WAL");
   db_.exec("PRAGMA synchronous=NORMAL");
   db_.exec("PRAGMA foreign_keys=ON");
+  db_.exec("PRAGMA cache_size=-" + std::to_string(cache_kib));
   create_schema();
+  db_.checkpoint_in_background();
 }
 
 void Store::create_schema() {
   const int version = std::stoi(db_.query_text("PRAGMA user_version"));
   if (version == schema_version) return;
-  if (version == 1) {  // before tiles remembered why they failed
-    Transaction tx(db_);
-    db_.exec("ALTER TABLE tiles ADD COLUMN last_error TEXT NOT NULL DEFAULT ''");
-    db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
-    tx.commit();
-    return;
-  }
-  if (version != 0)
+  if (version < 0 || version > schema_version)
     throw std::runtime_error("store: " + (data_dir_ / "tessera.db").string() +
                              " has schema version " + std::to_string(version) +
                              "; this build knows version " + std::to_string(schema_version));
   Transaction tx(db_);
-  db_.exec(schema_sql);
+  if (version == 0) {
+    db_.exec(schema_sql);
+    db_.exec(pixels_table_sql);
+  }
+  if (version == 1)  // before tiles remembered why they failed
+    db_.exec("ALTER TABLE tiles ADD COLUMN last_error TEXT NOT NULL DEFAULT ''");
+  if (version == 1 || version == 2) {  // before pixels had a table of their own
+    db_.exec("ALTER TABLE tiles ADD COLUMN pixels_id INTEGER");
+    db_.exec(pixels_table_sql);
+    // The tile rows' own rowids are unique, so they serve as the new keys.
+    db_.exec("INSERT INTO tile_pixels (id, pixels) SELECT rowid, pixels FROM tiles WHERE pixels IS NOT NULL");
+    db_.exec("UPDATE tiles SET pixels_id = rowid WHERE pixels IS NOT NULL");
+    db_.exec("ALTER TABLE tiles DROP COLUMN pixels");
+  }
   db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
   tx.commit();
 }
@@ -150,8 +184,9 @@ StoredState Store::load() {
     // length() of a blob is read from the record header; the pixels stay on disk.
     auto s = db_.statement(
         "SELECT job_id, tile_index, x, y, w, h, state, lease_id, worker_id, lease_expires_ms, "
-        "attempts, rays, result_lease_id, ifnull(length(pixels), 0), last_error FROM tiles "
-        "ORDER BY job_id, tile_index");
+        "attempts, rays, result_lease_id, "
+        "ifnull((SELECT length(p.pixels) FROM tile_pixels p WHERE p.id = t.pixels_id), 0), "
+        "last_error FROM tiles t ORDER BY job_id, tile_index");
     while (s->step()) {
       TileRow& tile = state.tiles.emplace_back();
       tile.job_id = s->column_text(0);
@@ -188,6 +223,12 @@ StoredState Store::load() {
 
 void Store::insert_job(const JobRow& job, const std::string& scene_json,
                        std::span<const TileRow> tiles) {
+  insert_job(job, scene_json, tiles.size(),
+             [&](std::size_t i, TileRow& row) { row = tiles[i]; });
+}
+
+void Store::insert_job(const JobRow& job, const std::string& scene_json, std::size_t tile_count,
+                       const std::function<void(std::size_t i, TileRow& row)>& tile_at) {
   Transaction tx(db_);
   db_.statement("INSERT OR IGNORE INTO scenes (digest, json) VALUES (?, ?)")
       ->bind(1, job.scene_digest)
@@ -211,7 +252,9 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json,
       .bind(12, job.error)
       .bind(13, static_cast<std::int64_t>(job.rays))
       .run();
-  for (const TileRow& tile : tiles) {
+  TileRow tile;  // one at a time: a big job's rows are never all in memory at once
+  for (std::size_t i = 0; i < tile_count; ++i) {
+    tile_at(i, tile);
     auto s = db_.statement(
         "INSERT INTO tiles (job_id, tile_index, x, y, w, h, state, lease_id, worker_id, "
         "lease_expires_ms, attempts, rays, result_lease_id, last_error) "
@@ -281,21 +324,24 @@ void Store::update_tile(const TileRow& tile) {
 }
 
 void Store::store_tile_result(const TileRow& tile, std::span<const float> pixels) {
-  // One statement, so the pixels and the state that says they are there land together.
+  // One transaction, so the pixels and the state that says they are there land together.
+  Transaction tx(db_);
+  db_.statement("INSERT INTO tile_pixels (pixels) VALUES (?)")->bind_blob(1, std::as_bytes(pixels)).run();
   auto s = db_.statement(
       "UPDATE tiles SET state = ?, lease_id = ?, worker_id = ?, lease_expires_ms = ?, "
-      "attempts = ?, rays = ?, result_lease_id = ?, last_error = ?, pixels = ? "
+      "attempts = ?, rays = ?, result_lease_id = ?, last_error = ?, pixels_id = last_insert_rowid() "
       "WHERE job_id = ? AND tile_index = ?");
   bind_tile_state(*s, tile, 1);
-  s->bind_blob(9, std::as_bytes(pixels)).bind(10, tile.job_id).bind(11, tile.tile_index).run();
+  s->bind(9, tile.job_id).bind(10, tile.tile_index).run();
+  tx.commit();
 }
 
 void Store::for_each_tile_pixels(
     const std::string& job_id,
     const std::function<void(int tile_index, std::span<const float>)>& visit) {
   auto s = db_.statement(
-      "SELECT tile_index, pixels FROM tiles WHERE job_id = ? AND pixels IS NOT NULL "
-      "ORDER BY tile_index");
+      "SELECT t.tile_index, p.pixels FROM tiles t JOIN tile_pixels p ON p.id = t.pixels_id "
+      "WHERE t.job_id = ? ORDER BY t.tile_index");
   s->bind(1, job_id);
   std::vector<float> floats;  // a copy: SQLite's blob pointer need not be float-aligned
   while (s->step()) {

@@ -79,7 +79,12 @@ class Store {
   Transaction transaction() { return Transaction(db_); }
 
   // The job, its tiles and (unless already stored under the digest) its scene, atomically.
+  // Tiles are stored in the order given: the Scheduler gives them in hand-out order, so
+  // that the rows a lease changes together lie together.
   void insert_job(const JobRow& job, const std::string& scene_json, std::span<const TileRow> tiles);
+  // The same, with the tiles made one at a time by `tile_at` (i from 0 to tile_count - 1).
+  void insert_job(const JobRow& job, const std::string& scene_json, std::size_t tile_count,
+                  const std::function<void(std::size_t i, TileRow& row)>& tile_at);
   void update_job(const JobRow& job);
   // Deletes the job, its tiles, its scene when no other job uses it, and its image.
   void delete_job(const std::string& job_id);

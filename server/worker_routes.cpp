@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <bit>
+#include <cstdint>
 #include <cstring>
+#include <span>
 
 #include <spdlog/spdlog.h>
 
@@ -108,7 +110,23 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
       [shared_respond] { (*shared_respond)(HttpResponse{204, "", "", {}}); });
 }
 
-HttpResponse upload(ApiContext& context, const HttpRequest& request) {
+// The body's bytes as float32 pixels, in place: a copy of every upload would double the
+// memory that the uploads of a thousand workers take while they queue. memmove onto
+// itself starts the floats' lifetime (what C++23's std::start_lifetime_as says outright);
+// a body that happens not to be aligned for float is copied into `copy` instead.
+std::span<const float> floats_of(std::string& body, std::vector<float>& copy) {
+  const std::size_t count = body.size() / sizeof(float);
+  if (count == 0) return {};
+  if (reinterpret_cast<std::uintptr_t>(body.data()) % alignof(float) != 0) {
+    copy.resize(count);
+    std::memcpy(copy.data(), body.data(), count * sizeof(float));
+    return copy;
+  }
+  return {static_cast<const float*>(std::memmove(body.data(), body.data(), count * sizeof(float))),
+          count};
+}
+
+HttpResponse upload(ApiContext& context, HttpRequest& request) {
   const std::string& id = request.params.at("id");
   if (request.body.size() % (3 * sizeof(float)) != 0)
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
@@ -124,9 +142,8 @@ HttpResponse upload(ApiContext& context, const HttpRequest& request) {
                             "X-Tessera-Rays must be whole numbers separated by commas");
     rays = *parsed;
   }
-  std::vector<float> pixels(request.body.size() / sizeof(float));
-  if (!pixels.empty())  // memcpy from or to a null pointer is undefined, even for 0 bytes
-    std::memcpy(pixels.data(), request.body.data(), request.body.size());
+  std::vector<float> copy;
+  const std::span<const float> pixels = floats_of(request.body, copy);
 
   ResultOutcome outcome{};
   if (const std::string* text = header("x-tessera-tiles")) {
@@ -230,7 +247,11 @@ void add_worker_routes(Router& router, ApiContext& context) {
     respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
   }, std::nullopt, role_worker);
   router.add("PUT", "/v1/leases/{id}/result",
-             [&context](HttpRequest&& request, Respond respond) { respond(upload(context, request)); },
+             [&context](HttpRequest&& request, Respond respond) {
+               HttpResponse response = upload(context, request);
+               request.body = std::string();  // the pixels are stored: free them before answering
+               respond(std::move(response));
+             },
              max_upload_bytes(context.limits), role_worker);
   router.add("POST", "/v1/leases/{id}/fail", [&context](HttpRequest&& request, Respond respond) {
     respond(report_failure(context, request));

@@ -72,7 +72,7 @@ TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
 TEST(FarmFaults, ALongTileOnALiveWorkerIsNeverTakenAway) {
   // Each tile takes several lease timeouts to render; only the heartbeats keep it.
   Farm farm("fault-long-tile", 0, quick_leases);
-  const json scene = test::showcase(128, 64, 256, 64);  // 2 tiles of 64x64 at 256 spp
+  const json scene = test::showcase(128, 64, 768, 64);  // 2 tiles of 64x64 at 768 spp
   const std::string id = farm.api().submit("long", 50, scene)["id"];
   auto worker = farm.start_worker("steady", 1);
   const json done = farm.wait_finished(id, 120s);

@@ -423,6 +423,45 @@ TEST_F(HttpTest, ExpectContinueGetsAnInterimAnswer) {
   EXPECT_EQ(body_of(response)["size"], 4);
 }
 
+TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
+  // A handler that holds its request, and so its body's share of the budget, until told.
+  std::promise<void> let_go;
+  std::shared_future<void> released = let_go.get_future().share();
+  std::atomic<bool> holding{false};
+  router_.add("POST", "/hold", [&](HttpRequest&&, Respond respond) {
+    holding = true;
+    released.wait();
+    respond(HttpResponse{204, "", "", {}});
+  }, 1 << 20);
+  router_.add("POST", "/big", [](HttpRequest&& request, Respond respond) {
+    respond(json_response(200, {{"size", request.body.size()}}));
+  }, 1 << 20);
+  HttpServerOptions options;
+  options.budgeted_body_bytes = 100;
+  options.body_budget_bytes = 1000;
+  start(options);
+
+  auto held = std::async(std::launch::async, [&] {
+    return HttpClient(url(), 20s).request("POST", "/hold", std::string(800, 'h'));
+  });
+  ASSERT_TRUE(eventually([&] { return holding.load(); }));
+  // 800 of 1000 bytes are held: another 800 wait, unread, in their socket...
+  auto waiting = std::async(std::launch::async, [&] {
+    return HttpClient(url(), 20s).request("POST", "/big", std::string(800, 'b'));
+  });
+  // ...while a body under the budgeted size goes at once.
+  EXPECT_EQ(json::parse(HttpClient(url(), 10s).request("POST", "/big", std::string(50, 's')).body)["size"], 50);
+  EXPECT_EQ(waiting.wait_for(300ms), std::future_status::timeout);
+
+  let_go.set_value();
+  EXPECT_EQ(held.get().status, 204);
+  const HttpResult result = waiting.get();
+  EXPECT_EQ(result.status, 200);
+  EXPECT_EQ(json::parse(result.body)["size"], 800);
+  // A body larger than the whole budget goes when nothing else is held.
+  EXPECT_EQ(json::parse(HttpClient(url(), 10s).request("POST", "/big", std::string(5000, 'x')).body)["size"], 5000);
+}
+
 TEST_F(HttpTest, LateAnswerFromAnotherThreadWhileOthersAreServed) {
   start();
   auto waiting = std::async(std::launch::async, [&] {

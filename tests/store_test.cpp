@@ -1,7 +1,10 @@
 #include "server/store.hpp"
 
+#include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <span>
+#include <thread>
 #include <fstream>
 #include <memory>
 
@@ -37,6 +40,17 @@ std::vector<TileRow> tile_rows(const std::string& job_id) {
   return tiles;
 }
 
+// Turns a database of this version back into the schema of version 2, which kept a done
+// tile's pixels in its row.
+void make_version_2(SqliteDb& db) {
+  db.exec("DROP TRIGGER tile_pixels_replaced");
+  db.exec("DROP TRIGGER tile_pixels_deleted");
+  db.exec("DROP TABLE tile_pixels");
+  db.exec("ALTER TABLE tiles DROP COLUMN pixels_id");
+  db.exec("ALTER TABLE tiles ADD COLUMN pixels BLOB");
+  db.exec("PRAGMA user_version=2");
+}
+
 class StoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -65,7 +79,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "images"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "2");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "3");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -82,13 +96,14 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
 TEST_F(StoreTest, UpgradesAVersion1DatabaseKeepingItsRows) {
   store_->insert_job(job_row("j-1", "d1"), R"({"scene":1})", tile_rows("j-1"));
   store_.reset();
-  {  // what version 1 wrote: tiles without last_error
+  {  // what version 1 wrote: tiles without last_error, with their pixels in the row
     SqliteDb db(dir_ / "tessera.db");
+    make_version_2(db);
     db.exec("ALTER TABLE tiles DROP COLUMN last_error");
     db.exec("PRAGMA user_version=1");
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "2");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "3");
   TileRow failed = tile_rows("j-1")[0];
   failed.attempts = 1;
   failed.last_error = "it broke";
@@ -98,6 +113,93 @@ TEST_F(StoreTest, UpgradesAVersion1DatabaseKeepingItsRows) {
   ASSERT_EQ(state.tiles.size(), tile_rows("j-1").size());
   EXPECT_EQ(state.tiles[0].last_error, "it broke");
   EXPECT_EQ(state.tiles[1].last_error, "");
+}
+
+TEST_F(StoreTest, UpgradesAVersion2DatabaseMovingThePixelsOutOfTheTileRows) {
+  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+  store_.reset();
+  const std::vector<float> pixels(20 * 20 * 3, 0.25f);
+  {  // what version 2 wrote: tile 1 done, its pixels in its row
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_2(db);
+    db.statement("UPDATE tiles SET state = 'done', pixels = ? WHERE tile_index = 1")
+        ->bind_blob(1, std::as_bytes(std::span(pixels)))
+        .run();
+  }
+  store_ = std::make_unique<Store>(dir_);
+  SqliteDb db(dir_ / "tessera.db");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "3");
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM pragma_table_info('tiles') WHERE name = 'pixels'"), "0");
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.tiles.size(), 2u);
+  EXPECT_EQ(state.tiles[0].pixel_bytes, 0);
+  EXPECT_EQ(state.tiles[1].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
+  int visits = 0;
+  store_->for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
+    ++visits;
+    EXPECT_EQ(index, 1);
+    ASSERT_EQ(stored.size(), pixels.size());
+    EXPECT_EQ(std::memcmp(stored.data(), pixels.data(), stored.size_bytes()), 0);
+  });
+  EXPECT_EQ(visits, 1);
+}
+
+TEST_F(StoreTest, PixelsStoredAgainReplaceTheOldAndGoWithTheirJob) {
+  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+  store_->insert_job(job_row("j-2", "d1"), "{}", tile_rows("j-2"));
+  TileRow done = tile_rows("j-1")[0];
+  done.state = "done";
+  store_->store_tile_result(done, std::vector<float>(20 * 20 * 3, 1.0f));
+  store_->store_tile_result(done, std::vector<float>(20 * 20 * 3, 2.0f));  // rendered again
+  TileRow other = tile_rows("j-2")[1];
+  other.state = "done";
+  store_->store_tile_result(other, std::vector<float>(20 * 20 * 3, 3.0f));
+  SqliteDb db(dir_ / "tessera.db");
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "2");
+  store_->for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
+    EXPECT_EQ(index, 0);
+    EXPECT_EQ(stored[0], 2.0f);
+  });
+  // A state change without pixels keeps them.
+  done.state = "pending";
+  store_->update_tile(done);
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "2");
+  store_->delete_job("j-1");
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "1");
+}
+
+TEST_F(StoreTest, TilesAreStoredInTheOrderGivenAndLoadedByIndex) {
+  // The Scheduler gives them in hand-out order, so that a lease's rows lie together.
+  std::vector<TileRow> tiles = tile_rows("j-1");
+  std::swap(tiles[0], tiles[1]);
+  store_->insert_job(job_row("j-1", "d1"), "{}", tiles);
+  SqliteDb db(dir_ / "tessera.db");
+  EXPECT_EQ(db.query_text("SELECT tile_index FROM tiles ORDER BY rowid LIMIT 1"), "1");
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.tiles.size(), 2u);
+  EXPECT_EQ(state.tiles[0].tile_index, 0);
+  EXPECT_EQ(state.tiles[1].tile_index, 1);
+}
+
+TEST_F(StoreTest, TheWalIsCheckpointedWhileTheStoreWrites) {
+  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+  // More than a thousand pages of pixels: the store's own commits do not checkpoint (its
+  // automatic checkpoint is off), its checkpointer thread does, so the database file
+  // grows before the store is closed.
+  const std::vector<float> pixels(20 * 20 * 3, 0.5f);
+  for (int round = 0; round < 400; ++round) {
+    TileRow done = tile_rows("j-1")[round % 2];
+    done.state = "done";
+    done.rays = static_cast<std::uint64_t>(round);
+    store_->store_tile_result(done, pixels);
+  }
+  const auto db_size = [&] { return std::filesystem::file_size(dir_ / "tessera.db"); };
+  const auto start = std::chrono::steady_clock::now();
+  while (db_size() < 4096 * 4 && std::chrono::steady_clock::now() - start < std::chrono::seconds(10))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_GE(db_size(), 4096u * 4) << "nothing was checkpointed into the database file";
+  reopen();
+  EXPECT_EQ(store_->load().tiles[1].rays, 399u);
 }
 
 TEST_F(StoreTest, JobsTilesScenesAndWorkersSurviveAReopen) {
