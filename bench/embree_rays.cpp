@@ -1,0 +1,132 @@
+// Tessera's ray-casting rate against Embree's own, on the same Embree scene.
+//
+// The scene is reduced to ray casting (max_depth 0, no lights, so no shadow rays), and at
+// the chosen size one primary ray per pixel is traced two ways, alternately:
+//   - tessera: render_local(), the path `tessera render` takes: tiles on a TBB arena, camera
+//     rays, hit reconstruction in double, shading, the image;
+//   - embree: a bare loop over the same camera rays in 4x4 packets through rtcIntersect16
+//     with the coherent flag, keeping nothing but a checksum of the hit ids.
+// It prints the median rate of each and their ratio.
+//
+// Usage: tessera_embree_rays SCENE.json WIDTH HEIGHT THREADS RUNS
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include <nlohmann/json.hpp>
+
+#include "common/scene_parser.hpp"
+#include "worker/local_render.hpp"
+
+namespace {
+
+using tessera::kPacketSide;
+using tessera::kPacketSize;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2.0;
+}
+
+// One packet per 4x4 block of pixels, rows of blocks spread over the arena's threads.
+std::uint64_t trace_bare(const tessera::Renderer& renderer, tbb::task_arena& arena) {
+  const tessera::Scene& scene = renderer.scene();
+  const RTCScene embree = renderer.geometry().embree_scene();
+  const int block_rows = (scene.height + kPacketSide - 1) / kPacketSide;
+  return arena.execute([&] {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, block_rows), std::uint64_t{0},
+        [&](const tbb::blocked_range<int>& rows, std::uint64_t sum) {
+          // The context type the scene's sphere and plane callbacks expect.
+          tessera::HitContext context;
+          rtcInitIntersectContext(&context.embree);
+          context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+          alignas(64) int valid[kPacketSize];
+          alignas(64) RTCRayHit16 rayhit;
+          for (int row = rows.begin(); row != rows.end(); ++row)
+            for (int bx = 0; bx < scene.width; bx += kPacketSide) {
+              for (int i = 0; i < kPacketSize; ++i) {
+                const int x = bx + i % kPacketSide;
+                const int y = row * kPacketSide + i / kPacketSide;
+                valid[i] = x < scene.width && y < scene.height ? -1 : 0;
+                const tessera::Ray ray = renderer.camera().ray_through(x + 0.5, y + 0.5);
+                rayhit.ray.org_x[i] = ray.origin.x;
+                rayhit.ray.org_y[i] = ray.origin.y;
+                rayhit.ray.org_z[i] = ray.origin.z;
+                rayhit.ray.dir_x[i] = ray.direction.x;
+                rayhit.ray.dir_y[i] = ray.direction.y;
+                rayhit.ray.dir_z[i] = ray.direction.z;
+                rayhit.ray.tnear[i] = 0.0f;
+                rayhit.ray.tfar[i] = tessera::kInfinity;
+                rayhit.ray.time[i] = 0.0f;
+                rayhit.ray.mask[i] = ~0u;
+                rayhit.ray.id[i] = static_cast<unsigned>(i);
+                rayhit.ray.flags[i] = 0;
+                rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+                rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+              }
+              rtcIntersect16(valid, embree, &context.embree, &rayhit);
+              for (int i = 0; i < kPacketSize; ++i)
+                if (valid[i]) sum += rayhit.hit.geomID[i] + rayhit.hit.primID[i];
+            }
+          return sum;
+        },
+        [](std::uint64_t a, std::uint64_t b) { return a + b; });
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 6) {
+    std::fprintf(stderr, "usage: %s SCENE.json WIDTH HEIGHT THREADS RUNS\n", argv[0]);
+    return 2;
+  }
+  try {
+    nlohmann::json document = tessera::read_json_file(argv[1]);
+    document["image"]["width"] = std::stoi(argv[2]);
+    document["image"]["height"] = std::stoi(argv[3]);
+    document["render"]["samples_per_pixel"] = 1;
+    document["render"]["max_depth"] = 0;
+    document["lights"] = nlohmann::json::array();
+    const int threads = std::stoi(argv[4]);
+    const int runs = std::stoi(argv[5]);
+    const tessera::Renderer renderer(tessera::parse_scene(document, tessera::Limits::none()));
+    const double rays = static_cast<double>(renderer.scene().width) * renderer.scene().height;
+
+    tbb::task_arena arena(threads);
+    std::vector<double> tessera_rates;
+    std::vector<double> embree_rates;
+    std::uint64_t checksum = 0;
+    for (int run = 0; run < runs; ++run) {
+      auto start = std::chrono::steady_clock::now();
+      const auto result = tessera::render_local(renderer, threads);
+      tessera_rates.push_back(static_cast<double>(result.rays.total()) / seconds_since(start));
+      start = std::chrono::steady_clock::now();
+      checksum += trace_bare(renderer, arena);
+      embree_rates.push_back(rays / seconds_since(start));
+    }
+    const double tessera_rate = median(tessera_rates) / 1e6;
+    const double embree_rate = median(embree_rates) / 1e6;
+    // The checksum keeps the compiler from dropping the bare loop's results.
+    std::printf("tessera %.2f Mrays/s, embree %.2f Mrays/s, ratio %.3f (checksum %llu)\n",
+                tessera_rate, embree_rate, tessera_rate / embree_rate,
+                static_cast<unsigned long long>(checksum % 1000));
+    return 0;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "tessera_embree_rays: %s\n", error.what());
+    return 1;
+  }
+}
