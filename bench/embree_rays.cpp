@@ -57,26 +57,15 @@ std::uint64_t trace_bare(const tessera::Renderer& renderer, tbb::task_arena& are
           alignas(64) RTCRayHit16 rayhit;
           for (int row = rows.begin(); row != rows.end(); ++row)
             for (int bx = 0; bx < scene.width; bx += kPacketSide) {
+              tessera::RayPacket packet;
               for (int i = 0; i < kPacketSize; ++i) {
                 const int x = bx + i % kPacketSide;
                 const int y = row * kPacketSide + i / kPacketSide;
-                valid[i] = x < scene.width && y < scene.height ? -1 : 0;
-                const tessera::Ray ray = renderer.camera().ray_through(x + 0.5, y + 0.5);
-                rayhit.ray.org_x[i] = ray.origin.x;
-                rayhit.ray.org_y[i] = ray.origin.y;
-                rayhit.ray.org_z[i] = ray.origin.z;
-                rayhit.ray.dir_x[i] = ray.direction.x;
-                rayhit.ray.dir_y[i] = ray.direction.y;
-                rayhit.ray.dir_z[i] = ray.direction.z;
-                rayhit.ray.tnear[i] = 0.0f;
-                rayhit.ray.tfar[i] = tessera::kInfinity;
-                rayhit.ray.time[i] = 0.0f;
-                rayhit.ray.mask[i] = ~0u;
-                rayhit.ray.id[i] = static_cast<unsigned>(i);
-                rayhit.ray.flags[i] = 0;
-                rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-                rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+                packet.active[i] = x < scene.width && y < scene.height;
+                if (packet.active[i])
+                  packet.rays[i] = renderer.camera().ray_through(x + 0.5, y + 0.5);
               }
+              tessera::load_packet(packet, valid, rayhit);
               rtcIntersect16(valid, embree, &context.embree, &rayhit);
               for (int i = 0; i < kPacketSize; ++i)
                 if (valid[i]) sum += rayhit.hit.geomID[i] + rayhit.hit.primID[i];

@@ -73,6 +73,18 @@ class StoreTest : public ::testing::Test {
   std::unique_ptr<Store> store_;
 };
 
+// The store holds pixels for tile 1 of job "j-1" and for no other tile of it.
+void expect_only_pixels_of_tile_1(Store& store, const std::vector<float>& pixels) {
+  int visits = 0;
+  store.for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
+    ++visits;
+    EXPECT_EQ(index, 1);
+    ASSERT_EQ(stored.size(), pixels.size());
+    EXPECT_EQ(std::memcmp(stored.data(), pixels.data(), stored.size_bytes()), 0);
+  });
+  EXPECT_EQ(visits, 1);
+}
+
 TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_EQ(store_->data_dir(), dir_);
   EXPECT_TRUE(std::filesystem::exists(dir_ / "tessera.db"));
@@ -134,14 +146,7 @@ TEST_F(StoreTest, UpgradesAVersion2DatabaseMovingThePixelsOutOfTheTileRows) {
   ASSERT_EQ(state.tiles.size(), 2u);
   EXPECT_EQ(state.tiles[0].pixel_bytes, 0);
   EXPECT_EQ(state.tiles[1].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
-  int visits = 0;
-  store_->for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
-    ++visits;
-    EXPECT_EQ(index, 1);
-    ASSERT_EQ(stored.size(), pixels.size());
-    EXPECT_EQ(std::memcmp(stored.data(), pixels.data(), stored.size_bytes()), 0);
-  });
-  EXPECT_EQ(visits, 1);
+  expect_only_pixels_of_tile_1(*store_, pixels);
 }
 
 TEST_F(StoreTest, PixelsStoredAgainReplaceTheOldAndGoWithTheirJob) {
@@ -266,14 +271,7 @@ TEST_F(StoreTest, TilePixelsAreStoredExactlyWithTheirState) {
   EXPECT_EQ(state.tiles[1].rays, 77u);
   EXPECT_EQ(state.tiles[1].result_lease_id, "l-9");
   EXPECT_EQ(state.tiles[1].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
-  int visits = 0;
-  store_->for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
-    ++visits;
-    EXPECT_EQ(index, 1);
-    ASSERT_EQ(stored.size(), pixels.size());
-    EXPECT_EQ(std::memcmp(stored.data(), pixels.data(), stored.size_bytes()), 0);
-  });
-  EXPECT_EQ(visits, 1);
+  expect_only_pixels_of_tile_1(*store_, pixels);
 }
 
 TEST_F(StoreTest, DeleteJobTakesTilesImageAndOrphanedSceneOnly) {

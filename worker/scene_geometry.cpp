@@ -244,13 +244,7 @@ std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
   return hit;
 }
 
-void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
-                              bool (&found)[kPacketSize]) const {
-  HitContext context;
-  rtcInitIntersectContext(&context.embree);
-  context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  alignas(64) int valid[kPacketSize];
-  alignas(64) RTCRayHit16 rayhit;
+void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit) {
   for (int i = 0; i < kPacketSize; ++i) {
     // An inactive lane's ray is unset; Embree still reads it, so it gets a harmless one.
     const Ray& ray = packet.active[i] ? packet.rays[i] : kIdleRay;
@@ -270,6 +264,16 @@ void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacke
     rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
+}
+
+void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
+                              bool (&found)[kPacketSize]) const {
+  HitContext context;
+  rtcInitIntersectContext(&context.embree);
+  context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[kPacketSize];
+  alignas(64) RTCRayHit16 rayhit;
+  load_packet(packet, valid, rayhit);
   rtcIntersect16(valid, scene_.get(), &context.embree, &rayhit);
   for (int i = 0; i < kPacketSize; ++i) {
     found[i] = packet.active[i] && rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;

@@ -103,6 +103,9 @@ struct RayPacket {
   bool active[kPacketSize] = {};
 };
 
+// Fills Embree's packet of sixteen rays (unbounded, every mask) and its valid mask.
+void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit);
+
 class SceneGeometry {
  public:
   SceneGeometry(const Scene& scene, const EmbreeDevice& device);

@@ -50,34 +50,25 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     if (packet.active[i]) out[i] = found[i] ? shading[i].result : scene_.background;
   if (depth >= scene_.render.max_depth) return;
 
-  // I_R, then I_T, added in that order as finish_shading() does.
-  RayPacket bounce;
-  bool any = false;
-  for (int i = 0; i < kPacketSize; ++i) {
-    bounce.active[i] = found[i] && !is_zero(shading[i].material->reflection);
-    if (!bounce.active[i]) continue;
-    bounce.rays[i] = ray_from(hits[i], reflect(shading[i].d, shading[i].n));
-    any = true;
-  }
-  if (any) {
-    Color reflected[kPacketSize];
-    trace_packet(bounce, depth + 1, keep, reflected, counts);
+  // I_R, then I_T, added in that order as finish_shading() does: each lane with a non-zero
+  // coefficient sends a ray in the direction given, and what comes back is weighted by it.
+  auto bounce = [&](Color Material::*coefficient, auto direction) {
+    RayPacket rays;
+    bool any = false;
+    for (int i = 0; i < kPacketSize; ++i) {
+      rays.active[i] = found[i] && !is_zero(shading[i].material->*coefficient);
+      if (!rays.active[i]) continue;
+      rays.rays[i] = ray_from(hits[i], direction(i));
+      any = true;
+    }
+    if (!any) return;
+    Color incoming[kPacketSize];
+    trace_packet(rays, depth + 1, keep, incoming, counts);
     for (int i = 0; i < kPacketSize; ++i)
-      if (bounce.active[i]) out[i] += shading[i].material->reflection * reflected[i];
-  }
-  any = false;
-  for (int i = 0; i < kPacketSize; ++i) {
-    bounce.active[i] = found[i] && !is_zero(shading[i].material->transmission);
-    if (!bounce.active[i]) continue;
-    bounce.rays[i] = ray_from(hits[i], transmitted_direction(shading[i], hits[i]));
-    any = true;
-  }
-  if (any) {
-    Color transmitted[kPacketSize];
-    trace_packet(bounce, depth + 1, keep, transmitted, counts);
-    for (int i = 0; i < kPacketSize; ++i)
-      if (bounce.active[i]) out[i] += shading[i].material->transmission * transmitted[i];
-  }
+      if (rays.active[i]) out[i] += shading[i].material->*coefficient * incoming[i];
+  };
+  bounce(&Material::reflection, [&](int i) { return reflect(shading[i].d, shading[i].n); });
+  bounce(&Material::transmission, [&](int i) { return transmitted_direction(shading[i], hits[i]); });
 }
 
 }  // namespace tessera

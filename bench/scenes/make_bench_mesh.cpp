@@ -18,18 +18,11 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 namespace {
 
-using Vec = std::array<double, 3>;
-
-Vec add(Vec a, Vec b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec sub(Vec a, Vec b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec scale(Vec a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(Vec a, Vec b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec cross(Vec a, Vec b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec normalize(Vec a) { return scale(a, 1.0 / std::sqrt(dot(a, a))); }
+using Vec = glm::dvec3;
 
 // ---- The scene, shared by both writers. ----------------------------------------------------
 
@@ -86,8 +79,8 @@ Mesh make_torus(int along, int around) {
     const Vec out = {std::cos(u), 0.0, std::sin(u)};
     for (int j = 0; j < around; ++j) {
       const double v = kTwoPi * j / around;
-      const Vec radial = add(scale(out, std::cos(v)), {0.0, std::sin(v), 0.0});
-      const Vec p = add(scale(out, kMajorRadius), scale(radial, tube_radius(u, v)));
+      const Vec radial = out * std::cos(v) + Vec(0.0, std::sin(v), 0.0);
+      const Vec p = out * kMajorRadius + radial * tube_radius(u, v);
       // Tilt about x: +y leans towards +z (the camera).
       mesh.positions.push_back({p[0], p[1] * ct - p[2] * st, p[1] * st + p[2] * ct});
     }
@@ -111,10 +104,10 @@ Mesh make_torus(int along, int around) {
   mesh.normals.assign(mesh.positions.size(), Vec{0.0, 0.0, 0.0});
   for (const auto& t : mesh.triangles) {
     const Vec& p0 = mesh.positions[t[0]];
-    const Vec n = cross(sub(mesh.positions[t[1]], p0), sub(mesh.positions[t[2]], p0));
-    for (int k : t) mesh.normals[k] = add(mesh.normals[k], n);
+    const Vec n = glm::cross(mesh.positions[t[1]] - p0, mesh.positions[t[2]] - p0);
+    for (int k : t) mesh.normals[k] += n;
   }
-  for (Vec& n : mesh.normals) n = normalize(n);
+  for (Vec& n : mesh.normals) n = glm::normalize(n);
   return mesh;
 }
 
