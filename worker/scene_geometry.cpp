@@ -41,7 +41,6 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
     const Color& transmission = scene.materials[object.material].transmission;
     const bool transmissive = transmission.r != 0.0 || transmission.g != 0.0 || transmission.b != 0.0;
     const unsigned mask = transmissive ? kTransmissiveMask : kOpaqueMask;
-    const std::size_t geometries_before = records_.size();
     std::visit(
         [&](const auto& shape) {
           using T = std::decay_t<decltype(shape)>;
@@ -53,18 +52,14 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
             add_triangles(triangulate(shape, object.transform), i, mask);
         },
         object.shape);
-    if (transmissive && std::holds_alternative<Plane>(object.shape)) {
-      transmissive_lo_ = glm::vec3(-kInfinity);
-      transmissive_hi_ = glm::vec3(kInfinity);
+    if (transmissive) {
+      // A plane has no record yet (the plane sets are added last), and no bounds anyway.
+      const bool plane = std::holds_alternative<Plane>(object.shape);
+      const auto [lo, hi] = plane ? std::pair(glm::vec3(-kInfinity), glm::vec3(kInfinity))
+                                  : geometry_bounds(records_.back());
+      transmissive_lo_ = glm::min(transmissive_lo_, lo);
+      transmissive_hi_ = glm::max(transmissive_hi_, hi);
     }
-    if (transmissive)
-      for (std::size_t id = geometries_before; id < records_.size(); ++id) {
-        RTCBounds bounds = geometry_bounds(records_[id]);
-        transmissive_lo_ = glm::min(transmissive_lo_, glm::vec3(bounds.lower_x, bounds.lower_y,
-                                                                bounds.lower_z));
-        transmissive_hi_ = glm::max(transmissive_hi_, glm::vec3(bounds.upper_x, bounds.upper_y,
-                                                                bounds.upper_z));
-      }
   }
   for (std::uint32_t set = 0; set < 2; ++set)
     if (!plane_sets_[set].planes.empty())
@@ -164,37 +159,26 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
   records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
 }
 
-RTCBounds SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
-  RTCBounds bounds{};
-  switch (record.kind) {
-    case Kind::sphere: {
-      RTCBoundsFunctionArguments args{};
-      args.geometryUserPtr = spheres_[record.index].get();
-      args.bounds_o = &bounds;
-      sphere_bounds(&args);
-      break;
-    }
-    case Kind::plane:
-      bounds = {-kInfinity, -kInfinity, -kInfinity, 0.0f, kInfinity, kInfinity, kInfinity, 0.0f};
-      break;
-    case Kind::triangles: {
-      glm::dvec3 lo(std::numeric_limits<double>::max());
-      glm::dvec3 hi(std::numeric_limits<double>::lowest());
-      for (const MeshTriangle& triangle : meshes_[record.index].triangles)
-        for (const glm::vec3& p : triangle.corners) {
-          lo = glm::min(lo, glm::dvec3(p));
-          hi = glm::max(hi, glm::dvec3(p));
-        }
-      // Rounded outwards, so that the float box holds every vertex.
-      const glm::dvec3 pad = 1e-6 * (glm::abs(lo) + glm::abs(hi)) + 1e-9;
-      lo -= pad;
-      hi += pad;
-      bounds = {static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
-                static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
-      break;
-    }
+std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(
+    const GeometryRecord& record) const {
+  if (record.kind == Kind::sphere) {
+    RTCBounds bounds{};
+    RTCBoundsFunctionArguments args{};
+    args.geometryUserPtr = spheres_[record.index].get();
+    args.bounds_o = &bounds;
+    sphere_bounds(&args);
+    return {{bounds.lower_x, bounds.lower_y, bounds.lower_z},
+            {bounds.upper_x, bounds.upper_y, bounds.upper_z}};
   }
-  return bounds;
+  // A mesh: its corners are floats already, so their extremes bound it exactly.
+  glm::vec3 lo(kInfinity);
+  glm::vec3 hi(-kInfinity);
+  for (const MeshTriangle& triangle : meshes_[record.index].triangles)
+    for (const glm::vec3& p : triangle.corners) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+  return {lo, hi};
 }
 
 bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "common/scene.hpp"
@@ -145,7 +146,8 @@ class SceneGeometry {
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
   void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
-  RTCBounds geometry_bounds(const GeometryRecord& record) const;
+  // Lower and upper corners of the box around a sphere's or a mesh's record.
+  std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;
   // `exact_t` is the callback's distance, for spheres and planes.
   void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u,
                   float v, double exact_t, SurfaceHit& hit) const;

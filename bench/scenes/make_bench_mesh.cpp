@@ -142,6 +142,21 @@ void json_vec5(std::FILE* f, const Vec& v) {
   std::fprintf(f, "[%.5f,%.5f,%.5f]", v[0], v[1], v[2]);
 }
 
+// Every material here has K_A = K_D (see README.md): both keys get the same colour.
+void json_ambient_diffuse(std::FILE* f, const Vec& colour) {
+  std::fprintf(f, "\"ambient\":");
+  json_vec(f, colour);
+  std::fprintf(f, ",\"diffuse\":");
+  json_vec(f, colour);
+}
+
+void json_vec5_list(std::FILE* f, const std::vector<Vec>& list) {
+  for (size_t k = 0; k < list.size(); ++k) {
+    if (k != 0) std::fputc(',', f);
+    json_vec5(f, list[k]);
+  }
+}
+
 void write_json(const std::string& path, const Mesh& mesh) {
   File out(path);
   std::FILE* f = out.f;
@@ -159,19 +174,13 @@ void write_json(const std::string& path, const Mesh& mesh) {
   json_vec(f, kBackground);
   std::fprintf(f, ",\"ambient_light\":");
   json_vec(f, kAmbientLight);
-  std::fprintf(f, ",\"materials\":{\"floor\":{\"ambient\":");
-  json_vec(f, kFloorA);
-  std::fprintf(f, ",\"diffuse\":");
-  json_vec(f, kFloorA);
-  std::fprintf(f, ",\"specular\":0,\"reflection\":%.9g,\"checker\":{\"size\":1,\"ambient\":",
+  std::fprintf(f, ",\"materials\":{\"floor\":{");
+  json_ambient_diffuse(f, kFloorA);
+  std::fprintf(f, ",\"specular\":0,\"reflection\":%.9g,\"checker\":{\"size\":1,",
                kFloorReflection);
-  json_vec(f, kFloorB);
-  std::fprintf(f, ",\"diffuse\":");
-  json_vec(f, kFloorB);
-  std::fprintf(f, "}},\"copper\":{\"ambient\":");
-  json_vec(f, kCopper);
-  std::fprintf(f, ",\"diffuse\":");
-  json_vec(f, kCopper);
+  json_ambient_diffuse(f, kFloorB);
+  std::fprintf(f, "}},\"copper\":{");
+  json_ambient_diffuse(f, kCopper);
   std::fprintf(f, ",\"specular\":%.9g,\"shininess\":%.9g,\"reflection\":0}},", kCopperSpecular,
                kCopperShininess);
   std::fprintf(f, "\"lights\":[");
@@ -188,15 +197,9 @@ void write_json(const std::string& path, const Mesh& mesh) {
                "],\"objects\":[{\"type\":\"plane\",\"point\":[0,0,0],\"normal\":[0,1,0],"
                "\"material\":\"floor\"},\n{\"type\":\"mesh\",\"material\":\"copper\",\n"
                "\"positions\":[");
-  for (size_t k = 0; k < mesh.positions.size(); ++k) {
-    if (k != 0) std::fputc(',', f);
-    json_vec5(f, mesh.positions[k]);
-  }
+  json_vec5_list(f, mesh.positions);
   std::fprintf(f, "],\n\"normals\":[");
-  for (size_t k = 0; k < mesh.normals.size(); ++k) {
-    if (k != 0) std::fputc(',', f);
-    json_vec5(f, mesh.normals[k]);
-  }
+  json_vec5_list(f, mesh.normals);
   std::fprintf(f, "],\n\"triangles\":[");
   for (size_t k = 0; k < mesh.triangles.size(); ++k) {
     const auto& t = mesh.triangles[k];
