@@ -102,7 +102,16 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   context.claims.wait(
       *wait,
       [&context, worker, max_tiles, shared_respond] {
-        const auto lease = context.scheduler.claim(worker, max_tiles);
+        std::optional<Lease> lease;
+        try {
+          lease = context.scheduler.claim(worker, max_tiles);
+        } catch (const std::exception& e) {
+          // The store refused the lease (a full disk, say); the job has failed and says why.
+          // Answered here, since a claim woken by notify() runs where nothing would catch it.
+          (*shared_respond)(error_response(
+              507, "storage_failed", std::string("cannot store the lease: ") + e.what()));
+          return true;
+        }
         if (!lease) return false;
         (*shared_respond)(json_response(200, to_json(*lease, context.clock.now_ms())));
         return true;
