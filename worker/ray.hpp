@@ -31,18 +31,19 @@ inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, const 
   constexpr float kOriginZone = 1.0f / 32.0f;
   constexpr float kFloatScale = 1.0f / 65536.0f;
   constexpr float kIntScale = 256.0f;
-  const Vec3 n = glm::dot(normal, towards) < 0.0 ? -normal : normal;
+  // Both offsets are worked out and one is selected, without branches: which one a
+  // coordinate takes, and to which side the normal turns, vary from ray to ray and would be
+  // mispredicted.
+  const float side = glm::dot(normal, towards) < 0.0 ? -1.0f : 1.0f;
   glm::vec3 out;
   for (int i = 0; i < 3; ++i) {
     const float p = static_cast<float>(point[i]);
-    const float nf = static_cast<float>(n[i]);
-    if (std::fabs(p) < kOriginZone) {
-      out[i] = p + kFloatScale * nf;
-      continue;
-    }
+    const float nf = side * static_cast<float>(normal[i]);
+    const float near = p + kFloatScale * nf;
     const auto ulps = static_cast<std::int32_t>(kIntScale * nf);
     const auto bits = std::bit_cast<std::int32_t>(p);
-    out[i] = std::bit_cast<float>(bits + (p < 0.0f ? -ulps : ulps));
+    const float far = std::bit_cast<float>(bits + (p < 0.0f ? -ulps : ulps));
+    out[i] = std::fabs(p) < kOriginZone ? near : far;
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include "worker/renderer.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <xmmintrin.h>
@@ -34,15 +35,31 @@ Renderer::Renderer(Scene scene)
       camera_(scene_.camera, scene_.width, scene_.height) {}
 
 RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) const {
+  if (out.size() != tile.pixel_count() * 3)
+    throw std::invalid_argument("render_tile: output buffer does not match the tile");
+  return render_tile(tile, out, static_cast<std::size_t>(tile.width) * 3);
+}
+
+RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
+                                std::size_t row_stride) const {
   if (tile.x < 0 || tile.y < 0 || tile.width <= 0 || tile.height <= 0 ||
       tile.x + tile.width > scene_.width || tile.y + tile.height > scene_.height)
     throw std::out_of_range("render_tile: tile outside the image");
-  if (out.size() != tile.pixel_count() * 3)
-    throw std::invalid_argument("render_tile: output buffer does not match the tile");
+  const std::size_t row = static_cast<std::size_t>(tile.width) * 3;
+  if (row_stride < row || out.size() < (tile.height - 1) * row_stride + row)
+    throw std::invalid_argument("render_tile: output buffer does not hold the tile");
 
   const FlushDenormals flush_denormals;
   const int samples = scene_.render.samples_per_pixel;
   RayCounts counts;
+  // The mean of the samples. Dividing by a power of two and multiplying by its reciprocal
+  // round alike (the reciprocal is exact), and the product is cheaper: 1, 4, 16 and 64
+  // samples are the common counts.
+  const bool power_of_two = (samples & (samples - 1)) == 0;
+  const double inverse_samples = 1.0 / samples;
+  const auto divide_by_samples = [&](const Color& sum) {
+    return power_of_two ? sum * inverse_samples : sum / static_cast<double>(samples);
+  };
   // Primary rays go out as packets of a 4x4 block of pixels aligned to the image, never to
   // the tile: a block cut by the tile's edge is traced whole and only its pixels inside the
   // tile are kept, so that Embree always sees the same packet for a pixel and its hit
@@ -74,16 +91,20 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) cons
         for (int i = 0; i < kPacketSize; ++i)
           if (in_tile[i]) sums[i] += colors[i];
       }
-      for (int i = 0; i < kPacketSize; ++i) {
-        if (!in_tile[i]) continue;
-        const int x = block_x + i % kPacketSide;
-        const int y = block_y + i / kPacketSide;
-        const Color value = sums[i] / static_cast<double>(samples);
-        float* pixel = out.data() + 3 * (static_cast<std::size_t>(y - tile.y) * tile.width +
-                                         (x - tile.x));
-        pixel[0] = static_cast<float>(value.r);
-        pixel[1] = static_cast<float>(value.g);
-        pixel[2] = static_cast<float>(value.b);
+      // Row by row of the block, only its pixels inside the tile.
+      const int column_begin = std::max(block_x, tile.x) - block_x;
+      const int column_end = std::min(block_x + kPacketSide, x_end) - block_x;
+      const int row_begin = std::max(block_y, tile.y) - block_y;
+      const int row_end = std::min(block_y + kPacketSide, y_end) - block_y;
+      for (int row = row_begin; row < row_end; ++row) {
+        float* pixel = out.data() + static_cast<std::size_t>(block_y + row - tile.y) * row_stride +
+                       3 * static_cast<std::size_t>(block_x + column_begin - tile.x);
+        for (int column = column_begin; column < column_end; ++column, pixel += 3) {
+          const Color value = divide_by_samples(sums[row * kPacketSide + column]);
+          pixel[0] = static_cast<float>(value.r);
+          pixel[1] = static_cast<float>(value.g);
+          pixel[2] = static_cast<float>(value.b);
+        }
       }
     }
   }

@@ -26,6 +26,9 @@ class Renderer {
   // Renders `tile` into `out` (tile.width * tile.height RGB float triples, row-major).
   // A pixel's value depends only on the scene and the pixel's coordinates.
   RayCounts render_tile(const TileRect& tile, std::span<float> out) const;
+  // The same into rows `row_stride` floats apart, such as the tile's place in a whole image:
+  // `out` starts at the tile's first pixel and reaches at least to its last.
+  RayCounts render_tile(const TileRect& tile, std::span<float> out, std::size_t row_stride) const;
 
  private:
   Scene scene_;

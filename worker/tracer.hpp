@@ -43,11 +43,12 @@ class Tracer {
                     Color (&out)[kPacketSize], RayCounts& counts) const;
 
  private:
+  // No default values: packets hold sixteen per light, and every member is always set.
   struct LightSample {
-    Vec3 to_light{0.0};    // unit, from the surface point towards the light
-    double distance = 0;   // to the light; infinite for directional lights
-    Vec3 position{0.0};    // of a point or spot light
-    Color intensity{0.0};  // I_L at the point, before shadowing
+    Vec3 to_light;    // unit, from the surface point towards the light; 0 when unlit
+    double distance;  // to the light; infinite for directional lights
+    Vec3 position;    // of a point or spot light
+    Color intensity;  // I_L at the point, before shadowing
   };
   // A light with everything that does not depend on the shaded point worked out once.
   struct PreparedLight {
@@ -72,10 +73,9 @@ class Tracer {
   };
 
   Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
-  Shading begin_shading(const Ray& ray, const SurfaceHit& hit) const;
+  void begin_shading(const Ray& ray, const SurfaceHit& hit, Shading& shading) const;
   // False when the light cannot reach the side of the surface facing the ray.
-  bool lit_by(const Shading& shading, const SurfaceHit& hit, const PreparedLight& light,
-              LightSample& sample, double& n_dot_l) const;
+  static bool lit_by(const Shading& shading, const LightSample& sample, double& n_dot_l);
   void add_light(Shading& shading, const LightSample& sample, double n_dot_l,
                  const Color& shadow) const;
   // Where a ray refracted (or totally reflected) at the surface goes on.
@@ -84,6 +84,19 @@ class Tracer {
   Color finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
                        RayCounts& counts) const;
   LightSample sample_light(const PreparedLight& light, const Vec3& point) const;
+  static LightSample directional_sample(const PreparedLight& light);
+  // A point or spot light's sample from the steps that take a square root and divisions,
+  // done apart so that a packet does them for all its lanes at once:
+  // `offset` = position - point, `distance` = |offset|, and their reciprocals, the second
+  // of the attenuation.
+  static LightSample positional_sample(const PreparedLight& light, const Vec3& offset,
+                                       double distance, double inverse_distance,
+                                       double inverse_attenuation);
+  // sample_light() for each lane where `found`, the roots and divisions in a loop of their
+  // own that the compiler vectorises.
+  void sample_light_packet(const PreparedLight& light, const SurfaceHit (&hits)[kPacketSize],
+                           const bool (&found)[kPacketSize],
+                           LightSample (&samples)[kPacketSize]) const;
   // S_L: 1 when nothing blocks the light, the product of the K_T of every transmissive
   // surface crossed, 0 behind an opaque one.
   Color shadow_factor(const SurfaceHit& hit, const LightSample& light, RayCounts& counts) const;
@@ -101,6 +114,7 @@ class Tracer {
   std::vector<PreparedLight> lights_;
   std::vector<bool> solid_;  // by object
   bool any_transmissive_ = false;
+  std::vector<double> checker_inverse_size_;  // by material; 0 where it has no checker
 };
 
 }  // namespace tessera
