@@ -84,14 +84,14 @@ class Tracer {
   Color finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
                        RayCounts& counts) const;
   LightSample sample_light(const PreparedLight& light, const Vec3& point) const;
-  static LightSample directional_sample(const PreparedLight& light);
+  static void directional_sample(const PreparedLight& light, LightSample& sample);
   // A point or spot light's sample from the steps that take a square root and divisions,
   // done apart so that a packet does them for all its lanes at once:
   // `offset` = position - point, `distance` = |offset|, and their reciprocals, the second
   // of the attenuation.
-  static LightSample positional_sample(const PreparedLight& light, const Vec3& offset,
-                                       double distance, double inverse_distance,
-                                       double inverse_attenuation);
+  static void positional_sample(const PreparedLight& light, const Vec3& offset, double distance,
+                                double inverse_distance, double inverse_attenuation,
+                                LightSample& sample);
   // sample_light() for each lane where `found`, the roots and divisions in a loop of their
   // own that the compiler vectorises.
   void sample_light_packet(const PreparedLight& light, const SurfaceHit (&hits)[kPacketSize],

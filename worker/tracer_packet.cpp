@@ -72,14 +72,12 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
          [&](int i) { return transmitted_direction(shading[i], hits[i]); });
 }
 
-void Tracer::sample_light_packet(const PreparedLight& light,
-                                 const SurfaceHit (&hits)[kPacketSize],
+void Tracer::sample_light_packet(const PreparedLight& light, const SurfaceHit (&hits)[kPacketSize],
                                  const bool (&found)[kPacketSize],
                                  LightSample (&samples)[kPacketSize]) const {
   if (light.kind == PreparedLight::Kind::directional) {
-    const LightSample sample = directional_sample(light);
     for (int i = 0; i < kPacketSize; ++i)
-      if (found[i]) samples[i] = sample;
+      if (found[i]) directional_sample(light, samples[i]);
     return;
   }
   // sample_light()'s very operations, regrouped: the squared distances, then the roots and
@@ -101,8 +99,8 @@ void Tracer::sample_light_packet(const PreparedLight& light,
   }
   for (int i = 0; i < kPacketSize; ++i)
     if (found[i])
-      samples[i] = positional_sample(light, offset[i], distance[i], inverse_distance[i],
-                                     inverse_attenuation[i]);
+      positional_sample(light, offset[i], distance[i], inverse_distance[i], inverse_attenuation[i],
+                        samples[i]);
 }
 
 }  // namespace tessera

@@ -90,43 +90,45 @@ inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, Shading
 
 inline Tracer::LightSample Tracer::sample_light(const PreparedLight& light,
                                                 const Vec3& point) const {
-  if (light.kind == PreparedLight::Kind::directional) return directional_sample(light);
+  LightSample sample;
+  if (light.kind == PreparedLight::Kind::directional) {
+    directional_sample(light, sample);
+    return sample;
+  }
   const Vec3 offset = light.position - point;
   const double distance = std::sqrt(glm::dot(offset, offset));
-  return positional_sample(light, offset, distance, 1.0 / distance,
-                           1.0 / shading_detail::attenuate(light.attenuation, distance));
+  positional_sample(light, offset, distance, 1.0 / distance,
+                    1.0 / shading_detail::attenuate(light.attenuation, distance), sample);
+  return sample;
 }
 
-inline Tracer::LightSample Tracer::directional_sample(const PreparedLight& light) {
-  LightSample sample;
+inline void Tracer::directional_sample(const PreparedLight& light, LightSample& sample) {
   sample.to_light = -light.direction;
   sample.distance = std::numeric_limits<double>::infinity();
   sample.position = Vec3(0.0);
   sample.intensity = light.intensity;
-  return sample;
 }
 
-inline Tracer::LightSample Tracer::positional_sample(const PreparedLight& light,
-                                                     const Vec3& offset, double distance,
-                                                     double inverse_distance,
-                                                     double inverse_attenuation) {
-  LightSample sample;
+// Writes into `sample` in place: built in a temporary and copied, GCC moves the struct
+// through the stack in pieces that the CPU cannot forward, and stalls on every lane.
+inline void Tracer::positional_sample(const PreparedLight& light, const Vec3& offset,
+                                      double distance, double inverse_distance,
+                                      double inverse_attenuation, LightSample& sample) {
   sample.position = light.position;
   sample.distance = distance;
   sample.to_light = Vec3(0.0);
   sample.intensity = Color(0.0);
-  if (distance == 0.0) return sample;  // a light inside the surface lights nothing
+  if (distance == 0.0) return;  // a light inside the surface lights nothing
   // One division each, then products: dividing each component costs three.
   sample.to_light = offset * inverse_distance;
   if (light.kind == PreparedLight::Kind::point) {
     sample.intensity = light.intensity * inverse_attenuation;
-    return sample;
+    return;
   }
   const double cos_angle = glm::dot(light.direction, -sample.to_light);  // D·L'
-  if (cos_angle <= 0.0 || cos_angle < light.cos_cutoff) return sample;
+  if (cos_angle <= 0.0 || cos_angle < light.cos_cutoff) return;
   sample.intensity =
       light.intensity * (shading_detail::power(cos_angle, light.exponent) * inverse_attenuation);
-  return sample;
 }
 
 inline bool Tracer::lit_by(const Shading& shading, const LightSample& sample, double& n_dot_l) {
