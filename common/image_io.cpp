@@ -128,8 +128,9 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
   if (kind == FileKind::jpg) spec.attribute("Compression", "jpeg:95");
   if (kind == FileKind::png) {
     // zlib level 4 with every row filtered by "sub" (libpng's PNG_FILTER_SUB): measured on
-    // the benchmark's renders, 3x as fast to write as the default (level 6, each row's
-    // filter chosen by trial) for files about 8% larger. docs/performance.md has the figures.
+    // the benchmark's renders, 1.8 to 3.6 times as fast to write as the default (level 6,
+    // each row's filter chosen by trial) for files about 8% larger. docs/performance.md has
+    // the figures.
     spec.attribute("png:compressionLevel", 4);
     spec.attribute("png:filter", 0x10);
   }

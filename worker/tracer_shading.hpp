@@ -1,7 +1,8 @@
 // The per-hit steps of the Whitted model, shared by Tracer::trace and Tracer::trace_packet.
 // They live in a header so that both translation units inline them: a packet shades
 // sixteen hits, and a call per step and per lane, with its Shading returned through memory,
-// cost as much as the arithmetic itself. Included by the tracer's own sources only.
+// is overhead on every one (docs/performance.md has what inlining measured). Included by
+// the tracer's own sources only.
 #pragma once
 
 #include <algorithm>
