@@ -47,7 +47,7 @@ int tiles_rendered_by(const fs::path& log) {
 
 TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
   Farm farm("fault-kill-worker", 0, quick_leases);
-  const json scene = test::showcase(256, 192, 8, 32);  // 48 tiles
+  const json scene = test::showcase(256, 192, 32, 32);  // 48 tiles, ~1.2 s for one thread
   const std::string id = farm.api().submit("kill", 50, scene)["id"];
   auto doomed = farm.start_worker("doomed", 1);
   ASSERT_TRUE(rendering_after(farm, "doomed", 2));
@@ -116,7 +116,7 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
 
 TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAgain) {
   const fs::path dir = test::fresh_dir("fault-kill-server");
-  const json scene = test::showcase(320, 240, 8, 32);  // 80 tiles
+  const json scene = test::showcase(320, 240, 24, 32);  // 80 tiles, ~1.4 s for one thread
   auto start_server = [&](const std::string& listen, const std::string& log) {
     fs::remove(dir / "port");
     auto server = std::make_unique<test::Process>(

@@ -57,7 +57,7 @@ TEST(FarmScheduling, TheHigherPriorityJobIsRenderedFirst) {
 
 TEST(FarmScheduling, AWorkerJoiningMidJobGetsTiles) {
   Farm farm("sched-late", 1, {"--worker-threads", "1"});
-  const json scene = test::showcase(320, 240, 8, 16);  // 300 tiles: seconds for one worker
+  const json scene = test::showcase(320, 240, 32, 16);  // 300 tiles, ~2 s for one thread: outlasts a worker's start
   const std::string id = farm.api().submit("late join", 50, scene)["id"];
   ASSERT_TRUE(test::eventually([&] { return farm.api().job(id)["tiles"]["done"] >= 5; }, 30s));
 
