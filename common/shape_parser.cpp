@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -65,11 +66,11 @@ Shape parse_triangle(const ObjectReader& object) {
   return triangle;
 }
 
+// The slow path, which names what is wrong: `in_range` bounds the indices.
 std::array<std::uint32_t, 3> parse_mesh_triangle(const ValueReader& value,
-                                                 const std::vector<Vec3>& positions) {
+                                                 const std::vector<Vec3>& positions,
+                                                 const IntRange& in_range) {
   value.expect_array_of(3, "an array of 3 position indices");
-  const IntRange in_range{0, static_cast<std::int64_t>(positions.size()) - 1,
-                          "the mesh has " + std::to_string(positions.size()) + " positions"};
   std::array<std::uint32_t, 3> indices{};
   for (std::size_t k = 0; k < 3; ++k)
     indices[k] = static_cast<std::uint32_t>(value.element(k).integer(in_range));
@@ -81,6 +82,24 @@ std::array<std::uint32_t, 3> parse_mesh_triangle(const ValueReader& value,
   return indices;
 }
 
+// The common case, with no JSON Pointer built: three non-negative JSON integers below
+// `count`. Anything else (5.0, say, which is allowed) takes the slow path.
+std::optional<std::array<std::uint32_t, 3>> plain_indices(const nlohmann::json& value,
+                                                          std::size_t count) {
+  if (!value.is_array() || value.size() != 3) return std::nullopt;
+  std::array<std::uint32_t, 3> indices{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const nlohmann::json& index = value[k];
+    if (!index.is_number_unsigned()) return std::nullopt;
+    const auto v = index.get<std::uint64_t>();
+    if (v >= count) return std::nullopt;
+    indices[k] = static_cast<std::uint32_t>(v);
+  }
+  return indices;
+}
+
+// Each element goes through the fast check first, and through ValueReader only when that
+// fails: the same values are accepted, and the first bad one gets the same message.
 Shape parse_mesh(const ObjectReader& object) {
   Mesh mesh;
   const ValueReader positions = object.require("positions");
@@ -88,15 +107,25 @@ Shape parse_mesh(const ObjectReader& object) {
   if (position_count < 3)
     positions.fail("must have at least 3 points, got " + std::to_string(position_count));
   mesh.positions.reserve(position_count);
-  for (std::size_t i = 0; i < position_count; ++i)
-    mesh.positions.push_back(positions.element(i).vec3());
+  for (std::size_t i = 0; i < position_count; ++i) {
+    const auto point = plain_vec3(positions.json()[i]);
+    mesh.positions.push_back(point ? *point : positions.element(i).vec3());
+  }
 
   const ValueReader triangles = object.require("triangles");
   const std::size_t index_triples = triangles.array_size("an array of triangles");
   if (index_triples == 0) triangles.fail("must have at least 1 triangle, got 0");
   mesh.triangles.reserve(index_triples);
-  for (std::size_t t = 0; t < index_triples; ++t)
-    mesh.triangles.push_back(parse_mesh_triangle(triangles.element(t), mesh.positions));
+  const IntRange in_range{0, static_cast<std::int64_t>(position_count) - 1,
+                          "the mesh has " + std::to_string(position_count) + " positions"};
+  for (std::size_t t = 0; t < index_triples; ++t) {
+    const auto indices = plain_indices(triangles.json()[t], position_count);
+    if (indices && !is_degenerate(mesh.positions[(*indices)[0]], mesh.positions[(*indices)[1]],
+                                  mesh.positions[(*indices)[2]]))
+      mesh.triangles.push_back(*indices);
+    else
+      mesh.triangles.push_back(parse_mesh_triangle(triangles.element(t), mesh.positions, in_range));
+  }
 
   if (const auto normals = object.find("normals")) {
     const std::size_t normal_count = normals->array_size("an array of normals");
@@ -105,8 +134,11 @@ Shape parse_mesh(const ObjectReader& object) {
                     "), got " + std::to_string(normal_count));
     }
     mesh.normals.reserve(normal_count);
-    for (std::size_t i = 0; i < normal_count; ++i)
-      mesh.normals.push_back(normals->element(i).direction());
+    for (std::size_t i = 0; i < normal_count; ++i) {
+      const auto raw = plain_vec3(normals->json()[i]);
+      const auto unit = raw ? try_normalize(*raw) : std::nullopt;
+      mesh.normals.push_back(unit ? *unit : normals->element(i).direction());
+    }
   }
   mesh.thin = object.boolean_or("thin", false);
   return mesh;

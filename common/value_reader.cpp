@@ -94,6 +94,18 @@ std::optional<Vec3> try_normalize(const Vec3& v) {
   return glm::normalize(v / scale);
 }
 
+std::optional<Vec3> plain_vec3(const json& value) {
+  if (!value.is_array() || value.size() != 3) return std::nullopt;
+  double xyz[3];
+  for (std::size_t i = 0; i < 3; ++i) {
+    const json& element = value[i];
+    if (!element.is_number()) return std::nullopt;
+    xyz[i] = element.get<double>();
+    if (!std::isfinite(xyz[i])) return std::nullopt;
+  }
+  return Vec3{xyz[0], xyz[1], xyz[2]};
+}
+
 void ValueReader::fail_type(std::string_view expected) const {
   fail("must be " + std::string(expected) + ", got " + value_->type_name());
 }

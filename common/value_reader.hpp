@@ -53,6 +53,10 @@ std::string describe(const nlohmann::json& value);
 // Unit vector, or nothing for the zero vector; pre-scaling keeps tiny vectors from
 // underflowing to a zero length.
 std::optional<Vec3> try_normalize(const Vec3& v);
+// The common case of ValueReader::vec3(), without building a JSON Pointer for each
+// element: a mesh has millions. Nothing when `value` is anything but [x, y, z] of finite
+// numbers; ValueReader::vec3() then says what is wrong, and where.
+std::optional<Vec3> plain_vec3(const nlohmann::json& value);
 
 class ValueReader {
  public:

@@ -168,6 +168,24 @@ TEST(SceneShapes, MeshIndices) {
   EXPECT_TRUE(fails_at(with_object(no_triangles), "/objects/0/triangles", {"required"}));
 }
 
+// Mesh elements are read by a fast check that builds no JSON Pointer, and only what it
+// refuses goes through the full rules: those still parse, or fail at their own pointer.
+TEST(SceneShapes, MeshElementsOffTheFastPathParseOrFailAtTheirPointer) {
+  const json mesh = with_object(square_mesh());
+  const Scene scene = parse_scene(with(mesh, "/objects/0/triangles/1", {0.0, 2, 3.0}));
+  EXPECT_EQ(std::get<Mesh>(scene.objects[0].shape).triangles[1],
+            (std::array<std::uint32_t, 3>{0, 2, 3}));
+  EXPECT_TRUE(fails_at(with(mesh, "/objects/0/positions/3/2", "z"), "/objects/0/positions/3/2",
+                       {"must be a number, got string"}));
+  EXPECT_TRUE(fails_at(with(mesh, "/objects/0/positions/2", {1, 1}), "/objects/0/positions/2",
+                       {"must be an array of 3 numbers"}));
+  EXPECT_TRUE(fails_at(with(mesh, "/objects/0/triangles/1/0", 4000000000u),
+                       "/objects/0/triangles/1/0", {"must be <= 3 (the mesh has 4 positions)"}));
+  const Scene huge = parse_scene(
+      with(mesh, "/objects/0/normals", {{1e308, 1e308, 0}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}}));
+  EXPECT_NEAR(std::get<Mesh>(huge.objects[0].shape).normals[0].x, std::sqrt(0.5), 1e-15);
+}
+
 TEST(SceneShapes, MeshNormalsAndThin) {
   const json mesh = with_object(square_mesh());
   EXPECT_TRUE(fails_at(with(mesh, "/objects/0/normals", {{0, 0, 1}}), "/objects/0/normals",
