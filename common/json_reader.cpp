@@ -1,6 +1,7 @@
 // JSON text → nlohmann::json, with syntax errors turned into SceneErrors that point at a
 // line and column of the text the user wrote.
 #include <algorithm>
+#include <utility>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/json_fast_parse.hpp"
 #include "common/scene_parser.hpp"
 
 namespace tessera {
@@ -111,6 +113,7 @@ class ErrorLocator : public nlohmann::json_sax<nlohmann::json> {
 
 nlohmann::json parse_json_text(std::string_view text) {
   check_nesting(text);
+  if (auto parsed = parse_json_fast(text)) return std::move(*parsed);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& error) {

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/json_fast_parse.hpp"
 #include "scene_test_support.hpp"
 
 namespace tessera::scene_test {
@@ -85,6 +86,36 @@ TEST(SceneDocument, HugeLiteralIsAJsonError) {
               std::string::npos)
         << error.what();
   }
+}
+
+// simdjson parses first; whatever it accepts must be exactly what nlohmann makes of the
+// same text, and what it refuses goes to nlohmann, which words the error or accepts it.
+TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
+  const char* const texts[] = {
+      "0", "-0.0", "5", "-5", "1.5", "0.1e1", "1E+2", "1e-320", "2.2250738585072014e-308",
+      "0.30000000000000004", "9007199254740993", "18446744073709551615", "-9223372036854775808",
+      "true", "null", "\"\"", "\"\\u0000\"", "\"\\ud834\\udd1e\"", "\"\\/\\b\\f\\n\\r\\t\"",
+      "[\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\"]", " \t\r\n{ \"a\" : [ 1 , { } , [ ] ] } \n",
+      "{\"a\": 1, \"a\": 2}", "{\"b\": 1, \"a\": {\"a\": [null, false]}}", "[[1,2,3],[4,5,6]]"};
+  for (const char* text : texts) {
+    const auto fast = parse_json_fast(text);
+    ASSERT_TRUE(fast.has_value()) << text;
+    const json slow = json::parse(text);
+    EXPECT_EQ(*fast, slow) << text;
+    EXPECT_EQ(fast->dump(), slow.dump()) << text;
+    EXPECT_EQ(fast->type(), slow.type()) << text;
+  }
+  EXPECT_TRUE(parse_json_fast("-0").value().is_number_unsigned());  // nlohmann: signed 0
+  EXPECT_EQ(parse_json_fast("-0").value(), json::parse("-0"));
+
+  // Refused here; nlohmann accepts the first three and refuses the rest.
+  const char* const refused[] = {"18446744073709551616", "-9223372036854775809", "\xef\xbb\xbf{}",
+                                 "1e400", "", "{} x", "[1,]", "01", "1.", "-", "\"\\ud800\"",
+                                 "\"a\x01\"", "\"\xff\"", "{'a': 1}", "[NaN]", "+1"};
+  for (const char* text : refused) EXPECT_FALSE(parse_json_fast(text).has_value()) << text;
+  EXPECT_EQ(parse_json_text("18446744073709551616"), json(18446744073709551616.0));
+  EXPECT_EQ(parse_json_text("\xef\xbb\xbf{}"), json::object());
+  EXPECT_THROW(parse_json_text("{} x"), SceneError);
 }
 
 TEST(SceneDocument, NanIsRejected) {
