@@ -73,9 +73,12 @@ int run_render(const RenderOptions& options) {
     return 2;
   }
   try {
-    nlohmann::json document = read_json_file(options.scene_path);
-    apply_overrides(document, options);
-    const Scene scene = parse_scene(document);
+    // The document is freed before tracing starts, not kept beside the Scene through it.
+    const Scene scene = [&] {
+      nlohmann::json document = read_json_file(options.scene_path);
+      apply_overrides(document, options);
+      return parse_scene(document);
+    }();
     return render_and_report(options, scene, output);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s: %s\n", options.scene_path.c_str(), e.what());

@@ -137,10 +137,22 @@ nlohmann::json read_json_file(const std::filesystem::path& path) {
     throw std::runtime_error("cannot read " + path.string() + ": is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path.string() + ": " + std::strerror(errno));
-  std::ostringstream contents;
-  contents << in.rdbuf();
+  // In one read of the file's size rather than through a stream buffer: a mesh scene
+  // can be tens of megabytes, and every copy of it costs page faults.
+  std::string text;
+  std::error_code size_error;
+  if (const auto size = std::filesystem::file_size(path, size_error); !size_error) {
+    text.resize(size);
+    in.read(text.data(), static_cast<std::streamsize>(size));
+    text.resize(static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.good()) {  // no size (a pipe), or a file that grew: read on to its end
+    std::ostringstream rest;
+    rest << in.rdbuf();
+    text += rest.str();
+  }
   if (in.bad()) throw std::runtime_error("cannot read " + path.string());
-  return parse_json_text(contents.str());
+  return parse_json_text(text);
 }
 
 }  // namespace tessera

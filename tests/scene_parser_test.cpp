@@ -8,8 +8,10 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <thread>
 #include <variant>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -142,6 +144,12 @@ TEST(SceneDocument, ReadJsonFile) {
   } catch (const SceneError& error) {
     EXPECT_NE(error.detail().find("line 1, column 17"), std::string::npos) << error.what();
   }
+  // A file without a size, such as a pipe, is read to its end.
+  const auto pipe = dir / "pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  std::thread writer([&] { std::ofstream(pipe) << minimal_scene().dump(); });
+  EXPECT_EQ(read_json_file(pipe), minimal_scene());
+  writer.join();
   std::filesystem::remove_all(dir);
 }
 
