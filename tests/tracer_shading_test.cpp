@@ -102,6 +102,27 @@ TEST(ShadowRays, ALightOnAWallFacingTheFloorLightsIt) {
   EXPECT_NEAR(test::render_pixel(scene).r, 0.8 / std::sqrt(2.0), 1e-5);
 }
 
+// Packets of shadow rays test opaque planes outside Embree (SceneGeometry::occluded); a
+// plane between a point and the light must still block it there.
+TEST(ShadowRays, AnOpaquePlaneBetweenAPointAndTheLightShadowsIt) {
+  json scene = test::pinhole_scene({2, 3, 0}, {2, 0, 0}, {0, 0, -1});
+  scene["objects"].push_back({{"type", "plane"},
+                              {"point", {0, 0, 0}},
+                              {"normal", {0, 1, 0}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0.8}}}});
+  scene["lights"].push_back({{"type", "point"}, {"position", {-1, 2, 0}}});
+  EXPECT_GT(test::render_pixel(scene).r, 0.1);  // lit while nothing is in the way
+  json walled = scene;
+  walled["objects"].push_back({{"type", "plane"},
+                               {"point", {0, 0, 0}},
+                               {"normal", {1, 0, 0}},
+                               {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
+  EXPECT_EQ(test::render_pixel(walled).r, 0.0);
+  // And the light on the near side of that wall reaches the point again.
+  walled["lights"][0]["position"] = {1, 2, 0};
+  EXPECT_GT(test::render_pixel(walled).r, 0.1);
+}
+
 TEST(RenderTile, WritesIntoRowsOfALargerImageAndNothingElse) {
   json scene = test::pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["image"] = {{"width", 24}, {"height", 20}};

@@ -82,9 +82,12 @@ struct PlaneSet {
 };
 
 // Embree geometry masks: shadow rays first ask whether anything opaque blocks the light,
-// and only then walk through the transmissive surfaces.
-inline constexpr unsigned kOpaqueMask = 1u;
+// and only then walk through the transmissive surfaces. Opaque planes have a bit of their
+// own, so that packets of shadow rays can test them outside Embree (occluded()).
+inline constexpr unsigned kOpaqueSolidMask = 1u;
 inline constexpr unsigned kTransmissiveMask = 2u;
+inline constexpr unsigned kOpaquePlaneMask = 4u;
+inline constexpr unsigned kOpaqueMask = kOpaqueSolidMask | kOpaquePlaneMask;
 inline constexpr unsigned kAnyMask = kOpaqueMask | kTransmissiveMask;
 
 // Primary rays go to Embree sixteen at a time, as a 4x4 block of pixels.

@@ -159,6 +159,19 @@ void plane_bounds(const RTCBoundsFunctionArguments* args) {
 
 }  // namespace
 
+void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
+                    bool (&blocked)[16]) {
+  for (int i = 0; i < 16; ++i) {
+    blocked[i] = false;
+    if (valid[i] != -1) continue;
+    const glm::vec3 o(rays.org_x[i], rays.org_y[i], rays.org_z[i]);
+    const glm::vec3 d(rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]);
+    double t;
+    unsigned primitive;
+    blocked[i] = distance(set, o, d, rays.tnear[i], rays.tfar[i], t, primitive);
+  }
+}
+
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
   // The transformed corners of the object-space cube bound the ellipsoid.

@@ -12,4 +12,10 @@ void set_plane_callbacks(RTCGeometry geometry);
 // The box Embree is given for a sphere: its args' user pointer is a PreparedSphere.
 void sphere_bounds(const RTCBoundsFunctionArguments* args);
 
+struct PlaneSet;
+// Which of the lanes with valid[i] == -1 one of the planes blocks between tnear and tfar:
+// the test the plane set's occluded callback makes, so the answer is the callback's own.
+void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
+                    bool (&blocked)[16]);
+
 }  // namespace tessera
