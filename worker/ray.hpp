@@ -27,14 +27,14 @@ inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
 // away from the origin, a fixed small distance near it. This follows the method of Wächter
 // and Binder (Ray Tracing Gems, ch. 6) and keeps secondary rays free of self-intersection
 // on large and far-away surfaces, where a fixed epsilon fails.
-inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, const Vec3& towards) {
+//
+// `side` is +1 to move along the normal, -1 against it.
+inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, float side) {
   constexpr float kOriginZone = 1.0f / 32.0f;
   constexpr float kFloatScale = 1.0f / 65536.0f;
   constexpr float kIntScale = 256.0f;
   // Both offsets are worked out and one is selected, without branches: which one a
-  // coordinate takes, and to which side the normal turns, vary from ray to ray and would be
-  // mispredicted.
-  const float side = glm::dot(normal, towards) < 0.0 ? -1.0f : 1.0f;
+  // coordinate takes varies from ray to ray and would be mispredicted.
   glm::vec3 out;
   for (int i = 0; i < 3; ++i) {
     const float p = static_cast<float>(point[i]);
@@ -46,6 +46,16 @@ inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, const 
     out[i] = std::fabs(p) < kOriginZone ? near : far;
   }
   return out;
+}
+
+// The side of the surface `towards` points to, as offset_ray_origin() takes it.
+inline float side_towards(const Vec3& normal, const Vec3& towards) {
+  return glm::dot(normal, towards) < 0.0 ? -1.0f : 1.0f;
+}
+
+// The origin moved off the surface to the side `towards` points to.
+inline glm::vec3 offset_ray_origin(const Vec3& point, const Vec3& normal, const Vec3& towards) {
+  return offset_ray_origin(point, normal, side_towards(normal, towards));
 }
 
 }  // namespace tessera

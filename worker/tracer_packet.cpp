@@ -16,10 +16,19 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   bool found[kPacketSize];
   geometry_.intersect(packet, hits, found);
   Shading shading[kPacketSize];
+  // Every ray leaving a hit starts at one of two points, moved off the surface to the one
+  // side or the other: worked out once here rather than once per light.
+  glm::vec3 lifted[2][kPacketSize];
   for (int i = 0; i < kPacketSize; ++i) {
     if (packet.active[i] && keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
-    if (found[i]) begin_shading(packet.rays[i], hits[i], shading[i]);
+    if (!found[i]) continue;
+    begin_shading(packet.rays[i], hits[i], shading[i]);
+    lifted[0][i] = offset_ray_origin(hits[i].position, hits[i].normal, 1.0f);
+    lifted[1][i] = offset_ray_origin(hits[i].position, hits[i].normal, -1.0f);
   }
+  auto leaving = [&](int i, const Vec3& direction) {
+    return lifted[side_towards(hits[i].normal, direction) < 0.0f ? 1 : 0][i];
+  };
 
   for (const PreparedLight& light : lights_) {
     LightSample samples[kPacketSize];
@@ -31,7 +40,8 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
       shadows.active[i] = found[i] && lit_by(shading[i], samples[i], n_dot_l[i]);
     for (int i = 0; i < kPacketSize; ++i) {
       if (!shadows.active[i]) continue;
-      shadows.rays[i] = shadow_ray(hits[i], samples[i]);
+      // shadow_ray(), from the point already moved off the surface.
+      shadows.rays[i] = Ray{leaving(i, samples[i].to_light), glm::vec3(samples[i].to_light)};
       reach[i] = shadow_reach(samples[i], shadows.rays[i]);
     }
     // Anything opaque on the way leaves the point in shadow whatever else is there.
@@ -58,7 +68,9 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     for (int i = 0; i < kPacketSize; ++i) {
       rays.active[i] = found[i] && !is_zero(shading[i].material->*coefficient);
       if (!rays.active[i]) continue;
-      rays.rays[i] = ray_from(hits[i], direction(i));
+      // ray_from(), from the point already moved off the surface.
+      const Vec3 towards = direction(i);
+      rays.rays[i] = Ray{leaving(i, towards), glm::vec3(glm::normalize(towards))};
       any = true;
     }
     if (!any) return;
