@@ -17,12 +17,15 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   geometry_.intersect(packet, hits, found);
   Shading shading[kPacketSize];
   // Every ray leaving a hit starts at one of two points, moved off the surface to the one
-  // side or the other: worked out once here rather than once per light.
+  // side or the other: worked out once here rather than once per light, and not at all
+  // where no ray leaves (no lights, and the last bounce).
+  const bool rays_leave = !lights_.empty() || depth < scene_.render.max_depth;
   glm::vec3 lifted[2][kPacketSize];
   for (int i = 0; i < kPacketSize; ++i) {
     if (packet.active[i] && keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (!found[i]) continue;
     begin_shading(packet.rays[i], hits[i], shading[i]);
+    if (!rays_leave) continue;
     lifted[0][i] = offset_ray_origin(hits[i].position, hits[i].normal, 1.0f);
     lifted[1][i] = offset_ray_origin(hits[i].position, hits[i].normal, -1.0f);
   }
