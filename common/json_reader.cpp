@@ -1,13 +1,13 @@
 // JSON text → nlohmann::json, with syntax errors turned into SceneErrors that point at a
 // line and column of the text the user wrote.
 #include <algorithm>
-#include <utility>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
