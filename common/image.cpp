@@ -15,10 +15,21 @@ std::vector<TileRect> split_into_tiles(int width, int height, int tile_size) {
   return tiles;
 }
 
-Image::Image(int width, int height)
-    : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height * 3, 0.0f) {
+namespace {
+
+// Checked before the pixels are allocated: a negative size would wrap around to a huge one.
+std::size_t float_count(int width, int height) {
   if (width <= 0 || height <= 0) throw std::invalid_argument("Image: sizes must be positive");
+  return static_cast<std::size_t>(width) * height * 3;
 }
+
+}  // namespace
+
+Image::Image(int width, int height)
+    : width_(width), height_(height), pixels_(float_count(width, height), 0.0f) {}
+
+Image::Image(int width, int height, Unset)
+    : width_(width), height_(height), pixels_(float_count(width, height)) {}
 
 void Image::paste(const TileRect& tile, std::span<const float> tile_pixels) {
   if (tile.x < 0 || tile.y < 0 || tile.x + tile.width > width_ || tile.y + tile.height > height_)

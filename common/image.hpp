@@ -2,7 +2,9 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace tessera {
@@ -25,8 +27,13 @@ std::vector<TileRect> split_into_tiles(int width, int height, int tile_size);
 // Linear float RGB, three floats per pixel, rows top to bottom.
 class Image {
  public:
+  // For an image whose every pixel is about to be written: its memory is left as the
+  // allocator gives it, instead of being zeroed first.
+  struct Unset {};
+
   Image() = default;
-  Image(int width, int height);
+  Image(int width, int height);  // black
+  Image(int width, int height, Unset);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -41,9 +48,26 @@ class Image {
   void paste(const TileRect& tile, std::span<const float> tile_pixels);
 
  private:
+  // Constructs elements by default-initialising them: for floats, nothing at all.
+  template <typename T>
+  struct UnsetAllocator : std::allocator<T> {
+    template <typename U>
+    struct rebind {
+      using other = UnsetAllocator<U>;
+    };
+    template <typename U>
+    void construct(U* p) noexcept {
+      ::new (static_cast<void*>(p)) U;
+    }
+    template <typename U, typename... Args>
+    void construct(U* p, Args&&... args) {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  };
+
   int width_ = 0;
   int height_ = 0;
-  std::vector<float> pixels_;
+  std::vector<float, UnsetAllocator<float>> pixels_;
 };
 
 }  // namespace tessera

@@ -67,6 +67,27 @@ TEST(Geometry, TheNearestOfSeveralPlanesIsHit) {
   EXPECT_NEAR(render_pixel(scene).r, 0.5 * 0.75, 1e-12);
 }
 
+TEST(Geometry, PacketsFindWhateverIsNearestOfAnOpaquePlaneAndTheRest) {
+  // Packets test opaque planes themselves and let Embree look only nearer than the plane:
+  // a sphere behind the plane stays hidden, one in front of it is seen, and one cut by it
+  // shows its cap above the plane.
+  auto emitting = [](double emission) {
+    return json{{"ambient", 0}, {"diffuse", 0}, {"emission", emission}};
+  };
+  json scene = pinhole_scene({0, 10, 0}, {0, 0, 0}, {0, 0, -1});  // looking down at y = 0
+  scene["objects"] = {
+      {{"type", "plane"},
+       {"point", {0, 0, 0}},
+       {"normal", {0, 1, 0}},
+       {"material", emitting(0.25)}},
+      {{"type", "sphere"}, {"center", {0, -3, 0}}, {"radius", 1}, {"material", emitting(0.5)}}};
+  EXPECT_EQ(render_pixel(scene).r, 0.25f);
+  scene["objects"][1]["center"] = {0, 3, 0};
+  EXPECT_EQ(render_pixel(scene).r, 0.5f);
+  scene["objects"][1]["center"] = {0, -0.5, 0};
+  EXPECT_EQ(render_pixel(scene).r, 0.5f);
+}
+
 TEST(Geometry, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.

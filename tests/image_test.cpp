@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <filesystem>
 #include <set>
 
@@ -42,6 +43,18 @@ TEST(Tiles, CoverTheImageExactlyOnce) {
 TEST(Tiles, RejectNonPositiveSizes) {
   EXPECT_THROW(split_into_tiles(0, 10, 4), std::invalid_argument);
   EXPECT_THROW(split_into_tiles(10, 10, 0), std::invalid_argument);
+}
+
+TEST(Image, ANewImageIsBlackAndItsSizesAreCheckedFirst) {
+  const Image image(5, 3);
+  ASSERT_EQ(image.pixels().size(), 5u * 3u * 3u);
+  EXPECT_TRUE(
+      std::all_of(image.pixels().begin(), image.pixels().end(), [](float v) { return v == 0.0f; }));
+  // Checked before anything is allocated: -1 would otherwise wrap around to 2^64 - 1 and
+  // fail as an allocation instead.
+  EXPECT_THROW(Image(-1, 4), std::invalid_argument);
+  EXPECT_THROW(Image(4, 0, Image::Unset{}), std::invalid_argument);
+  EXPECT_EQ(Image(4, 2, Image::Unset{}).pixels().size(), 24u);
 }
 
 TEST(Image, PastePutsTilePixelsInPlace) {

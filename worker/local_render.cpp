@@ -15,7 +15,8 @@ LocalRenderResult render_local(const Renderer& renderer, int threads, int tile_s
   const Scene& scene = renderer.scene();
   const std::vector<TileRect> tiles = split_into_tiles(
       scene.width, scene.height, tile_size > 0 ? tile_size : scene.render.tile_size);
-  LocalRenderResult result{Image(scene.width, scene.height), {}};
+  // Unset: the tiles below cover every pixel.
+  LocalRenderResult result{Image(scene.width, scene.height, Image::Unset{}), {}};
   std::mutex counts_mutex;
 
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);

@@ -72,10 +72,17 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
       Color sums[kPacketSize];
       bool in_tile[kPacketSize];
       RayPacket packet;
+      // Most blocks lie wholly inside the tile, and so inside the image.
+      const bool whole = block_x >= tile.x && block_x + kPacketSide <= x_end && block_y >= tile.y &&
+                         block_y + kPacketSide <= y_end;
       for (int i = 0; i < kPacketSize; ++i) {
+        sums[i] = Color(0.0);
+        if (whole) {
+          packet.active[i] = in_tile[i] = true;
+          continue;
+        }
         const int x = block_x + i % kPacketSide;
         const int y = block_y + i / kPacketSide;
-        sums[i] = Color(0.0);
         packet.active[i] = x < scene_.width && y < scene_.height;
         in_tile[i] = x >= tile.x && x < x_end && y >= tile.y && y < y_end;
       }

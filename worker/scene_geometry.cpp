@@ -61,9 +61,11 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
       transmissive_hi_ = glm::max(transmissive_hi_, hi);
     }
   }
-  for (std::uint32_t set = 0; set < 2; ++set)
-    if (!plane_sets_[set].planes.empty())
-      add_user_geometry(Kind::plane, set, 0, set == 0 ? kOpaquePlaneMask : kTransmissiveMask);
+  for (std::uint32_t set = 0; set < 2; ++set) {
+    if (plane_sets_[set].planes.empty()) continue;
+    if (set == 0) opaque_planes_geometry_ = static_cast<unsigned>(records_.size());
+    add_user_geometry(Kind::plane, set, 0, set == 0 ? kOpaquePlaneMask : kTransmissiveMask);
+  }
   // Robust traversal closes the hairline cracks between neighbouring mesh triangles.
   rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
   rtcCommitScene(scene_.get());
@@ -228,26 +230,39 @@ std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
   return hit;
 }
 
-void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit) {
+namespace {
+
+// The fields every packet fills the same way, each in a loop of its own: sixteen lanes of a
+// constant are four vector stores, where a loop over lanes writing every field of a lane
+// is a store per field and lane.
+template <typename Rays>
+void load_rays(const RayPacket& packet, int (&valid)[kPacketSize], Rays& rays) {
+  for (int i = 0; i < kPacketSize; ++i) valid[i] = packet.active[i] ? -1 : 0;
   for (int i = 0; i < kPacketSize; ++i) {
     // An inactive lane's ray is unset; Embree still reads it, so it gets a harmless one.
     const Ray& ray = packet.active[i] ? packet.rays[i] : kIdleRay;
-    valid[i] = packet.active[i] ? -1 : 0;
-    rayhit.ray.org_x[i] = ray.origin.x;
-    rayhit.ray.org_y[i] = ray.origin.y;
-    rayhit.ray.org_z[i] = ray.origin.z;
-    rayhit.ray.dir_x[i] = ray.direction.x;
-    rayhit.ray.dir_y[i] = ray.direction.y;
-    rayhit.ray.dir_z[i] = ray.direction.z;
-    rayhit.ray.tnear[i] = 0.0f;
-    rayhit.ray.tfar[i] = kInfinity;
-    rayhit.ray.time[i] = 0.0f;
-    rayhit.ray.mask[i] = kAnyMask;
-    rayhit.ray.id[i] = static_cast<unsigned>(i);
-    rayhit.ray.flags[i] = 0;
-    rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    rays.org_x[i] = ray.origin.x;
+    rays.org_y[i] = ray.origin.y;
+    rays.org_z[i] = ray.origin.z;
+    rays.dir_x[i] = ray.direction.x;
+    rays.dir_y[i] = ray.direction.y;
+    rays.dir_z[i] = ray.direction.z;
   }
+  for (int i = 0; i < kPacketSize; ++i) rays.tnear[i] = 0.0f;
+  for (int i = 0; i < kPacketSize; ++i) rays.time[i] = 0.0f;
+  for (int i = 0; i < kPacketSize; ++i) rays.id[i] = static_cast<unsigned>(i);
+  for (int i = 0; i < kPacketSize; ++i) rays.flags[i] = 0;
+}
+
+}  // namespace
+
+void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit,
+                 unsigned mask) {
+  load_rays(packet, valid, rayhit.ray);
+  for (int i = 0; i < kPacketSize; ++i) rayhit.ray.tfar[i] = kInfinity;
+  for (int i = 0; i < kPacketSize; ++i) rayhit.ray.mask[i] = mask;
+  for (int i = 0; i < kPacketSize; ++i) rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+  for (int i = 0; i < kPacketSize; ++i) rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
 }
 
 void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
@@ -257,13 +272,50 @@ void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacke
   context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRayHit16 rayhit;
-  load_packet(packet, valid, rayhit);
+  // Infinite planes are in every packet's way as far as the BVH can tell, so Embree would
+  // call their callback for every packet. The same test here, on all lanes at once, costs
+  // less; Embree then looks only for something nearer than each lane's plane.
+  const bool opaque_planes = opaque_planes_geometry_ != RTC_INVALID_GEOMETRY_ID;
+  load_packet(packet, valid, rayhit, opaque_planes ? kAnyMask & ~kOpaquePlaneMask : kAnyMask);
+  double plane_t[kPacketSize];
+  int plane[kPacketSize];
+  if (opaque_planes) {
+    nearest_planes(plane_sets_[0], rayhit, valid, plane_t, plane);
+    for (int i = 0; i < kPacketSize; ++i)
+      if (plane[i] >= 0) rayhit.ray.tfar[i] = static_cast<float>(plane_t[i]);
+  }
   rtcIntersect16(valid, scene_.get(), &context.embree, &rayhit);
+  // A mesh's triangles are read back from memory Embree's traversal did not touch, and a
+  // large mesh's are far out of cache: asking for all sixteen at once lets their misses
+  // overlap instead of coming one after another.
   for (int i = 0; i < kPacketSize; ++i) {
-    found[i] = packet.active[i] && rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
-    if (found[i])
+    const unsigned geometry = rayhit.hit.geomID[i];
+    if (!packet.active[i] || geometry == RTC_INVALID_GEOMETRY_ID) continue;
+    const GeometryRecord& record = records_[geometry];
+    if (record.kind != Kind::triangles) continue;
+    const TriangleMesh& mesh = meshes_[record.index];
+    const unsigned primitive = rayhit.hit.primID[i];
+    // Both ends: 36 bytes often straddle two cache lines.
+    const auto* corners = reinterpret_cast<const char*>(&mesh.triangles[primitive]);
+    __builtin_prefetch(corners);
+    __builtin_prefetch(corners + sizeof(MeshTriangle) - 1);
+    if (mesh.normals.empty()) continue;
+    const auto* normals = reinterpret_cast<const char*>(&mesh.normals[primitive]);
+    __builtin_prefetch(normals);
+    __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
+  }
+  for (int i = 0; i < kPacketSize; ++i) {
+    found[i] = false;
+    if (!packet.active[i]) continue;
+    if (rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
       finish_hit(packet.rays[i], rayhit.hit.geomID[i], rayhit.hit.primID[i], rayhit.ray.tfar[i],
                  rayhit.hit.u[i], rayhit.hit.v[i], context.t[i], hits[i]);
+      found[i] = true;
+    } else if (opaque_planes && plane[i] >= 0) {
+      finish_hit(packet.rays[i], opaque_planes_geometry_, static_cast<unsigned>(plane[i]),
+                 rayhit.ray.tfar[i], 0.0f, 0.0f, plane_t[i], hits[i]);
+      found[i] = true;
+    }
   }
 }
 
@@ -274,35 +326,22 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRay16 rays;
-  for (int i = 0; i < kPacketSize; ++i) {
-    // An inactive lane's ray is unset; Embree still reads it, so it gets a harmless one.
-    const Ray& ray = packet.active[i] ? packet.rays[i] : kIdleRay;
-    valid[i] = packet.active[i] ? -1 : 0;
-    rays.org_x[i] = ray.origin.x;
-    rays.org_y[i] = ray.origin.y;
-    rays.org_z[i] = ray.origin.z;
-    rays.dir_x[i] = ray.direction.x;
-    rays.dir_y[i] = ray.direction.y;
-    rays.dir_z[i] = ray.direction.z;
-    rays.tnear[i] = 0.0f;
-    rays.tfar[i] = packet.active[i] ? t_max[i] : 0.0f;
-    rays.time[i] = 0.0f;
-    rays.mask[i] = mask;
-    rays.id[i] = static_cast<unsigned>(i);
-    rays.flags[i] = 0;
-  }
+  load_rays(packet, valid, rays);
+  for (int i = 0; i < kPacketSize; ++i) rays.tfar[i] = packet.active[i] ? t_max[i] : 0.0f;
   // Infinite planes are in every packet's way as far as the BVH can tell, so Embree would
   // call their callback for every packet of shadow rays. The same test here, on all lanes
   // at once, costs less, and the lanes it finds blocked need no traversal at all.
-  bool by_plane[kPacketSize] = {};
   const PlaneSet& opaque_planes = plane_sets_[0];
-  if ((mask & kOpaquePlaneMask) != 0 && !opaque_planes.planes.empty()) {
+  const bool planes_here = (mask & kOpaquePlaneMask) != 0 && !opaque_planes.planes.empty();
+  const unsigned embree_mask = planes_here ? mask & ~kOpaquePlaneMask : mask;
+  for (int i = 0; i < kPacketSize; ++i) rays.mask[i] = embree_mask;
+  bool by_plane[kPacketSize] = {};
+  if (planes_here) {
     planes_occlude(opaque_planes, rays, valid, by_plane);
     bool any_left = false;
     for (int i = 0; i < kPacketSize; ++i) {
       if (by_plane[i]) valid[i] = 0;
       any_left = any_left || valid[i] != 0;
-      rays.mask[i] = mask & ~kOpaquePlaneMask;
     }
     if (!any_left) {
       for (int i = 0; i < kPacketSize; ++i) blocked[i] = by_plane[i];

@@ -107,8 +107,9 @@ struct RayPacket {
   bool active[kPacketSize] = {};
 };
 
-// Fills Embree's packet of sixteen rays (unbounded, every mask) and its valid mask.
-void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit);
+// Fills Embree's packet of sixteen rays (unbounded, under `mask`) and its valid mask.
+void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit,
+                 unsigned mask = kAnyMask);
 
 class SceneGeometry {
  public:
@@ -127,8 +128,8 @@ class SceneGeometry {
   // transmissive surfaces.
   bool may_meet_transmissive(const Ray& ray, float t_max) const;
   // The closest hit of every active ray of a coherent packet (unbounded t). The lanes
-  // Embree sees, and so the hits, depend only on the packet's contents.
-  // found[i] says whether hits[i] was written.
+  // Embree sees, and so the hits, depend only on the packet's contents; opaque planes are
+  // tested here rather than in Embree. found[i] says whether hits[i] was written.
   void intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
                  bool (&found)[kPacketSize]) const;
   // Whether anything under `mask` lies on each active ray of a coherent packet, with
@@ -165,6 +166,8 @@ class SceneGeometry {
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
   PlaneSet plane_sets_[2];  // opaque, transmissive
+  // The Embree geometry of plane_sets_[0], which packets test outside Embree.
+  unsigned opaque_planes_geometry_ = RTC_INVALID_GEOMETRY_ID;
   std::vector<TriangleMesh> meshes_;
 };
 

@@ -172,6 +172,39 @@ void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid
   }
 }
 
+void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&valid)[16],
+                    double (&t)[16], int (&plane)[16]) {
+  // In arrays of its own, so that the compiler need not allow for the outputs overlapping
+  // the rays.
+  double nearest[16];
+  int index[16];
+  for (int i = 0; i < 16; ++i) {
+    nearest[i] = kInfinity;
+    index[i] = -1;
+  }
+  // plane_distance() from t_min = 0 to the nearest plane so far, without its branches, so
+  // that the sixteen lanes go two to an instruction. Its sign test only spares a division:
+  // t > 0 holds exactly when numerator and denominator have one strict sign and the
+  // quotient did not underflow, and a zero denominator gives an infinite or NaN t, which
+  // fails t > 0 or t < nearest. So each lane gets plane_distance()'s very answer, the first
+  // of equally near planes included.
+  for (std::size_t p = 0; p < set.planes.size(); ++p) {
+    const PreparedPlane& candidate = set.planes[p];
+    for (int i = 0; i < 16; ++i) {
+      const Vec3 origin(rayhit.ray.org_x[i], rayhit.ray.org_y[i], rayhit.ray.org_z[i]);
+      const Vec3 direction(rayhit.ray.dir_x[i], rayhit.ray.dir_y[i], rayhit.ray.dir_z[i]);
+      const double denominator = glm::dot(direction, candidate.normal);
+      const double numerator = candidate.offset - glm::dot(origin, candidate.normal);
+      const double t_plane = numerator / denominator;
+      const bool nearer = (valid[i] == -1) & (t_plane > 0.0) & (t_plane < nearest[i]);
+      nearest[i] = nearer ? t_plane : nearest[i];
+      index[i] = nearer ? static_cast<int>(p) : index[i];
+    }
+  }
+  std::copy(nearest, nearest + 16, t);
+  std::copy(index, index + 16, plane);
+}
+
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
   // The transformed corners of the object-space cube bound the ellipsoid.

@@ -17,5 +17,10 @@ struct PlaneSet;
 // the test the plane set's occluded callback makes, so the answer is the callback's own.
 void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
                     bool (&blocked)[16]);
+// The nearest of the planes, if any, on each lane with valid[i] == -1 of a packet with
+// unbounded rays: the distance and the plane's index in the set (-1 and infinity where
+// none), as the plane set's intersect callback would find them.
+void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&valid)[16],
+                    double (&t)[16], int (&plane)[16]);
 
 }  // namespace tessera
