@@ -228,5 +228,38 @@ TEST(Geometry, SmoothMeshNormalsAreInterpolated) {
   EXPECT_NEAR(render_pixel(scene).r, 1.0, 1e-6);
 }
 
+TEST(Geometry, AMeshHitHasTheNormalOfTheFloatCornersEmbreeIntersected) {
+  // The hit is rebuilt on the triangle Embree saw, whose corners are floats: the normal
+  // (worked out when the mesh is built) must be the one of those floats, bit for bit, not of
+  // the doubles they were rounded from.
+  json scene = pinhole_scene({0.1, 0.1, 5}, {0.1, 0.1, 0});
+  const double corners[3][3] = {{-0.7, -0.3, 0.1}, {0.9, -0.2, 0.3}, {0.1, 0.8, -0.2}};
+  scene["objects"].push_back({{"type", "mesh"},
+                              {"positions", corners},
+                              {"triangles", {{0, 1, 2}}},
+                              {"material", {{"diffuse", 1}}}});
+  const Renderer renderer(parse_scene(scene));
+  const auto hit =
+      renderer.geometry().intersect(renderer.camera().ray_through(0.5, 0.5), kInfinity);
+  ASSERT_TRUE(hit.has_value());
+  // Rounded through memory the compiler must really write: GCC 12's vectoriser was seen to
+  // drop a float rounding it could see through (worker/scene_geometry.cpp).
+  auto rounded = [](double value) {
+    volatile float f = static_cast<float>(value);
+    return static_cast<double>(f);
+  };
+  Vec3 floats[3];
+  Vec3 doubles[3];
+  for (int k = 0; k < 3; ++k) {
+    floats[k] = Vec3(rounded(corners[k][0]), rounded(corners[k][1]), rounded(corners[k][2]));
+    doubles[k] = Vec3(corners[k][0], corners[k][1], corners[k][2]);
+  }
+  const Vec3 expected = glm::normalize(glm::cross(floats[1] - floats[0], floats[2] - floats[0]));
+  EXPECT_EQ(hit->normal.x, expected.x);
+  EXPECT_EQ(hit->normal.y, expected.y);
+  EXPECT_EQ(hit->normal.z, expected.z);
+  EXPECT_NE(glm::normalize(glm::cross(doubles[1] - doubles[0], doubles[2] - doubles[0])), expected);
+}
+
 }  // namespace
 }  // namespace tessera

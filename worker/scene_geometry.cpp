@@ -157,6 +157,14 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
     MeshTriangleNormals& normals = mesh.normals.emplace_back();
     for (int k = 0; k < 3; ++k) normals.corners[k] = glm::vec3(triangles.normals[tri[k]]);
   }
+  // From the stored floats, in a pass of its own: in the loop above, GCC 12's vectoriser
+  // was seen to use the doubles the floats were rounded from (a different normal, and other
+  // pixels, than finish_hit() computed from the floats).
+  for (MeshTriangle& triangle : mesh.triangles) {
+    const Vec3 v0(triangle.corners[0]);
+    triangle.normal =
+        glm::normalize(glm::cross(Vec3(triangle.corners[1]) - v0, Vec3(triangle.corners[2]) - v0));
+  }
   meshes_.push_back(std::move(mesh));
   records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
 }
@@ -295,11 +303,9 @@ void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacke
     if (record.kind != Kind::triangles) continue;
     const TriangleMesh& mesh = meshes_[record.index];
     const unsigned primitive = rayhit.hit.primID[i];
-    // Both ends: 36 bytes often straddle two cache lines.
-    const auto* corners = reinterpret_cast<const char*>(&mesh.triangles[primitive]);
-    __builtin_prefetch(corners);
-    __builtin_prefetch(corners + sizeof(MeshTriangle) - 1);
+    __builtin_prefetch(&mesh.triangles[primitive]);
     if (mesh.normals.empty()) continue;
+    // Both ends: 36 bytes often straddle two cache lines.
     const auto* normals = reinterpret_cast<const char*>(&mesh.normals[primitive]);
     __builtin_prefetch(normals);
     __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
@@ -417,7 +423,7 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       hit.t = th.t;
       // Barycentric reconstruction keeps the point on the triangle's own plane.
       hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;
-      hit.normal = glm::normalize(glm::cross(v1 - v0, v2 - v0));
+      hit.normal = triangle.normal;
       hit.shading_normal = hit.normal;
       if (!mesh.normals.empty()) {
         const MeshTriangleNormals& normals = mesh.normals[primitive];

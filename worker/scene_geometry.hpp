@@ -54,11 +54,13 @@ struct PreparedPlane {
 
 // A mesh as the tracer reads it after Embree has found a hit: each triangle's corners
 // together, in the single precision Embree intersects (so the hit is recomputed on the very
-// triangle Embree saw), and one or two cache lines per hit instead of one per index and
-// corner.
-struct MeshTriangle {
+// triangle Embree saw), with its unit geometric normal, worked out once from them in
+// double: one cache line per hit instead of one per index and corner.
+struct alignas(64) MeshTriangle {
   glm::vec3 corners[3];
+  Vec3 normal;  // normalize(cross(v1 - v0, v2 - v0)), as finish_hit() would compute it
 };
+static_assert(sizeof(MeshTriangle) == 64);
 struct MeshTriangleNormals {
   glm::vec3 corners[3];  // unit
 };
