@@ -45,6 +45,9 @@ Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry)
                   std::cos(glm::radians(spot.cutoff_degrees)),
                   spot.exponent};
     }
+    prepared.constant_falloff =
+        prepared.attenuation.linear == 0.0 && prepared.attenuation.quadratic == 0.0;
+    prepared.inverse_constant = 1.0 / prepared.attenuation.constant;
     // A light of zero intensity lights nothing, and casts no shadow rays.
     if (!is_zero(prepared.intensity)) lights_.push_back(prepared);
   }

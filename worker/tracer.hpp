@@ -59,6 +59,10 @@ class Tracer {
     Attenuation attenuation;
     double cos_cutoff = 0.0;
     double exponent = 1.0;
+    // No linear or quadratic term: 1 / attenuation is the same at every distance (for
+    // every finite one, bit for bit), so it is divided out once here.
+    bool constant_falloff = false;
+    double inverse_constant = 1.0;
   };
 
   // A surface point part way through being shaded.
@@ -83,6 +87,8 @@ class Tracer {
   // Adds the reflected and transmitted light.
   Color finish_shading(const Shading& shading, const SurfaceHit& hit, int depth,
                        RayCounts& counts) const;
+  // 1 / (kc + kl·d + kq·d²).
+  static double inverse_attenuation(const PreparedLight& light, double distance);
   LightSample sample_light(const PreparedLight& light, const Vec3& point) const;
   static void directional_sample(const PreparedLight& light, LightSample& sample);
   // A point or spot light's sample from the steps that take a square root and divisions,

@@ -89,6 +89,11 @@ inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, Shading
   shading.result = material.emission + *ambient * scene_.ambient_light;
 }
 
+inline double Tracer::inverse_attenuation(const PreparedLight& light, double distance) {
+  return light.constant_falloff ? light.inverse_constant
+                                : 1.0 / shading_detail::attenuate(light.attenuation, distance);
+}
+
 inline Tracer::LightSample Tracer::sample_light(const PreparedLight& light,
                                                 const Vec3& point) const {
   LightSample sample;
@@ -98,8 +103,8 @@ inline Tracer::LightSample Tracer::sample_light(const PreparedLight& light,
   }
   const Vec3 offset = light.position - point;
   const double distance = std::sqrt(glm::dot(offset, offset));
-  positional_sample(light, offset, distance, 1.0 / distance,
-                    1.0 / shading_detail::attenuate(light.attenuation, distance), sample);
+  positional_sample(light, offset, distance, 1.0 / distance, inverse_attenuation(light, distance),
+                    sample);
   return sample;
 }
 
