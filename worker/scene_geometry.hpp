@@ -58,7 +58,7 @@ struct PreparedPlane {
 // double: one cache line per hit instead of one per index and corner.
 struct alignas(64) MeshTriangle {
   glm::vec3 corners[3];
-  Vec3 normal;  // normalize(cross(v1 - v0, v2 - v0)), as finish_hit() would compute it
+  Vec3 normal;  // normalize(cross(v1 - v0, v2 - v0)) of the float corners, in double
 };
 static_assert(sizeof(MeshTriangle) == 64);
 struct MeshTriangleNormals {
