@@ -3,8 +3,6 @@
 // the arithmetic is Tracer::trace's own, in the same order.
 #include "worker/tracer.hpp"
 
-#include <algorithm>
-
 #include "worker/tracer_shading.hpp"
 
 namespace tessera {
@@ -113,11 +111,9 @@ void Tracer::sample_light_packet(const PreparedLight& light, const SurfaceHit (&
     distance[i] = std::sqrt(squared[i]);
     inverse_distance[i] = 1.0 / distance[i];
   }
-  if (light.constant_falloff)
-    std::fill(inverse_attenuation, inverse_attenuation + kPacketSize, light.inverse_constant);
-  else
-    for (int i = 0; i < kPacketSize; ++i)
-      inverse_attenuation[i] = 1.0 / shading_detail::attenuate(light.attenuation, distance[i]);
+  // The falloff's test is the same for every lane, so GCC takes it out of the loop.
+  for (int i = 0; i < kPacketSize; ++i)
+    inverse_attenuation[i] = Tracer::inverse_attenuation(light, distance[i]);
   for (int i = 0; i < kPacketSize; ++i)
     if (found[i])
       positional_sample(light, offset[i], distance[i], inverse_distance[i], inverse_attenuation[i],

@@ -159,21 +159,13 @@ void plane_bounds(const RTCBoundsFunctionArguments* args) {
 
 }  // namespace
 
-void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
-                    bool (&blocked)[16]) {
-  for (int i = 0; i < 16; ++i) {
-    blocked[i] = false;
-    if (valid[i] != -1) continue;
-    const glm::vec3 o(rays.org_x[i], rays.org_y[i], rays.org_z[i]);
-    const glm::vec3 d(rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]);
-    double t;
-    unsigned primitive;
-    blocked[i] = distance(set, o, d, rays.tnear[i], rays.tfar[i], t, primitive);
-  }
-}
+namespace {
 
-void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&valid)[16],
-                    double (&t)[16], int (&plane)[16]) {
+// The nearest plane on each lane with valid[i] == -1 of sixteen rays that start at t = 0,
+// for any of Embree's ray layouts of sixteen.
+template <typename Rays>
+void nearest_of_planes(const PlaneSet& set, const Rays& rays, const int (&valid)[16],
+                       double (&t)[16], int (&plane)[16]) {
   // In arrays of its own, so that the compiler need not allow for the outputs overlapping
   // the rays.
   double nearest[16];
@@ -191,8 +183,8 @@ void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&
   for (std::size_t p = 0; p < set.planes.size(); ++p) {
     const PreparedPlane& candidate = set.planes[p];
     for (int i = 0; i < 16; ++i) {
-      const Vec3 origin(rayhit.ray.org_x[i], rayhit.ray.org_y[i], rayhit.ray.org_z[i]);
-      const Vec3 direction(rayhit.ray.dir_x[i], rayhit.ray.dir_y[i], rayhit.ray.dir_z[i]);
+      const Vec3 origin(rays.org_x[i], rays.org_y[i], rays.org_z[i]);
+      const Vec3 direction(rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]);
       const double denominator = glm::dot(direction, candidate.normal);
       const double numerator = candidate.offset - glm::dot(origin, candidate.normal);
       const double t_plane = numerator / denominator;
@@ -203,6 +195,22 @@ void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&
   }
   std::copy(nearest, nearest + 16, t);
   std::copy(index, index + 16, plane);
+}
+
+}  // namespace
+
+void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
+                    bool (&blocked)[16]) {
+  // Some plane lies between 0 and tfar exactly when the nearest one does.
+  double t[16];
+  int plane[16];
+  nearest_of_planes(set, rays, valid, t, plane);
+  for (int i = 0; i < 16; ++i) blocked[i] = plane[i] >= 0 && t[i] < rays.tfar[i];
+}
+
+void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&valid)[16],
+                    double (&t)[16], int (&plane)[16]) {
+  nearest_of_planes(set, rayhit.ray, valid, t, plane);
 }
 
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {

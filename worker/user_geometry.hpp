@@ -13,8 +13,9 @@ void set_plane_callbacks(RTCGeometry geometry);
 void sphere_bounds(const RTCBoundsFunctionArguments* args);
 
 struct PlaneSet;
-// Which of the lanes with valid[i] == -1 one of the planes blocks between tnear and tfar:
-// the test the plane set's occluded callback makes, so the answer is the callback's own.
+// Which of the lanes with valid[i] == -1 one of the planes blocks between 0 and tfar (the
+// rays must start at tnear = 0, as packets here do): the answer the plane set's occluded
+// callback would give.
 void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid)[16],
                     bool (&blocked)[16]);
 // The nearest of the planes, if any, on each lane with valid[i] == -1 of a packet with
