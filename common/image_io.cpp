@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -35,33 +36,56 @@ T quantise(float v, OutputTransfer transfer) {
   return static_cast<T>(std::lround(c * max_code));
 }
 
-// 8-bit sRGB by table: thresholds[k] is the least value in [0, 1] that quantise() takes to
-// code k + 1 or above, found by bisection over the floats themselves, so a search through
-// the table gives quantise()'s own answer without a pow() per channel.
+// 8-bit sRGB by table: thresholds_[k] is the least value in [0, 1] that quantise() takes to
+// code k + 1 or above, found by bisection over the floats themselves, so the table gives
+// quantise()'s own answer without a pow() per channel. A binary search through the
+// thresholds mispredicts a branch at nearly every step, so the lookup goes through buckets
+// instead: the top 16 bits of a float in [0, 1) pick one of 16,256 buckets, each holding
+// the code of its least value, and one comparison with the next threshold finishes it. A
+// bucket is at most 0.65 as wide as the gap between two thresholds near it (the gaps grow
+// as v^0.58, the buckets as v, and the ratio peaks just above 0.5), so it never holds two
+// of them; the constructor checks that.
 class Srgb8Table {
  public:
   Srgb8Table() {
     for (int k = 0; k < 255; ++k) {
       std::uint32_t lo = std::bit_cast<std::uint32_t>(0.0f);  // code <= k
-      std::uint32_t hi = std::bit_cast<std::uint32_t>(1.0f);  // code >= k + 1
+      std::uint32_t hi = kOneBits;                            // code >= k + 1
       while (hi - lo > 1) {
         const std::uint32_t mid = lo + (hi - lo) / 2;
         (code(mid) > k ? hi : lo) = mid;
       }
       thresholds_[k] = std::bit_cast<float>(hi);
     }
+    thresholds_[255] = std::numeric_limits<float>::infinity();  // no code above 255
+    for (std::uint32_t bucket = 0; bucket < kBuckets; ++bucket) {
+      const float least = std::bit_cast<float>(bucket << kBucketShift);
+      const float most = std::bit_cast<float>(((bucket + 1) << kBucketShift) - 1);
+      const auto start = std::upper_bound(thresholds_, thresholds_ + 255, least) - thresholds_;
+      if (start < 255 && most >= thresholds_[start + 1])
+        throw std::logic_error("sRGB table: a bucket holds two code steps");
+      start_[bucket] = static_cast<std::uint8_t>(start);
+    }
   }
   std::uint8_t operator()(float v) const {
-    if (!(v > 0.0f)) return 0;  // NaN too
-    return static_cast<std::uint8_t>(std::upper_bound(thresholds_, thresholds_ + 255, v) -
-                                     thresholds_);
+    const auto bits = std::bit_cast<std::uint32_t>(v);
+    if (bits < kOneBits) {  // [0, 1)
+      const std::uint8_t start = start_[bits >> kBucketShift];
+      return static_cast<std::uint8_t>(start + (v >= thresholds_[start]));
+    }
+    // 1 and above, infinity included, are 255; NaN and negative values (sign bit set) are 0.
+    return bits <= std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity()) ? 255 : 0;
   }
 
  private:
+  static constexpr std::uint32_t kOneBits = std::bit_cast<std::uint32_t>(1.0f);
+  static constexpr unsigned kBucketShift = 16;
+  static constexpr std::uint32_t kBuckets = kOneBits >> kBucketShift;
   static int code(std::uint32_t bits) {
     return quantise<std::uint8_t>(std::bit_cast<float>(bits), OutputTransfer::srgb);
   }
-  float thresholds_[255];
+  float thresholds_[256];
+  std::uint8_t start_[kBuckets];
 };
 
 template <typename T>
