@@ -88,6 +88,55 @@ TEST(Geometry, PacketsFindWhateverIsNearestOfAnOpaquePlaneAndTheRest) {
   EXPECT_EQ(render_pixel(scene).r, 0.5f);
 }
 
+TEST(Geometry, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
+  // The shadow walk's packets: each lane goes only as far as its own reach, and sees only
+  // the surfaces under the mask. Straight down from y = 10: a glass sphere whose top is at
+  // y = 4, then the opaque floor at y = 0.
+  json scene = pinhole_scene({0, 10, 0}, {0, 0, 0}, {0, 0, -1});
+  scene["objects"] = {{{"type", "plane"},
+                       {"point", {0, 0, 0}},
+                       {"normal", {0, 1, 0}},
+                       {"material", {{"diffuse", 1}}}},
+                      {{"type", "sphere"},
+                       {"center", {0, 3, 0}},
+                       {"radius", 1},
+                       {"material", {{"transmission", 0.5}, {"ior", 1.5}}}}};
+  const Renderer renderer(parse_scene(scene));
+  const SceneGeometry& geometry = renderer.geometry();
+  RayPacket packet;
+  float reach[kPacketSize] = {};
+  // Lanes 0-3 go through the sphere's centre, 4-7 pass it by at x = 3; reaches 5.5 (short
+  // of the sphere), 6.5 (into it), 11 (to the floor) and infinity.
+  const float reaches[4] = {5.5f, 6.5f, 11.0f, kInfinity};
+  for (int i = 0; i < 8; ++i) {
+    packet.active[i] = true;
+    packet.rays[i] = Ray{{i < 4 ? 0.0f : 3.0f, 10.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
+    reach[i] = reaches[i % 4];
+  }
+  SurfaceHit hits[kPacketSize];
+  bool found[kPacketSize];
+  const std::uint32_t floor = 0, sphere = 1;
+  geometry.intersect(packet, reach, kAnyMask, hits, found);
+  const bool any_expected[8] = {false, true, true, true, false, false, true, true};
+  const std::uint32_t any_object[8] = {0, sphere, sphere, sphere, 0, 0, floor, floor};
+  const double any_t[8] = {0, 6, 6, 6, 0, 0, 10, 10};
+  for (int i = 0; i < 8; ++i) {
+    ASSERT_EQ(found[i], any_expected[i]) << "lane " << i;
+    if (!found[i]) continue;
+    EXPECT_EQ(hits[i].object, any_object[i]) << "lane " << i;
+    EXPECT_NEAR(hits[i].t, any_t[i], 1e-6) << "lane " << i;
+  }
+  for (int i = 8; i < kPacketSize; ++i) EXPECT_FALSE(found[i]) << "lane " << i;
+  // Under the transmissive mask the floor is not there, however far the lane goes.
+  geometry.intersect(packet, reach, kTransmissiveMask, hits, found);
+  for (int i = 0; i < 8; ++i) {
+    ASSERT_EQ(found[i], i >= 1 && i < 4) << "lane " << i;
+    if (found[i]) {
+      EXPECT_EQ(hits[i].object, sphere) << "lane " << i;
+    }
+  }
+}
+
 TEST(Geometry, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.

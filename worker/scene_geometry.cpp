@@ -192,26 +192,37 @@ std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(
 }
 
 bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {
+  // Without branches, so that a packet's lanes go through it without mispredictions. Where a
+  // direction component is zero the quotients are infinite, which leaves the interval as it
+  // is when the origin lies inside the slab and empties it when it lies outside; NaN (the
+  // origin on a face) fails every comparison below and leaves it as it is too. `outside`
+  // also catches the one case the infinities miss, an infinite t_max.
   float t_near = 0.0f;
   float t_far = t_max;
+  bool outside = false;
   for (int axis = 0; axis < 3; ++axis) {
     const float o = ray.origin[axis];
     const float d = ray.direction[axis];
     const float lo = transmissive_lo_[axis];
     const float hi = transmissive_hi_[axis];
-    if (d == 0.0f) {
-      if (o < lo || o > hi) return false;
-      continue;
-    }
-    // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
+    outside |= d == 0.0f && (o < lo || o > hi);
     float t0 = (lo - o) / d;
     float t1 = (hi - o) / d;
-    if (t0 > t1) std::swap(t0, t1);
-    t_near = std::max(t_near, t0 * (1.0f - 1e-5f));
-    t_far = std::min(t_far, t1 * (1.0f + 1e-5f));
-    if (t_near > t_far) return false;
+    const bool swap = t0 > t1;
+    const float entry = swap ? t1 : t0;
+    const float exit = swap ? t0 : t1;
+    // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
+    t_near = std::max(t_near, entry * (1.0f - 1e-5f));
+    t_far = std::min(t_far, exit * (1.0f + 1e-5f));
   }
-  return true;
+  return !outside && !(t_near > t_far);
+}
+
+void SceneGeometry::may_meet_transmissive(const RayPacket& packet,
+                                          const float (&t_max)[kPacketSize],
+                                          bool (&may)[kPacketSize]) const {
+  for (int i = 0; i < kPacketSize; ++i)
+    may[i] = packet.active[i] && may_meet_transmissive(packet.rays[i], t_max[i]);
 }
 
 std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
@@ -275,6 +286,18 @@ void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16
 
 void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
                               bool (&found)[kPacketSize]) const {
+  intersect(packet, nullptr, kAnyMask, hits, found);
+}
+
+void SceneGeometry::intersect(const RayPacket& packet, const float (&t_max)[kPacketSize],
+                              unsigned mask, SurfaceHit (&hits)[kPacketSize],
+                              bool (&found)[kPacketSize]) const {
+  intersect(packet, &t_max, mask, hits, found);
+}
+
+void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPacketSize],
+                              unsigned mask, SurfaceHit (&hits)[kPacketSize],
+                              bool (&found)[kPacketSize]) const {
   HitContext context;
   rtcInitIntersectContext(&context.embree);
   context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -283,14 +306,22 @@ void SceneGeometry::intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacke
   // Infinite planes are in every packet's way as far as the BVH can tell, so Embree would
   // call their callback for every packet. The same test here, on all lanes at once, costs
   // less; Embree then looks only for something nearer than each lane's plane.
-  const bool opaque_planes = opaque_planes_geometry_ != RTC_INVALID_GEOMETRY_ID;
-  load_packet(packet, valid, rayhit, opaque_planes ? kAnyMask & ~kOpaquePlaneMask : kAnyMask);
+  const bool opaque_planes =
+      (mask & kOpaquePlaneMask) != 0 && opaque_planes_geometry_ != RTC_INVALID_GEOMETRY_ID;
+  load_packet(packet, valid, rayhit, opaque_planes ? mask & ~kOpaquePlaneMask : mask);
+  if (t_max != nullptr)
+    for (int i = 0; i < kPacketSize; ++i) rayhit.ray.tfar[i] = (*t_max)[i];
   double plane_t[kPacketSize];
   int plane[kPacketSize];
   if (opaque_planes) {
     nearest_planes(plane_sets_[0], rayhit, valid, plane_t, plane);
-    for (int i = 0; i < kPacketSize; ++i)
-      if (plane[i] >= 0) rayhit.ray.tfar[i] = static_cast<float>(plane_t[i]);
+    for (int i = 0; i < kPacketSize; ++i) {
+      // As the plane callback has it: t < t_max, compared in double.
+      if (plane[i] >= 0 && plane_t[i] < rayhit.ray.tfar[i])
+        rayhit.ray.tfar[i] = static_cast<float>(plane_t[i]);
+      else
+        plane[i] = -1;
+    }
   }
   rtcIntersect16(valid, scene_.get(), &context.embree, &rayhit);
   // A mesh's triangles are read back from memory Embree's traversal did not touch, and a

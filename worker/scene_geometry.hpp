@@ -129,11 +129,17 @@ class SceneGeometry {
   // against the box around all of them, which spares most shadow rays the walk through
   // transmissive surfaces.
   bool may_meet_transmissive(const Ray& ray, float t_max) const;
+  // The same for each lane of a packet; false on inactive lanes.
+  void may_meet_transmissive(const RayPacket& packet, const float (&t_max)[kPacketSize],
+                             bool (&may)[kPacketSize]) const;
   // The closest hit of every active ray of a coherent packet (unbounded t). The lanes
   // Embree sees, and so the hits, depend only on the packet's contents; opaque planes are
   // tested here rather than in Embree. found[i] says whether hits[i] was written.
   void intersect(const RayPacket& packet, SurfaceHit (&hits)[kPacketSize],
                  bool (&found)[kPacketSize]) const;
+  // The same for the surfaces under `mask`, with 0 < t < t_max[i] on each lane.
+  void intersect(const RayPacket& packet, const float (&t_max)[kPacketSize], unsigned mask,
+                 SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
   // Whether anything under `mask` lies on each active ray of a coherent packet, with
   // 0 < t < t_max[i].
   void occluded(const RayPacket& packet, const float (&t_max)[kPacketSize], unsigned mask,
@@ -147,6 +153,9 @@ class SceneGeometry {
     std::uint32_t object;  // into Scene::objects (for planes: see the PlaneSet)
   };
 
+  // Both of the above: `t_max` null for unbounded rays.
+  void intersect(const RayPacket& packet, const float (*t_max)[kPacketSize], unsigned mask,
+                 SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
   void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
                   unsigned mask);
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, bool transmissive);

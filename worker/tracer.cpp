@@ -8,10 +8,8 @@ namespace tessera {
 namespace {
 
 using shading_detail::is_zero;
+using shading_detail::kMaxShadowCrossings;
 using shading_detail::reflect;
-
-// Bounds the walk of a shadow ray through a stack of transmissive surfaces.
-constexpr int kMaxShadowCrossings = 64;
 
 }  // namespace
 

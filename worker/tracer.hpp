@@ -109,6 +109,15 @@ class Tracer {
   // S_L once nothing opaque is known to lie on `ray`, a shadow ray that may go as far as
   // `reach`.
   Color unblocked_factor(const LightSample& light, Ray ray, float reach, RayCounts& counts) const;
+  // unblocked_factor() of each active lane of `shadows` that `blocked` leaves free, into
+  // `factor` (1 on the other lanes). The shadow rays of a packet's hits towards one light
+  // are coherent, so the walk goes to Embree sixteen at a time, one crossing of every lane
+  // per packet; each lane's arithmetic is unblocked_factor()'s own. Every lane is walked,
+  // so that the packets do not depend on `keep`; the lanes in it are counted.
+  void unblocked_factors(const LightSample (&samples)[kPacketSize], const RayPacket& shadows,
+                         const float (&reach)[kPacketSize], const bool (&blocked)[kPacketSize],
+                         const bool (&keep)[kPacketSize], Color (&factor)[kPacketSize],
+                         RayCounts& counts) const;
   // How far a shadow ray starting at `from` may go towards the light.
   static float shadow_reach(const LightSample& light, const Ray& from);
   // The shadow ray from `hit` towards the light (to_light is unit already).

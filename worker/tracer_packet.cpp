@@ -8,6 +8,7 @@
 namespace tessera {
 
 using shading_detail::is_zero;
+using shading_detail::kMaxShadowCrossings;
 using shading_detail::reflect;
 
 void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)[kPacketSize],
@@ -50,12 +51,12 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     // Anything opaque on the way leaves the point in shadow whatever else is there.
     bool blocked[kPacketSize];
     geometry_.occluded(shadows, reach, kOpaqueMask, blocked);
+    Color shadow[kPacketSize];
+    unblocked_factors(samples, shadows, reach, blocked, keep, shadow, counts);
     for (int i = 0; i < kPacketSize; ++i) {
       if (!shadows.active[i] || !keep[i]) continue;
       counts.shadow += 1;
-      const Color shadow =
-          blocked[i] ? Color(0.0) : unblocked_factor(samples[i], shadows.rays[i], reach[i], counts);
-      add_light(shading[i], samples[i], n_dot_l[i], shadow);
+      add_light(shading[i], samples[i], n_dot_l[i], blocked[i] ? Color(0.0) : shadow[i]);
     }
   }
 
@@ -85,6 +86,42 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   bounce(&Material::reflection, [&](int i) { return reflect(shading[i].d, shading[i].n); });
   bounce(&Material::transmission,
          [&](int i) { return transmitted_direction(shading[i], hits[i]); });
+}
+
+void Tracer::unblocked_factors(const LightSample (&samples)[kPacketSize], const RayPacket& shadows,
+                               const float (&reach)[kPacketSize],
+                               const bool (&blocked)[kPacketSize], const bool (&keep)[kPacketSize],
+                               Color (&factor)[kPacketSize], RayCounts& counts) const {
+  for (int i = 0; i < kPacketSize; ++i) factor[i] = Color(1.0);
+  if (!any_transmissive_) return;
+  RayPacket walk;
+  float walk_reach[kPacketSize] = {};
+  bool any = false;
+  geometry_.may_meet_transmissive(shadows, reach, walk.active);
+  for (int i = 0; i < kPacketSize; ++i) {
+    walk.active[i] = walk.active[i] && !blocked[i];
+    if (!walk.active[i]) continue;
+    walk.rays[i] = shadows.rays[i];
+    walk_reach[i] = reach[i];
+    any = true;
+  }
+  for (int crossing = 0; any && crossing < kMaxShadowCrossings; ++crossing) {
+    SurfaceHit blockers[kPacketSize];
+    bool found[kPacketSize];
+    geometry_.intersect(walk, walk_reach, kTransmissiveMask, blockers, found);
+    any = false;
+    for (int i = 0; i < kPacketSize; ++i) {
+      if (!walk.active[i]) continue;
+      if (keep[i]) counts.shadow += 1;
+      if (found[i]) factor[i] *= material_of(blockers[i].object).transmission;
+      walk.active[i] = found[i] && !is_zero(factor[i]);
+      if (!walk.active[i]) continue;
+      walk.rays[i].origin =
+          offset_ray_origin(blockers[i].position, blockers[i].normal, samples[i].to_light);
+      walk_reach[i] = shadow_reach(samples[i], walk.rays[i]);
+      any = true;
+    }
+  }
 }
 
 void Tracer::sample_light_packet(const PreparedLight& light, const SurfaceHit (&hits)[kPacketSize],

@@ -18,6 +18,9 @@ namespace tessera::shading_detail {
 // surface is not shadowed by that surface.
 inline constexpr float kShadowReach = 0.99999f;
 
+// Bounds the walk of a shadow ray through a stack of transmissive surfaces.
+inline constexpr int kMaxShadowCrossings = 64;
+
 inline bool is_zero(const Color& c) { return c.r == 0.0 && c.g == 0.0 && c.b == 0.0; }
 
 inline double attenuate(const Attenuation& a, double distance) {
