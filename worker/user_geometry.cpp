@@ -2,6 +2,7 @@
 // exact analytic intersection in double precision.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "worker/scene_geometry.hpp"
 #include "worker/user_geometry.hpp"
@@ -10,50 +11,43 @@ namespace tessera {
 
 namespace {
 
-// The shape tests proper, inlined into the callbacks: true and the distance when the ray
-// meets the shape with t_min < t < t_max.
-[[gnu::always_inline]] inline bool sphere_distance(const PreparedSphere& sphere, const glm::vec3& origin,
-                            const glm::vec3& direction, double t_min, double t_max, double& t) {
-  Vec3 f;
-  Vec3 d;
-  double radius;
-  if (sphere.world_sphere) {
-    f = Vec3(origin) - sphere.world_center;
-    d = Vec3(direction);
-    radius = sphere.world_radius;
-  } else {
-    f = Vec3(sphere.world_to_object * glm::dvec4(Vec3(origin), 1.0)) - sphere.center;
-    d = glm::dmat3(sphere.world_to_object) * Vec3(direction);
-    radius = sphere.radius;
-  }
-  const double a = glm::dot(d, d);
-  const double b = glm::dot(f, d);
-  const double r2 = radius * radius;
+// The sphere test proper, for f = origin - centre and the direction d, both in the frame
+// where the shape is a sphere of radius² r2: whether the ray meets it with
+// t_min < t < t_max, and the nearer such t. It has no branches, so that a loop of these
+// over a packet's lanes vectorises (two lanes to an SSE2 instruction) and no lane waits
+// on another's mispredicted rejection. It takes and gives scalars: GCC does not vectorise
+// a loop through glm's vectors, nor one through a returned struct. The sums go in
+// glm::dot's order, (x + y) + z.
+[[gnu::always_inline]] inline bool sphere_root(double fx, double fy, double fz, double dx,
+                                               double dy, double dz, double r2, double t_min,
+                                               double t_max, double& t) {
+  const double a = dx * dx + dy * dy + dz * dz;
+  const double b = fx * dx + fy * dy + fz * dz;
   // Most rays that reach this test pass the sphere by: |f|²·a - b² = |q|²·a, q as below,
   // says so without a division. Cancellation makes it inexact, so it only rejects with a
   // margin far above its rounding error, and the exact test decides everything else.
-  const double ff = glm::dot(f, f);
-  if (ff * a - b * b > a * r2 + 1e-12 * ff * a) return false;
+  const double ff = fx * fx + fy * fy + fz * fz;
+  const bool passes_by = ff * a - b * b > a * r2 + 1e-12 * ff * a;
   // |q| is the distance from the centre to the ray's line; computing the discriminant from
   // it (instead of b² - ac) avoids cancellation for small spheres seen from far away.
-  const Vec3 q = f - (b / a) * d;
-  const double discriminant = a * (r2 - glm::dot(q, q));
-  if (discriminant < 0.0) return false;
+  const double s = b / a;
+  const double qx = fx - s * dx;
+  const double qy = fy - s * dy;
+  const double qz = fz - s * dz;
+  const double discriminant = a * (r2 - (qx * qx + qy * qy + qz * qz));
   const double c = ff - r2;
   const double h = -b - std::copysign(std::sqrt(discriminant), b);
-  double t0 = c / h;
-  double t1 = h / a;
-  if (h == 0.0) t0 = t1 = 0.0;
-  if (t0 > t1) std::swap(t0, t1);
-  if (t0 > t_min && t0 < t_max) {
-    t = t0;
-    return true;
-  }
-  if (t1 > t_min && t1 < t_max) {
-    t = t1;
-    return true;
-  }
-  return false;
+  // Where h = 0 (a ray tangent to the sphere at its own origin) the roots are ±infinity or
+  // NaN and ±0; t_min >= 0, as Embree requires, so neither is taken, and the divisions need
+  // no branch around them.
+  const double t0 = c / h;
+  const double t1 = h / a;
+  const double nearer = t0 > t1 ? t1 : t0;
+  const double farther = t0 > t1 ? t0 : t1;
+  const bool nearer_in = (nearer > t_min) & (nearer < t_max);
+  const bool farther_in = (farther > t_min) & (farther < t_max);
+  t = nearer_in ? nearer : farther;
+  return !passes_by & !(discriminant < 0.0) & (nearer_in | farther_in);
 }
 
 [[gnu::always_inline]] inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
@@ -68,36 +62,90 @@ namespace {
   return t > t_min && t < t_max;
 }
 
-}  // namespace
-
-namespace {
-
 // Planes are infinite; Embree needs finite boxes, so they get one far beyond any scene.
 constexpr float kPlaneExtent = 1e18f;
 
-// The nearest hit with t_min < t < t_max, and which primitive of the geometry it is on.
-bool distance(const PreparedSphere& sphere, const glm::vec3& o, const glm::vec3& d, double t_min,
-              double t_max, double& t, unsigned& primitive) {
-  primitive = 0;
-  return sphere_distance(sphere, o, d, t_min, t_max, t);
+// Lanes base to end - 1 (at most 16) of the rays Embree handed over, each field's lanes as
+// a plain array: Embree's accessors index in unsigned arithmetic, which GCC cannot prove
+// free of wrap-around, and so does not vectorise.
+struct Lanes {
+  Lanes(const RTCRayN* ray, unsigned n, const int* valid, unsigned base, unsigned end)
+      : count(end - base), valid(valid + base) {
+    auto* rays = const_cast<RTCRayN*>(ray);  // the accessors take it non-const
+    org_x = &RTCRayN_org_x(rays, n, base);
+    org_y = &RTCRayN_org_y(rays, n, base);
+    org_z = &RTCRayN_org_z(rays, n, base);
+    dir_x = &RTCRayN_dir_x(rays, n, base);
+    dir_y = &RTCRayN_dir_y(rays, n, base);
+    dir_z = &RTCRayN_dir_z(rays, n, base);
+    tnear = &RTCRayN_tnear(rays, n, base);
+    tfar = &RTCRayN_tfar(rays, n, base);
+  }
+
+  std::size_t count;
+  const int* valid;
+  const float *org_x, *org_y, *org_z;
+  const float *dir_x, *dir_y, *dir_z;
+  const float *tnear, *tfar;
+};
+
+// The nearest hit on each valid lane with tnear < t < tfar, and which primitive of the
+// geometry it is on: found[i] says whether t[i] and primitive[i] hold one.
+void distances(const PreparedSphere& sphere, const Lanes& lanes, double (&t)[kPacketSize],
+               unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
+  // Plain locals, which GCC can keep in registers across the loop's stores.
+  const std::size_t count = lanes.count;
+  const int* valid = lanes.valid;
+  const float *org_x = lanes.org_x, *org_y = lanes.org_y, *org_z = lanes.org_z;
+  const float *dir_x = lanes.dir_x, *dir_y = lanes.dir_y, *dir_z = lanes.dir_z;
+  const float *tnear = lanes.tnear, *tfar = lanes.tfar;
+  for (std::size_t i = 0; i < count; ++i) primitive[i] = 0;
+  const bool in_world = sphere.world_sphere;
+  const Vec3 center = in_world ? sphere.world_center : sphere.center;
+  const double radius = in_world ? sphere.world_radius : sphere.radius;
+  const double r2 = radius * radius;
+  if (in_world) {
+    for (std::size_t i = 0; i < count; ++i) {
+      double root;
+      const bool meets = sphere_root(org_x[i] - center.x, org_y[i] - center.y, org_z[i] - center.z,
+                                     dir_x[i], dir_y[i], dir_z[i], r2, tnear[i], tfar[i], root);
+      found[i] = (valid[i] == -1) & meets;
+      t[i] = root;
+    }
+    return;
+  }
+  const glm::dmat4 to_object = sphere.world_to_object;
+  const glm::dmat3 linear(to_object);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3 f = Vec3(to_object * glm::dvec4(org_x[i], org_y[i], org_z[i], 1.0)) - center;
+    const Vec3 d = linear * Vec3(dir_x[i], dir_y[i], dir_z[i]);
+    double root;
+    const bool meets = sphere_root(f.x, f.y, f.z, d.x, d.y, d.z, r2, tnear[i], tfar[i], root);
+    found[i] = (valid[i] == -1) & meets;
+    t[i] = root;
+  }
 }
 
-bool distance(const PlaneSet& set, const glm::vec3& o, const glm::vec3& d, double t_min,
-              double t_max, double& t, unsigned& primitive) {
-  bool found = false;
-  for (unsigned i = 0; i < set.planes.size(); ++i) {
-    double t_plane;
-    if (!plane_distance(set.planes[i], o, d, t_min, t_max, t_plane)) continue;
-    t = t_max = t_plane;  // nearer planes only from here on; on a tie the first one stays
-    primitive = i;
-    found = true;
+void distances(const PlaneSet& set, const Lanes& lanes, double (&t)[kPacketSize],
+               unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
+  for (std::size_t i = 0; i < lanes.count; ++i) {
+    found[i] = false;
+    if (lanes.valid[i] != -1) continue;
+    const glm::vec3 o(lanes.org_x[i], lanes.org_y[i], lanes.org_z[i]);
+    const glm::vec3 d(lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]);
+    double t_max = lanes.tfar[i];
+    for (unsigned p = 0; p < set.planes.size(); ++p) {
+      double t_plane;
+      if (!plane_distance(set.planes[p], o, d, lanes.tnear[i], t_max, t_plane)) continue;
+      t[i] = t_max = t_plane;  // nearer planes only from here on; on a tie the first one stays
+      primitive[i] = p;
+      found[i] = true;
+    }
   }
-  return found;
 }
 
 // Embree hands over up to 16 rays at once. The tests of all of them run first, in a loop of
-// their own, so that their divisions and square roots overlap instead of waiting on each
-// other's branches; the hits are recorded after.
+// their own, so that their divisions and square roots overlap; the hits are recorded after.
 template <typename Shape>
 void intersect_callback(const RTCIntersectFunctionNArguments* args) {
   const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
@@ -111,16 +159,7 @@ void intersect_callback(const RTCIntersectFunctionNArguments* args) {
     double t[kPacketSize];
     unsigned primitive[kPacketSize];
     bool found[kPacketSize];
-    for (unsigned i = base; i < end; ++i) {
-      found[i - base] = false;
-      if (args->valid[i] != -1) continue;
-      const glm::vec3 o(RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i),
-                        RTCRayN_org_z(ray, n, i));
-      const glm::vec3 d(RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i),
-                        RTCRayN_dir_z(ray, n, i));
-      found[i - base] = distance(shape, o, d, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i),
-                                 t[i - base], primitive[i - base]);
-    }
+    distances(shape, Lanes(ray, n, args->valid, base, end), t, primitive, found);
     for (unsigned i = base; i < end; ++i) {
       if (!found[i - base]) continue;
       RTCRayN_tfar(ray, n, i) = static_cast<float>(t[i - base]);
@@ -138,17 +177,14 @@ template <typename Shape>
 void occluded_callback(const RTCOccludedFunctionNArguments* args) {
   const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
   const unsigned n = args->N;
-  for (unsigned i = 0; i < n; ++i) {
-    if (args->valid[i] != -1) continue;
-    const glm::vec3 o(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i),
-                      RTCRayN_org_z(args->ray, n, i));
-    const glm::vec3 d(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i),
-                      RTCRayN_dir_z(args->ray, n, i));
-    float& tfar = RTCRayN_tfar(args->ray, n, i);
-    double t;
-    unsigned primitive;
-    if (distance(shape, o, d, RTCRayN_tnear(args->ray, n, i), tfar, t, primitive))
-      tfar = -kInfinity;
+  for (unsigned base = 0; base < n; base += kPacketSize) {
+    const unsigned end = std::min(n, base + kPacketSize);
+    double t[kPacketSize];
+    unsigned primitive[kPacketSize];
+    bool found[kPacketSize];
+    distances(shape, Lanes(args->ray, n, args->valid, base, end), t, primitive, found);
+    for (unsigned i = base; i < end; ++i)
+      if (found[i - base]) RTCRayN_tfar(args->ray, n, i) = -kInfinity;
   }
 }
 
