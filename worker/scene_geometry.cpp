@@ -205,7 +205,7 @@ bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {
     const float d = ray.direction[axis];
     const float lo = transmissive_lo_[axis];
     const float hi = transmissive_hi_[axis];
-    outside |= d == 0.0f && (o < lo || o > hi);
+    outside |= (d == 0.0f) & ((o < lo) | (o > hi));
     float t0 = (lo - o) / d;
     float t1 = (hi - o) / d;
     const bool swap = t0 > t1;
