@@ -44,6 +44,10 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
   const auto start = std::chrono::steady_clock::now();
   const Renderer renderer(scene);
   const auto built = std::chrono::steady_clock::now();
+  // OpenImageIO's libraries load beside the tracing rather than after it. Not earlier:
+  // building the Renderer starts TBB, which opens libtbbmalloc with dlopen() and would
+  // wait for the dynamic loader's lock that this load holds until it is done.
+  start_loading_image_files();
   const LocalRenderResult result = render_local(renderer, options.threads);
   const auto rendered = std::chrono::steady_clock::now();
   write_image(result.image, output, scene.render.output_transfer);

@@ -9,22 +9,20 @@
 #include <stdexcept>
 #include <string>
 
-#include <OpenImageIO/imageio.h>
+#include "common/image_file_loader.hpp"
 
 namespace tessera {
 namespace {
 
-enum class FileKind { exr, png, jpg, tif, unknown };
-
-FileKind kind_of(const std::filesystem::path& path) {
+ImageFileKind kind_of(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".exr") return FileKind::exr;
-  if (ext == ".png") return FileKind::png;
-  if (ext == ".jpg" || ext == ".jpeg") return FileKind::jpg;
-  if (ext == ".tif" || ext == ".tiff") return FileKind::tif;
-  return FileKind::unknown;
+  if (ext == ".exr") return ImageFileKind::exr;
+  if (ext == ".png") return ImageFileKind::png;
+  if (ext == ".jpg" || ext == ".jpeg") return ImageFileKind::jpg;
+  if (ext == ".tif" || ext == ".tiff") return ImageFileKind::tif;
+  return ImageFileKind::unknown;
 }
 
 // Quantises in our own code, not OIIO's, so that the bytes never depend on its version.
@@ -119,18 +117,17 @@ float linear_to_srgb(float linear) {
   return 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
 }
 
-void encode_images_on_calling_thread() {
-  OIIO::attribute("threads", 1);
-  OIIO::attribute("exr_threads", -1);  // -1: OpenEXR without a thread pool of its own
-}
+void encode_images_on_calling_thread() { image_files().encode_on_calling_thread(); }
+
+void start_loading_image_files() { ImageFileLoader::instance().start_in_background(); }
 
 bool is_supported_image_path(const std::filesystem::path& path) {
-  return kind_of(path) != FileKind::unknown;
+  return kind_of(path) != ImageFileKind::unknown;
 }
 
 void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer) {
-  const FileKind kind = kind_of(path);
-  if (kind == FileKind::unknown)
+  const ImageFileKind kind = kind_of(path);
+  if (kind == ImageFileKind::unknown)
     throw std::runtime_error("cannot write " + path.string() +
                              ": unknown image extension (use .exr, .png, .jpg or .tif)");
 
@@ -139,60 +136,42 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
   temp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
                         path.extension().string());
 
-  OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
-  if (kind == FileKind::exr) type = OIIO::TypeDesc::FLOAT;
-  if (kind == FileKind::tif) type = OIIO::TypeDesc::UINT16;
-  OIIO::ImageSpec spec(image.width(), image.height(), 3, type);
-  if (kind == FileKind::exr) {
-    spec.attribute("compression", "zip");
-    spec.attribute("oiio:ColorSpace", "Linear");
+  ImageFileContent content;
+  content.kind = kind;
+  content.width = image.width();
+  content.height = image.height();
+  content.srgb = kind != ImageFileKind::exr && transfer == OutputTransfer::srgb;
+  std::vector<std::uint16_t> codes16;
+  std::vector<std::uint8_t> codes8;
+  if (kind == ImageFileKind::exr) {
+    content.pixels = image.pixels().data();
+  } else if (kind == ImageFileKind::tif) {
+    codes16 = encode<std::uint16_t>(image, transfer);
+    content.pixels = codes16.data();
   } else {
-    spec.attribute("oiio:ColorSpace", transfer == OutputTransfer::srgb ? "sRGB" : "Linear");
+    codes8 = encode<std::uint8_t>(image, transfer);
+    content.pixels = codes8.data();
   }
-  if (kind == FileKind::jpg) spec.attribute("Compression", "jpeg:95");
-  if (kind == FileKind::png) {
-    // zlib level 4 with every row filtered by "sub" (libpng's PNG_FILTER_SUB): measured on
-    // the benchmark's renders, 1.8 to 3.6 times as fast to write as the default (level 6,
-    // each row's filter chosen by trial) for files about 8% larger. docs/performance.md has
-    // the figures.
-    spec.attribute("png:compressionLevel", 4);
-    spec.attribute("png:filter", 0x10);
-  }
-
-  auto out = OIIO::ImageOutput::create(temp.string());
-  if (!out) throw std::runtime_error("cannot write " + path.string() + ": " + OIIO::geterror());
-  bool ok = out->open(temp.string(), spec);
-  if (ok) {
-    if (kind == FileKind::exr) {
-      ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels().data());
-    } else if (kind == FileKind::tif) {
-      ok = out->write_image(OIIO::TypeDesc::UINT16, encode<std::uint16_t>(image, transfer).data());
-    } else {
-      ok = out->write_image(OIIO::TypeDesc::UINT8, encode<std::uint8_t>(image, transfer).data());
-    }
-    ok = out->close() && ok;
-  }
-  if (!ok) {
-    const std::string message = out->geterror();
+  try {
+    image_files().write(temp.string(), content);
+  } catch (const std::exception& e) {
     std::error_code ignored;
     std::filesystem::remove(temp, ignored);
-    throw std::runtime_error("cannot write " + path.string() + ": " + message);
+    throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
   }
   std::filesystem::rename(temp, path);
 }
 
 Image read_image(const std::filesystem::path& path) {
-  auto in = OIIO::ImageInput::open(path.string());
-  if (!in) throw std::runtime_error("cannot read " + path.string() + ": " + OIIO::geterror());
-  const OIIO::ImageSpec& spec = in->spec();
-  Image image(spec.width, spec.height);
-  std::vector<float> all(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
-    throw std::runtime_error("cannot read " + path.string() + ": " + in->geterror());
-  const int channels = std::min(spec.nchannels, 3);
-  for (std::size_t i = 0, n = static_cast<std::size_t>(spec.width) * spec.height; i < n; ++i)
-    for (int c = 0; c < 3; ++c)
-      image.pixels()[i * 3 + c] = all[i * spec.nchannels + std::min(c, channels - 1)];
+  int width = 0, height = 0;
+  std::vector<float> rgb;
+  try {
+    rgb = image_files().read(path.string(), width, height);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("cannot read " + path.string() + ": " + e.what());
+  }
+  Image image(width, height);
+  std::copy(rgb.begin(), rgb.end(), image.pixels().begin());
   return image;
 }
 

@@ -1,4 +1,5 @@
-// Image files through OpenImageIO; the format follows the file extension.
+// Image files through OpenImageIO (loaded on first use: image_file_module.hpp); the format
+// follows the file extension.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +24,11 @@ Image read_image(const std::filesystem::path& path);
 // threads of their own, and background encoding stays in the (low-priority) thread that
 // asked for it.
 void encode_images_on_calling_thread();
+
+// Starts loading what reads and writes image files on a thread of its own, for a program
+// that will write one after other work: otherwise it loads when first used (about 0.1 s;
+// docs/performance.md).
+void start_loading_image_files();
 
 // True for the extensions write_image accepts.
 bool is_supported_image_path(const std::filesystem::path& path);
