@@ -1,0 +1,67 @@
+// The tracer's scaling from 1 to 2 threads: render_local(), the path `tessera render`
+// takes from its "tracing" clock, run on one Renderer with 1 and with 2 threads
+// alternately, in one process that does nothing else meanwhile. (`tessera render` loads
+// OpenImageIO on a thread of its own while it traces, which shares the cores with the
+// 2-thread render but not with the 1-thread one, so its own "tracing" figure measures
+// that too.) Prints the median of each and their ratio.
+//
+// Usage: tessera_thread_scaling SCENE.json SPP RUNS
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/scene_parser.hpp"
+#include "worker/local_render.hpp"
+
+namespace {
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2.0;
+}
+
+double timed_render(const tessera::Renderer& renderer, int threads) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = tessera::render_local(renderer, threads);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (result.rays.total() == 0) throw std::runtime_error("the render traced no rays");
+  return seconds;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 4) {
+    std::fprintf(stderr, "usage: %s SCENE.json SPP RUNS\n", argv[0]);
+    return 2;
+  }
+  try {
+    nlohmann::json document = tessera::read_json_file(argv[1]);
+    document["render"]["samples_per_pixel"] = std::stoi(argv[2]);
+    const int runs = std::stoi(argv[3]);
+    const tessera::Renderer renderer(tessera::parse_scene(document));
+    std::vector<double> one, two;
+    for (int run = 0; run < runs; ++run) {
+      // Alternating which goes first, as bench/run does between processes.
+      if (run % 2 == 0) {
+        one.push_back(timed_render(renderer, 1));
+        two.push_back(timed_render(renderer, 2));
+      } else {
+        two.push_back(timed_render(renderer, 2));
+        one.push_back(timed_render(renderer, 1));
+      }
+    }
+    const double t1 = median(one), t2 = median(two);
+    std::printf("1 thread %.3f s, 2 threads %.3f s, ratio %.3f\n", t1, t2, t1 / t2);
+    return 0;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "tessera_thread_scaling: %s\n", error.what());
+    return 1;
+  }
+}
