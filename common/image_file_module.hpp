@@ -32,8 +32,8 @@ struct ImageFileModule {
   // Writes `content` to `path` (whose extension names the format). Throws std::runtime_error
   // saying what failed; may leave a partial file, which the caller removes.
   void (*write)(const std::string& path, const ImageFileContent& content);
-  // Reads any file OpenImageIO knows as float RGB; the third channel repeats the last one a
-  // file has when it has fewer. Throws std::runtime_error saying what failed.
+  // Reads any file OpenImageIO knows as float RGB; a channel the file lacks repeats its
+  // last one (grey for one channel). Throws std::runtime_error saying what failed.
   std::vector<float> (*read)(const std::string& path, int& width, int& height);
   // OpenImageIO and OpenEXR start no threads of their own from now on.
   void (*encode_on_calling_thread)();
