@@ -22,22 +22,19 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/median.hpp"
 #include "common/scene_parser.hpp"
 #include "worker/local_render.hpp"
 
 namespace {
+
+using tessera::bench::median;
 
 using tessera::kPacketSide;
 using tessera::kPacketSize;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2.0;
 }
 
 // One packet per 4x4 block of pixels, rows of blocks spread over the arena's threads.

@@ -15,16 +15,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/median.hpp"
 #include "common/scene_parser.hpp"
 #include "worker/local_render.hpp"
 
 namespace {
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2.0;
-}
+using tessera::bench::median;
 
 double timed_render(const tessera::Renderer& renderer, int threads) {
   const auto start = std::chrono::steady_clock::now();
