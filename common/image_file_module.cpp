@@ -40,13 +40,14 @@ std::vector<float> read(const std::string& path, int& width, int& height) {
   std::vector<float> all(count * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
     throw std::runtime_error(in->geterror());
+  width = spec.width;
+  height = spec.height;
+  if (spec.nchannels == 3) return all;
   const int channels = std::min(spec.nchannels, 3);
   std::vector<float> rgb(count * 3);
   for (std::size_t i = 0; i < count; ++i)
     for (int c = 0; c < 3; ++c)
       rgb[i * 3 + c] = all[i * spec.nchannels + std::min(c, channels - 1)];
-  width = spec.width;
-  height = spec.height;
   return rgb;
 }
 
