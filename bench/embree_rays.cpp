@@ -64,8 +64,10 @@ std::uint64_t trace_bare(const tessera::Renderer& renderer, tbb::task_arena& are
               }
               tessera::load_packet(packet, valid, rayhit);
               rtcIntersect16(valid, embree, &context.embree, &rayhit);
+              // A missed lane's primID is whatever the last hit there left.
               for (int i = 0; i < kPacketSize; ++i)
-                if (valid[i]) sum += rayhit.hit.geomID[i] + rayhit.hit.primID[i];
+                if (valid[i] && rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
+                  sum += rayhit.hit.geomID[i] + rayhit.hit.primID[i];
             }
           return sum;
         },
