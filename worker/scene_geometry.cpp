@@ -317,7 +317,7 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
     nearest_planes(plane_sets_[0], rayhit, valid, plane_t, plane);
     for (int i = 0; i < kPacketSize; ++i) {
       // As the plane callback has it: t < t_max, compared in double.
-      if (plane[i] >= 0 && plane_t[i] < rayhit.ray.tfar[i])
+      if ((plane[i] >= 0) & (plane_t[i] < rayhit.ray.tfar[i]))
         rayhit.ray.tfar[i] = static_cast<float>(plane_t[i]);
       else
         plane[i] = -1;
@@ -378,7 +378,7 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
     bool any_left = false;
     for (int i = 0; i < kPacketSize; ++i) {
       if (by_plane[i]) valid[i] = 0;
-      any_left = any_left || valid[i] != 0;
+      any_left = any_left | (valid[i] != 0);
     }
     if (!any_left) {
       for (int i = 0; i < kPacketSize; ++i) blocked[i] = by_plane[i];
@@ -387,7 +387,7 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
   }
   rtcOccluded16(valid, scene_.get(), &context, &rays);
   for (int i = 0; i < kPacketSize; ++i)
-    blocked[i] = by_plane[i] || (packet.active[i] && rays.tfar[i] < 0.0f);
+    blocked[i] = by_plane[i] | (packet.active[i] & (rays.tfar[i] < 0.0f));
 }
 
 bool SceneGeometry::occluded(const Ray& ray, float t_max, unsigned mask) const {

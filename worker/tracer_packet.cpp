@@ -23,7 +23,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   const bool rays_leave = !lights_.empty() || depth < scene_.render.max_depth;
   glm::vec3 lifted[2][kPacketSize];
   for (int i = 0; i < kPacketSize; ++i) {
-    if (packet.active[i] && keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
+    if (packet.active[i] & keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (!found[i]) continue;
     begin_shading(packet.rays[i], hits[i], shading[i]);
     if (!rays_leave) continue;
@@ -54,7 +54,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     Color shadow[kPacketSize];
     unblocked_factors(samples, shadows, reach, blocked, keep, shadow, counts);
     for (int i = 0; i < kPacketSize; ++i) {
-      if (!shadows.active[i] || !keep[i]) continue;
+      if (!(shadows.active[i] & keep[i])) continue;
       counts.shadow += 1;
       add_light(shading[i], samples[i], n_dot_l[i], blocked[i] ? Color(0.0) : shadow[i]);
     }
@@ -99,7 +99,7 @@ void Tracer::unblocked_factors(const LightSample (&samples)[kPacketSize], const 
   bool any = false;
   geometry_.may_meet_transmissive(shadows, reach, walk.active);
   for (int i = 0; i < kPacketSize; ++i) {
-    walk.active[i] = walk.active[i] && !blocked[i];
+    walk.active[i] = walk.active[i] & !blocked[i];
     if (!walk.active[i]) continue;
     walk.rays[i] = shadows.rays[i];
     walk_reach[i] = reach[i];

@@ -241,7 +241,7 @@ void planes_occlude(const PlaneSet& set, const RTCRay16& rays, const int (&valid
   double t[16];
   int plane[16];
   nearest_of_planes(set, rays, valid, t, plane);
-  for (int i = 0; i < 16; ++i) blocked[i] = plane[i] >= 0 && t[i] < rays.tfar[i];
+  for (int i = 0; i < 16; ++i) blocked[i] = (plane[i] >= 0) & (t[i] < rays.tfar[i]);
 }
 
 void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&valid)[16],
