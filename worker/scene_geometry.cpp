@@ -386,6 +386,8 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
     }
   }
   rtcOccluded16(valid, scene_.get(), &context, &rays);
+  // Bitwise, not short-circuit, here and in the other loops over lanes' flags: the same
+  // answers without a branch per lane (half the instructions of this loop).
   for (int i = 0; i < kPacketSize; ++i)
     blocked[i] = by_plane[i] | (packet.active[i] & (rays.tfar[i] < 0.0f));
 }

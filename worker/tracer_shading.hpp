@@ -123,8 +123,7 @@ inline void Tracer::directional_sample(const PreparedLight& light, LightSample& 
 inline void Tracer::positional_sample(const PreparedLight& light, const Vec3& offset,
                                       double distance, double inverse_distance,
                                       double inverse_attenuation, LightSample& sample) {
-  // Each field is stored once: sixteen lanes for each of many lights make these stores a
-  // good part of the packet's light sampling.
+  // Each field is stored once: a packet stores sixteen samples for every light.
   sample.position = light.position;
   sample.distance = distance;
   if (distance == 0.0) {  // a light inside the surface lights nothing
