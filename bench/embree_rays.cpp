@@ -9,7 +9,6 @@
 // It prints the median rate of each and their ratio.
 //
 // Usage: tessera_embree_rays SCENE.json WIDTH HEIGHT THREADS RUNS
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>

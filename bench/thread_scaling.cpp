@@ -6,7 +6,6 @@
 // that too.) Prints the median of each and their ratio.
 //
 // Usage: tessera_thread_scaling SCENE.json SPP RUNS
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
