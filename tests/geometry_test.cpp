@@ -137,6 +137,48 @@ TEST(Geometry, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
   }
 }
 
+TEST(Geometry, OpaquePlanesStayOutOfEmbreeAndSingleRaysStillMeetThem) {
+  // Straight down from y = 10 onto a sphere whose top is at y = 4, over the floor at y = 0.
+  json scene = pinhole_scene({0, 10, 0}, {0, 0, 0}, {0, 0, -1});
+  scene["objects"] = {{{"type", "plane"},
+                       {"point", {0, 0, 0}},
+                       {"normal", {0, 1, 0}},
+                       {"material", {{"diffuse", 1}}}},
+                      {{"type", "sphere"}, {"center", {0, 3, 0}}, {"radius", 1}}};
+  const Renderer renderer(parse_scene(scene));
+  const SceneGeometry& geometry = renderer.geometry();
+  // Embree's box around its scene is the sphere's alone: the plane's would be everywhere.
+  RTCBounds bounds;
+  rtcGetSceneBounds(geometry.embree_scene(), &bounds);
+  EXPECT_LT(bounds.upper_y, 4.1f);
+  EXPECT_GT(bounds.lower_y, 1.9f);
+  const EmbreeDevice device;
+  const SceneGeometry whole(renderer.scene(), device, OpaquePlanes::also_in_embree);
+  rtcGetSceneBounds(whole.embree_scene(), &bounds);
+  EXPECT_GT(bounds.upper_y, 1e17f);
+
+  const std::uint32_t floor = 0, sphere = 1;
+  const Ray onto_sphere{{0.0f, 10.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
+  const Ray beside_it{{3.0f, 10.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
+  for (const SceneGeometry* g : {&geometry, &whole}) {
+    const auto first = g->intersect(onto_sphere, kInfinity);
+    ASSERT_TRUE(first.has_value());
+    EXPECT_EQ(first->object, sphere);
+    EXPECT_NEAR(first->t, 6.0, 1e-9);
+    const auto floor_hit = g->intersect(beside_it, kInfinity);
+    ASSERT_TRUE(floor_hit.has_value());
+    EXPECT_EQ(floor_hit->object, floor);
+    EXPECT_EQ(floor_hit->t, 10.0);
+    EXPECT_EQ(floor_hit->normal, Vec3(0, 1, 0));
+    EXPECT_FALSE(g->intersect(beside_it, 9.5f).has_value());
+    EXPECT_FALSE(g->intersect(beside_it, kInfinity, kTransmissiveMask | kOpaqueSolidMask));
+    EXPECT_TRUE(g->occluded(beside_it, 10.5f, kOpaqueMask));
+    EXPECT_FALSE(g->occluded(beside_it, 9.5f, kOpaqueMask));
+    EXPECT_FALSE(g->occluded(beside_it, 10.5f, kOpaqueSolidMask));
+    EXPECT_TRUE(g->occluded(onto_sphere, 6.5f, kOpaqueSolidMask));
+  }
+}
+
 TEST(Geometry, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.
@@ -164,6 +206,72 @@ TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
        {"material", {{"ambient", 0}, {"diffuse", 0}, {"transmission", 0.5}, {"ior", 1.5}}}});
   scene["background"] = 1;
   EXPECT_NEAR(render_pixel(scene).r, 0.25, 1e-6);
+}
+
+TEST(Geometry, BoxesAreMetOnEachFaceFromOutsideAndInside) {
+  // Boxes are tested analytically: along the axes in world space when the transform only
+  // scales and moves them (the first), in object space otherwise (the second).
+  const json transforms[2] = {{{{"scale", {2, 1, -0.5}}}, {{"translate", {1, -1, 2}}}},
+                              {{{"rotate", {{"axis", {1, 1, 1}}, {"degrees", 40}}}},
+                               {{"scale", {1, 3, 1}}},
+                               {{"translate", {-2, 0, 1}}}}};
+  const Vec3 lo(1, 2, 3), hi(2, 4, 7);
+  for (const json& steps : transforms) {
+    json scene = pinhole_scene({0, 0, 50}, {0, 0, 0});
+    scene["objects"] = {{{"type", "box"},
+                         {"min", {lo.x, lo.y, lo.z}},
+                         {"max", {hi.x, hi.y, hi.z}},
+                         {"transform", steps}}};
+    const Renderer renderer(parse_scene(scene));
+    const SceneGeometry& geometry = renderer.geometry();
+    const Mat4& m = renderer.scene().objects[0].transform;
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(m)));
+    const Vec3 centre(m * glm::dvec4((lo + hi) / 2.0, 1.0));
+    RayPacket packet;
+    Vec3 normals[6];
+    for (int face = 0; face < 6; ++face) {
+      const int axis = face / 2;
+      Vec3 middle = (lo + hi) / 2.0;
+      middle[axis] = face % 2 == 1 ? hi[axis] : lo[axis];
+      Vec3 outward(0.0);
+      outward[axis] = face % 2 == 1 ? 1.0 : -1.0;
+      const Vec3 point(m * glm::dvec4(middle, 1.0));
+      const Vec3 n = glm::normalize(normal_matrix * outward);
+      normals[face] = n;
+      // From 3 units out, straight at the face's middle.
+      const Ray in{glm::vec3(point + 3.0 * n), glm::vec3(-n)};
+      const auto hit = geometry.intersect(in, kInfinity);
+      ASSERT_TRUE(hit.has_value()) << "face " << face;
+      EXPECT_NEAR(hit->t, 3.0, 1e-5) << "face " << face;
+      EXPECT_NEAR(glm::length(hit->normal - n), 0.0, 1e-12) << "face " << face;
+      EXPECT_NEAR(glm::dot(hit->position - point, n), 0.0, 1e-12) << "face " << face;
+      EXPECT_NEAR(glm::length(hit->position - point), 0.0, 1e-5) << "face " << face;
+      EXPECT_FALSE(geometry.occluded(in, 2.9f)) << "face " << face;
+      EXPECT_TRUE(geometry.occluded(in, 3.1f)) << "face " << face;
+      // From the centre, out through the face's middle: the far side, with its outward
+      // normal.
+      const Ray out{glm::vec3(centre), glm::vec3(glm::normalize(point - centre))};
+      const auto exit = geometry.intersect(out, kInfinity);
+      ASSERT_TRUE(exit.has_value()) << "face " << face;
+      EXPECT_NEAR(exit->t, glm::length(point - centre), 1e-5) << "face " << face;
+      EXPECT_NEAR(glm::length(exit->normal - n), 0.0, 1e-12) << "face " << face;
+      // Turned away from the box, the same ray meets nothing.
+      EXPECT_FALSE(geometry.intersect(Ray{in.origin, -in.direction}, kInfinity)) << "face " << face;
+      packet.active[face] = true;
+      packet.rays[face] = in;
+    }
+    // A packet finds the very hits single rays do.
+    SurfaceHit hits[kPacketSize];
+    bool found[kPacketSize];
+    geometry.intersect(packet, hits, found);
+    for (int face = 0; face < 6; ++face) {
+      ASSERT_TRUE(found[face]) << "face " << face;
+      const auto single = geometry.intersect(packet.rays[face], kInfinity);
+      EXPECT_EQ(hits[face].t, single->t) << "face " << face;
+      EXPECT_EQ(hits[face].position, single->position) << "face " << face;
+      EXPECT_EQ(hits[face].normal, normals[face]) << "face " << face;
+    }
+  }
 }
 
 // Every pixel of a scene where secondary rays must not hit their own surface: a mirror or

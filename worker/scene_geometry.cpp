@@ -34,7 +34,8 @@ std::optional<TriangleHit> intersect_triangle(const Vec3& v0, const Vec3& v1, co
 
 }  // namespace
 
-SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
+SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
+                             OpaquePlanes opaque_planes)
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
@@ -46,6 +47,8 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
           using T = std::decay_t<decltype(shape)>;
           if constexpr (std::is_same_v<T, Sphere>)
             add_sphere(shape, object.transform, i, mask);
+          else if constexpr (std::is_same_v<T, Box>)
+            add_box(shape, object.transform, i, mask);
           else if constexpr (std::is_same_v<T, Plane>)
             add_plane(shape, object.transform, i, transmissive);
           else
@@ -61,10 +64,13 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device)
       transmissive_hi_ = glm::max(transmissive_hi_, hi);
     }
   }
-  for (std::uint32_t set = 0; set < 2; ++set) {
-    if (plane_sets_[set].planes.empty()) continue;
-    if (set == 0) opaque_planes_geometry_ = static_cast<unsigned>(records_.size());
-    add_user_geometry(Kind::plane, set, 0, set == 0 ? kOpaquePlaneMask : kTransmissiveMask);
+  if (!plane_sets_[1].planes.empty()) add_user_geometry(Kind::plane, 1, 0, kTransmissiveMask);
+  if (!plane_sets_[0].planes.empty()) {
+    opaque_planes_geometry_ = static_cast<unsigned>(records_.size());
+    if (opaque_planes == OpaquePlanes::also_in_embree)
+      add_user_geometry(Kind::plane, 0, 0, kOpaquePlaneMask);
+    else
+      records_.push_back({Kind::plane, 0, 0});
   }
   // Robust traversal closes the hairline cracks between neighbouring mesh triangles.
   rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
@@ -80,6 +86,9 @@ void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint3
   if (kind == Kind::sphere) {
     rtcSetGeometryUserData(geometry, spheres_[index].get());
     set_sphere_callbacks(geometry);
+  } else if (kind == Kind::box) {
+    rtcSetGeometryUserData(geometry, boxes_[index].get());
+    set_box_callbacks(geometry);
   } else {
     rtcSetGeometryUserData(geometry, &plane_sets_[index]);
     set_plane_callbacks(geometry);
@@ -114,6 +123,43 @@ void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std:
   }
   spheres_.push_back(std::move(prepared));
   add_user_geometry(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object, mask);
+}
+
+void SceneGeometry::add_box(const Box& box, const Mat4& transform, std::uint32_t object,
+                            unsigned mask) {
+  auto prepared = std::make_unique<PreparedBox>();
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  const glm::dmat3 linear(transform);
+  bool along_axes = true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) along_axes = along_axes && (i == j || linear[i][j] == 0.0);
+  if (along_axes) {
+    // A scale along the axes, negative ones included, keeps the box axis-aligned.
+    const Vec3 a(transform * glm::dvec4(box.min, 1.0));
+    const Vec3 b(transform * glm::dvec4(box.max, 1.0));
+    prepared->world_box = true;
+    prepared->lo = glm::min(a, b);
+    prepared->hi = glm::max(a, b);
+    for (int face = 0; face < 6; ++face) {
+      Vec3 n(0.0);
+      n[face / 2] = face % 2 == 1 ? 1.0 : -1.0;
+      prepared->face_normals[face] = n;
+    }
+  } else {
+    prepared->lo = box.min;
+    prepared->hi = box.max;
+    // Normals go through the inverse transpose, which keeps an outward normal outward even
+    // under a mirroring transform.
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(linear));
+    for (int face = 0; face < 6; ++face) {
+      Vec3 n(0.0);
+      n[face / 2] = face % 2 == 1 ? 1.0 : -1.0;
+      prepared->face_normals[face] = glm::normalize(normal_matrix * n);
+    }
+  }
+  boxes_.push_back(std::move(prepared));
+  add_user_geometry(Kind::box, static_cast<std::uint32_t>(boxes_.size() - 1), object, mask);
 }
 
 void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
@@ -171,12 +217,17 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
 
 std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(
     const GeometryRecord& record) const {
-  if (record.kind == Kind::sphere) {
+  if (record.kind == Kind::sphere || record.kind == Kind::box) {
     RTCBounds bounds{};
     RTCBoundsFunctionArguments args{};
-    args.geometryUserPtr = spheres_[record.index].get();
     args.bounds_o = &bounds;
-    sphere_bounds(&args);
+    if (record.kind == Kind::sphere) {
+      args.geometryUserPtr = spheres_[record.index].get();
+      sphere_bounds(&args);
+    } else {
+      args.geometryUserPtr = boxes_[record.index].get();
+      box_bounds(&args);
+    }
     return {{bounds.lower_x, bounds.lower_y, bounds.lower_z},
             {bounds.upper_x, bounds.upper_y, bounds.upper_z}};
   }
@@ -225,8 +276,21 @@ void SceneGeometry::may_meet_transmissive(const RayPacket& packet,
     may[i] = packet.active[i] && may_meet_transmissive(packet.rays[i], t_max[i]);
 }
 
+int SceneGeometry::nearest_opaque_plane(const Ray& ray, float t_max, unsigned mask,
+                                        double& t) const {
+  if ((mask & kOpaquePlaneMask) == 0 || plane_sets_[0].planes.empty()) return -1;
+  const int plane = nearest_plane(plane_sets_[0], ray.origin, ray.direction, t);
+  // As the packets have it: t < t_max, compared in double.
+  return plane >= 0 && t < t_max ? plane : -1;
+}
+
 std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
                                                    unsigned mask) const {
+  // The packets' way, lane for lane: the nearest opaque plane first, then Embree for
+  // anything nearer.
+  double plane_t = kInfinity;
+  const int plane = nearest_opaque_plane(ray, t_max, mask, plane_t);
+  if (plane >= 0) t_max = static_cast<float>(plane_t);
   HitContext context;
   rtcInitIntersectContext(&context.embree);
   RTCRayHit rayhit{};
@@ -238,14 +302,17 @@ std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
   rayhit.ray.dir_z = ray.direction.z;
   rayhit.ray.tnear = 0.0f;
   rayhit.ray.tfar = t_max;
-  rayhit.ray.mask = mask;
+  rayhit.ray.mask = mask & ~kOpaquePlaneMask;
   rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_.get(), &context.embree, &rayhit);
-  if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  std::optional<SurfaceHit> hit(std::in_place);
-  finish_hit(ray, rayhit.hit.geomID, rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u,
-             rayhit.hit.v, context.t[0], *hit);
+  std::optional<SurfaceHit> hit;
+  if (rayhit.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+    finish_hit(ray, rayhit.hit.geomID, rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u,
+               rayhit.hit.v, context.t[0], hit.emplace());
+  else if (plane >= 0)
+    finish_hit(ray, opaque_planes_geometry_, static_cast<unsigned>(plane), rayhit.ray.tfar, 0.0f,
+               0.0f, plane_t, hit.emplace());
   return hit;
 }
 
@@ -303,9 +370,8 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
   context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRayHit16 rayhit;
-  // Infinite planes are in every packet's way as far as the BVH can tell, so Embree would
-  // call their callback for every packet. The same test here, on all lanes at once, costs
-  // less; Embree then looks only for something nearer than each lane's plane.
+  // Opaque planes are tested here, on all lanes at once (see OpaquePlanes); Embree then
+  // looks only for something nearer than each lane's plane.
   const bool opaque_planes =
       (mask & kOpaquePlaneMask) != 0 && opaque_planes_geometry_ != RTC_INVALID_GEOMETRY_ID;
   load_packet(packet, valid, rayhit, opaque_planes ? mask & ~kOpaquePlaneMask : mask);
@@ -365,9 +431,8 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
   alignas(64) RTCRay16 rays;
   load_rays(packet, valid, rays);
   for (int i = 0; i < kPacketSize; ++i) rays.tfar[i] = packet.active[i] ? t_max[i] : 0.0f;
-  // Infinite planes are in every packet's way as far as the BVH can tell, so Embree would
-  // call their callback for every packet of shadow rays. The same test here, on all lanes
-  // at once, costs less, and the lanes it finds blocked need no traversal at all.
+  // Opaque planes are tested here, on all lanes at once (see OpaquePlanes), and the lanes
+  // they block need no traversal at all.
   const PlaneSet& opaque_planes = plane_sets_[0];
   const bool planes_here = (mask & kOpaquePlaneMask) != 0 && !opaque_planes.planes.empty();
   const unsigned embree_mask = planes_here ? mask & ~kOpaquePlaneMask : mask;
@@ -393,6 +458,8 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
 }
 
 bool SceneGeometry::occluded(const Ray& ray, float t_max, unsigned mask) const {
+  double plane_t;
+  if (nearest_opaque_plane(ray, t_max, mask, plane_t) >= 0) return true;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r{};
@@ -404,7 +471,7 @@ bool SceneGeometry::occluded(const Ray& ray, float t_max, unsigned mask) const {
   r.dir_z = ray.direction.z;
   r.tnear = 0.0f;
   r.tfar = t_max;
-  r.mask = mask;
+  r.mask = mask & ~kOpaquePlaneMask;
   rtcOccluded1(scene_.get(), &context, &r);
   return r.tfar < 0.0f;
 }
@@ -432,6 +499,24 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       hit.position =
           Vec3(sphere.object_to_world * glm::dvec4(sphere.center + sphere.radius * n, 1.0));
       hit.normal = glm::normalize(glm::transpose(glm::dmat3(sphere.world_to_object)) * n);
+      hit.shading_normal = hit.normal;
+      break;
+    }
+    case Kind::box: {
+      const PreparedBox& box = *boxes_[record.index];
+      hit.t = exact_t;
+      Vec3 o(ray.origin);
+      Vec3 d(ray.direction);
+      if (!box.world_box) {
+        o = Vec3(box.world_to_object * glm::dvec4(o, 1.0));
+        d = glm::dmat3(box.world_to_object) * d;
+      }
+      // Snapping the point onto its face removes the error that o + t·d accumulates.
+      Vec3 p = glm::clamp(o + hit.t * d, box.lo, box.hi);
+      const unsigned axis = primitive / 2;
+      p[axis] = primitive % 2 == 1 ? box.hi[axis] : box.lo[axis];
+      hit.position = box.world_box ? p : Vec3(box.object_to_world * glm::dvec4(p, 1.0));
+      hit.normal = box.face_normals[primitive];
       hit.shading_normal = hit.normal;
       break;
     }

@@ -46,6 +46,19 @@ struct PreparedSphere {
   double world_radius = 1.0;
 };
 
+// A box: axis-aligned in object space, seen through its object-to-world transform. Hits
+// name their face as the primitive: 2·axis, +1 for the face at `hi`.
+struct PreparedBox {
+  Vec3 lo{0.0};  // object space; the frame of the test (world space when `world_box`)
+  Vec3 hi{0.0};
+  Mat4 world_to_object{1.0};
+  Mat4 object_to_world{1.0};
+  // Set when the transform only scales along the axes and translates, as it does for most
+  // boxes: lo and hi are then world corners, tested without a matrix product per ray.
+  bool world_box = false;
+  Vec3 face_normals[6];  // world space, unit, outward; by face
+};
+
 struct PreparedPlane {
   Vec3 point{0.0};    // world space
   Vec3 normal{0.0};   // world space, unit
@@ -113,16 +126,24 @@ struct RayPacket {
 void load_packet(const RayPacket& packet, int (&valid)[kPacketSize], RTCRayHit16& rayhit,
                  unsigned mask = kAnyMask);
 
+// Whether the Embree scene holds the opaque planes. Every query here tests them outside
+// Embree, on all lanes at once: an infinite plane's box is everywhere, so inside the BVH it
+// would be visited by every ray and keep any ray from being culled at the root. The
+// benchmark's bare Embree loop, which knows nothing of that, needs them inside.
+enum class OpaquePlanes { outside_embree, also_in_embree };
+
 class SceneGeometry {
  public:
-  SceneGeometry(const Scene& scene, const EmbreeDevice& device);
+  SceneGeometry(const Scene& scene, const EmbreeDevice& device,
+                OpaquePlanes opaque_planes = OpaquePlanes::outside_embree);
 
   // The closest hit with 0 < t < t_max, if any.
   std::optional<SurfaceHit> intersect(const Ray& ray, float t_max,
                                       unsigned mask = kAnyMask) const;
   // Whether anything lies on the ray with 0 < t < t_max.
   bool occluded(const Ray& ray, float t_max, unsigned mask = kAnyMask) const;
-  // The Embree scene itself, for the benchmark that traces it with nothing around.
+  // The Embree scene itself, for the benchmark that traces it with nothing around (built
+  // with OpaquePlanes::also_in_embree, so that it holds the whole scene).
   RTCScene embree_scene() const { return scene_.get(); }
 
   // False when the ray certainly meets no transmissive surface before t_max: a slab test
@@ -146,7 +167,7 @@ class SceneGeometry {
                 bool (&blocked)[kPacketSize]) const;
 
  private:
-  enum class Kind : std::uint8_t { sphere, plane, triangles };
+  enum class Kind : std::uint8_t { sphere, box, plane, triangles };
   struct GeometryRecord {
     Kind kind;
     std::uint32_t index;   // into the vector of its kind (for planes: which PlaneSet)
@@ -158,11 +179,15 @@ class SceneGeometry {
                  SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
   void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
                   unsigned mask);
+  void add_box(const Box& box, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
   void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
-  // Lower and upper corners of the box around a sphere's or a mesh's record.
+  // Lower and upper corners of the box around a sphere's, a box's or a mesh's record.
   std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;
+  // The nearest opaque plane with 0 < t < t_max on the ray, as for a lane of a packet: its
+  // index in plane_sets_[0] and distance, or -1 if `mask` leaves them out or none is there.
+  int nearest_opaque_plane(const Ray& ray, float t_max, unsigned mask, double& t) const;
   // `exact_t` is the callback's distance, for spheres and planes.
   void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u,
                   float v, double exact_t, SurfaceHit& hit) const;
@@ -176,8 +201,10 @@ class SceneGeometry {
   glm::vec3 transmissive_hi_{-kInfinity};
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
+  std::vector<std::unique_ptr<PreparedBox>> boxes_;
   PlaneSet plane_sets_[2];  // opaque, transmissive
-  // The Embree geometry of plane_sets_[0], which packets test outside Embree.
+  // The record of plane_sets_[0], after every Embree geometry's (and its Embree geometry
+  // id with OpaquePlanes::also_in_embree).
   unsigned opaque_planes_geometry_ = RTC_INVALID_GEOMETRY_ID;
   std::vector<TriangleMesh> meshes_;
 };

@@ -1,5 +1,5 @@
-// Boxes, triangles and meshes as world-space triangle lists. Winding stays counter-
-// clockwise seen from outside even under a mirroring transform.
+// Triangles and meshes as world-space triangle lists. Winding stays counter-clockwise seen
+// from outside even under a mirroring transform.
 #pragma once
 
 #include "common/scene.hpp"
@@ -7,7 +7,6 @@
 
 namespace tessera {
 
-PreparedTriangles triangulate(const Box& box, const Mat4& transform);
 PreparedTriangles triangulate(const Triangle& triangle, const Mat4& transform);
 PreparedTriangles triangulate(const Mesh& mesh, const Mat4& transform);
 

@@ -1,5 +1,5 @@
-// Spheres (ellipsoids under a transform) and infinite planes as Embree user geometry, with
-// exact analytic intersection in double precision.
+// Spheres (ellipsoids under a transform), boxes and infinite planes as Embree user
+// geometry, with exact analytic intersection in double precision.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -48,6 +48,40 @@ namespace {
   const bool farther_in = (farther > t_min) & (farther < t_max);
   t = nearer_in ? nearer : farther;
   return !passes_by & !(discriminant < 0.0) & (nearer_in | farther_in);
+}
+
+// The slab test, for the origin o and direction d in the frame where the box spans lo to
+// hi: whether the ray meets it with t_min < t < t_max, the nearer such t and its face. Like
+// sphere_root(), it has no branches. A zero direction component gives infinite quotients,
+// which leave the interval as it is when the origin lies within that slab and empty it
+// otherwise; an origin exactly on such a slab's face gives NaN, which empties it too.
+[[gnu::always_inline]] inline bool box_root(const double (&o)[3], const double (&d)[3],
+                                            const Vec3& lo, const Vec3& hi, double t_min,
+                                            double t_max, double& t, unsigned& face) {
+  double t_entry = -std::numeric_limits<double>::infinity();
+  double t_exit = std::numeric_limits<double>::infinity();
+  unsigned entry_face = 0;
+  unsigned exit_face = 0;
+  for (unsigned axis = 0; axis < 3; ++axis) {
+    const double inverse = 1.0 / d[axis];
+    const double t_lo = (lo[axis] - o[axis]) * inverse;
+    const double t_hi = (hi[axis] - o[axis]) * inverse;
+    // Forward along the axis the ray enters by the lo face and leaves by the hi one.
+    const bool forward = t_lo < t_hi;
+    const double enters = forward ? t_lo : t_hi;
+    const double leaves = forward ? t_hi : t_lo;
+    const bool later = enters > t_entry;
+    t_entry = later ? enters : t_entry;
+    entry_face = later ? 2 * axis + !forward : entry_face;
+    const bool sooner = leaves < t_exit;
+    t_exit = sooner ? leaves : t_exit;
+    exit_face = sooner ? 2 * axis + forward : exit_face;
+  }
+  const bool entry_in = (t_entry > t_min) & (t_entry < t_max);
+  const bool exit_in = (t_exit > t_min) & (t_exit < t_max);
+  t = entry_in ? t_entry : t_exit;
+  face = entry_in ? entry_face : exit_face;
+  return (t_entry <= t_exit) & (entry_in | exit_in);
 }
 
 [[gnu::always_inline]] inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
@@ -126,6 +160,41 @@ void distances(const PreparedSphere& sphere, const Lanes& lanes, double (&t)[kPa
   }
 }
 
+void distances(const PreparedBox& box, const Lanes& lanes, double (&t)[kPacketSize],
+               unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
+  const std::size_t count = lanes.count;
+  const Vec3 lo = box.lo;
+  const Vec3 hi = box.hi;
+  if (box.world_box) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const double o[3] = {lanes.org_x[i], lanes.org_y[i], lanes.org_z[i]};
+      const double d[3] = {lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]};
+      double root;
+      unsigned face;
+      const bool meets = box_root(o, d, lo, hi, lanes.tnear[i], lanes.tfar[i], root, face);
+      found[i] = (lanes.valid[i] == -1) & meets;
+      t[i] = root;
+      primitive[i] = face;
+    }
+    return;
+  }
+  const glm::dmat4 to_object = box.world_to_object;
+  const glm::dmat3 linear(to_object);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec3 f =
+        Vec3(to_object * glm::dvec4(lanes.org_x[i], lanes.org_y[i], lanes.org_z[i], 1.0));
+    const Vec3 g = linear * Vec3(lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]);
+    const double o[3] = {f.x, f.y, f.z};
+    const double d[3] = {g.x, g.y, g.z};
+    double root;
+    unsigned face;
+    const bool meets = box_root(o, d, lo, hi, lanes.tnear[i], lanes.tfar[i], root, face);
+    found[i] = (lanes.valid[i] == -1) & meets;
+    t[i] = root;
+    primitive[i] = face;
+  }
+}
+
 void distances(const PlaneSet& set, const Lanes& lanes, double (&t)[kPacketSize],
                unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
   for (std::size_t i = 0; i < lanes.count; ++i) {
@@ -197,6 +266,15 @@ void plane_bounds(const RTCBoundsFunctionArguments* args) {
 
 namespace {
 
+// Where the ray's line meets the plane, in units of its direction: infinite or NaN when
+// they are parallel.
+[[gnu::always_inline]] inline double plane_quotient(const PreparedPlane& plane, const Vec3& origin,
+                                                    const Vec3& direction) {
+  const double denominator = glm::dot(direction, plane.normal);
+  const double numerator = plane.offset - glm::dot(origin, plane.normal);
+  return numerator / denominator;
+}
+
 // The nearest plane on each lane with valid[i] == -1 of sixteen rays that start at t = 0,
 // for any of Embree's ray layouts of sixteen.
 template <typename Rays>
@@ -219,11 +297,9 @@ void nearest_of_planes(const PlaneSet& set, const Rays& rays, const int (&valid)
   for (std::size_t p = 0; p < set.planes.size(); ++p) {
     const PreparedPlane& candidate = set.planes[p];
     for (int i = 0; i < 16; ++i) {
-      const Vec3 origin(rays.org_x[i], rays.org_y[i], rays.org_z[i]);
-      const Vec3 direction(rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]);
-      const double denominator = glm::dot(direction, candidate.normal);
-      const double numerator = candidate.offset - glm::dot(origin, candidate.normal);
-      const double t_plane = numerator / denominator;
+      const double t_plane =
+          plane_quotient(candidate, Vec3(rays.org_x[i], rays.org_y[i], rays.org_z[i]),
+                         Vec3(rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]));
       const bool nearer = (valid[i] == -1) & (t_plane > 0.0) & (t_plane < nearest[i]);
       nearest[i] = nearer ? t_plane : nearest[i];
       index[i] = nearer ? static_cast<int>(p) : index[i];
@@ -249,16 +325,33 @@ void nearest_planes(const PlaneSet& set, const RTCRayHit16& rayhit, const int (&
   nearest_of_planes(set, rayhit.ray, valid, t, plane);
 }
 
-void sphere_bounds(const RTCBoundsFunctionArguments* args) {
-  const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
-  // The transformed corners of the object-space cube bound the ellipsoid.
+int nearest_plane(const PlaneSet& set, const glm::vec3& origin, const glm::vec3& direction,
+                  double& t) {
+  // nearest_of_planes() for one lane.
+  double nearest = kInfinity;
+  int index = -1;
+  for (std::size_t p = 0; p < set.planes.size(); ++p) {
+    const double t_plane = plane_quotient(set.planes[p], Vec3(origin), Vec3(direction));
+    if ((t_plane > 0.0) & (t_plane < nearest)) {
+      nearest = t_plane;
+      index = static_cast<int>(p);
+    }
+  }
+  t = nearest;
+  return index;
+}
+
+namespace {
+
+// Embree's box around the box from `lo` to `hi` seen through `transform`: the box around
+// its transformed corners.
+RTCBounds transformed_bounds(const Vec3& box_lo, const Vec3& box_hi, const Mat4& transform) {
   Vec3 lo(std::numeric_limits<double>::max());
   Vec3 hi(std::numeric_limits<double>::lowest());
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 offset((corner & 1) ? 1.0 : -1.0, (corner & 2) ? 1.0 : -1.0,
-                      (corner & 4) ? 1.0 : -1.0);
-    const Vec3 p =
-        Vec3(sphere.object_to_world * glm::dvec4(sphere.center + sphere.radius * offset, 1.0));
+    const Vec3 p(transform * glm::dvec4((corner & 1) ? box_hi.x : box_lo.x,
+                                        (corner & 2) ? box_hi.y : box_lo.y,
+                                        (corner & 4) ? box_hi.z : box_lo.z, 1.0));
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
@@ -266,15 +359,35 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const Vec3 pad = 1e-6 * (glm::abs(lo) + glm::abs(hi)) + 1e-9;
   lo -= pad;
   hi += pad;
-  *args->bounds_o = {
-      static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
-      static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
+  return {static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z), 0.0f,
+          static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
+}
+
+}  // namespace
+
+void sphere_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
+  // The transformed corners of the object-space cube bound the ellipsoid.
+  *args->bounds_o = transformed_bounds(sphere.center - sphere.radius, sphere.center + sphere.radius,
+                                       sphere.object_to_world);
+}
+
+void box_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto& box = *static_cast<const PreparedBox*>(args->geometryUserPtr);
+  *args->bounds_o =
+      transformed_bounds(box.lo, box.hi, box.world_box ? Mat4(1.0) : box.object_to_world);
 }
 
 void set_sphere_callbacks(RTCGeometry geometry) {
   rtcSetGeometryBoundsFunction(geometry, &sphere_bounds, nullptr);
   rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PreparedSphere>);
   rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PreparedSphere>);
+}
+
+void set_box_callbacks(RTCGeometry geometry) {
+  rtcSetGeometryBoundsFunction(geometry, &box_bounds, nullptr);
+  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PreparedBox>);
+  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PreparedBox>);
 }
 
 void set_plane_callbacks(RTCGeometry geometry) {
