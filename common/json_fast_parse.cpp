@@ -11,8 +11,7 @@ namespace {
 using nlohmann::json;
 using simdjson::dom::element_type;
 
-// Recursion is bounded: parse_json_text refuses documents nested deeper than 64 levels
-// before it gets here, and simdjson refuses any deeper than its own limit of 1024.
+// Recursion is bounded: simdjson refuses documents nested deeper than its max_depth.
 json to_json(simdjson::dom::element value) {
   switch (value.type()) {
     case element_type::ARRAY: {
@@ -52,8 +51,9 @@ json to_json(simdjson::dom::element value) {
 
 }  // namespace
 
-std::optional<json> parse_json_fast(std::string_view text) {
+std::optional<json> parse_json_fast(std::string_view text, std::size_t max_depth) {
   simdjson::dom::parser parser;
+  if (parser.allocate(text.size(), max_depth) != simdjson::SUCCESS) return std::nullopt;
   simdjson::dom::element root;
   // `true`: simdjson copies the text when reading past its end could cross a page.
   if (parser.parse(text.data(), text.size(), true).get(root) != simdjson::SUCCESS)

@@ -112,8 +112,10 @@ class ErrorLocator : public nlohmann::json_sax<nlohmann::json> {
 }  // namespace
 
 nlohmann::json parse_json_text(std::string_view text) {
+  // simdjson refuses any text nested deeper than the limit itself, so only a text it
+  // refuses needs the pre-scan, a pass over every byte of what may be tens of megabytes.
+  if (auto parsed = parse_json_fast(text, max_nesting)) return std::move(*parsed);
   check_nesting(text);
-  if (auto parsed = parse_json_fast(text)) return std::move(*parsed);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& error) {

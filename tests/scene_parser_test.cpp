@@ -100,21 +100,24 @@ TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
       "[\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\"]", " \t\r\n{ \"a\" : [ 1 , { } , [ ] ] } \n",
       "{\"a\": 1, \"a\": 2}", "{\"b\": 1, \"a\": {\"a\": [null, false]}}", "[[1,2,3],[4,5,6]]"};
   for (const char* text : texts) {
-    const auto fast = parse_json_fast(text);
+    const auto fast = parse_json_fast(text, 64);
     ASSERT_TRUE(fast.has_value()) << text;
     const json slow = json::parse(text);
     EXPECT_EQ(*fast, slow) << text;
     EXPECT_EQ(fast->dump(), slow.dump()) << text;
     EXPECT_EQ(fast->type(), slow.type()) << text;
   }
-  EXPECT_TRUE(parse_json_fast("-0").value().is_number_unsigned());  // nlohmann: signed 0
-  EXPECT_EQ(parse_json_fast("-0").value(), json::parse("-0"));
+  // Its depth limit is the pre-scan's, which parse_json_text() runs only where it refuses.
+  EXPECT_TRUE(parse_json_fast(nested_arrays(64), 64).has_value());
+  EXPECT_FALSE(parse_json_fast(nested_arrays(65), 64).has_value());
+  EXPECT_TRUE(parse_json_fast("-0", 64).value().is_number_unsigned());  // nlohmann: signed 0
+  EXPECT_EQ(parse_json_fast("-0", 64).value(), json::parse("-0"));
 
   // Refused here; nlohmann accepts the first three and refuses the rest.
   const char* const refused[] = {"18446744073709551616", "-9223372036854775809", "\xef\xbb\xbf{}",
                                  "1e400", "", "{} x", "[1,]", "01", "1.", "-", "\"\\ud800\"",
                                  "\"a\x01\"", "\"\xff\"", "{'a': 1}", "[NaN]", "+1"};
-  for (const char* text : refused) EXPECT_FALSE(parse_json_fast(text).has_value()) << text;
+  for (const char* text : refused) EXPECT_FALSE(parse_json_fast(text, 64).has_value()) << text;
   EXPECT_EQ(parse_json_text("18446744073709551616"), json(18446744073709551616.0));
   EXPECT_EQ(parse_json_text("\xef\xbb\xbf{}"), json::object());
   EXPECT_THROW(parse_json_text("{} x"), SceneError);

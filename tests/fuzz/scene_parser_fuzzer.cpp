@@ -14,7 +14,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  if (const auto fast = tessera::parse_json_fast(text)) {
+  if (const auto fast = tessera::parse_json_fast(text, 64)) {
     const nlohmann::json slow = nlohmann::json::parse(text, nullptr, false);
     if (slow.is_discarded() || slow != *fast || slow.dump() != fast->dump()) __builtin_trap();
   }
