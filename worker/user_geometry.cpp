@@ -84,8 +84,10 @@ namespace {
   return (t_entry <= t_exit) & (entry_in | exit_in);
 }
 
-[[gnu::always_inline]] inline bool plane_distance(const PreparedPlane& plane, const glm::vec3& origin,
-                           const glm::vec3& direction, double t_min, double t_max, double& t) {
+[[gnu::always_inline]] inline bool plane_distance(const PreparedPlane& plane,
+                                                  const glm::vec3& origin,
+                                                  const glm::vec3& direction, double t_min,
+                                                  double t_max, double& t) {
   const double denominator = glm::dot(Vec3(direction), plane.normal);
   const double numerator = plane.offset - glm::dot(Vec3(origin), plane.normal);
   // Most rays that miss a plane point away from it: the signs tell, without a division.
@@ -291,16 +293,6 @@ void nearest_of_planes(const PlaneSet& set, const Rays& rays, const int (&valid)
     nearest[i] = kInfinity;
     index[i] = -1;
   }
-  // The lanes in double once, rather than once for each plane.
-  double ox[16], oy[16], oz[16], dx[16], dy[16], dz[16];
-  for (int i = 0; i < 16; ++i) {
-    ox[i] = rays.org_x[i];
-    oy[i] = rays.org_y[i];
-    oz[i] = rays.org_z[i];
-    dx[i] = rays.dir_x[i];
-    dy[i] = rays.dir_y[i];
-    dz[i] = rays.dir_z[i];
-  }
   // plane_distance() from t_min = 0 to the nearest plane so far, without its branches, so
   // that the sixteen lanes go two to an instruction. Its sign test only spares a division:
   // t > 0 holds exactly when numerator and denominator have one strict sign and the
@@ -310,7 +302,8 @@ void nearest_of_planes(const PlaneSet& set, const Rays& rays, const int (&valid)
   for (std::size_t p = 0; p < set.planes.size(); ++p) {
     const PreparedPlane& candidate = set.planes[p];
     for (int i = 0; i < 16; ++i) {
-      const double t_plane = plane_quotient(candidate, ox[i], oy[i], oz[i], dx[i], dy[i], dz[i]);
+      const double t_plane = plane_quotient(candidate, rays.org_x[i], rays.org_y[i], rays.org_z[i],
+                                            rays.dir_x[i], rays.dir_y[i], rays.dir_z[i]);
       const bool nearer = (valid[i] == -1) & (t_plane > 0.0) & (t_plane < nearest[i]);
       nearest[i] = nearer ? t_plane : nearest[i];
       index[i] = nearer ? static_cast<int>(p) : index[i];

@@ -1,0 +1,222 @@
+// Building SceneGeometry: each object of the scene prepared for its exact test and
+// registered with Embree, and the BVH committed.
+#include "worker/scene_geometry.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "worker/triangulate.hpp"
+#include "worker/user_geometry.hpp"
+
+namespace tessera {
+
+SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
+                             OpaquePlanes opaque_planes)
+    : device_(device), scene_(device) {
+  for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+    const Object& object = scene.objects[i];
+    const Color& transmission = scene.materials[object.material].transmission;
+    const bool transmissive =
+        transmission.r != 0.0 || transmission.g != 0.0 || transmission.b != 0.0;
+    const unsigned mask = transmissive ? kTransmissiveMask : kOpaqueSolidMask;
+    std::visit(
+        [&](const auto& shape) {
+          using T = std::decay_t<decltype(shape)>;
+          if constexpr (std::is_same_v<T, Sphere>)
+            add_sphere(shape, object.transform, i, mask);
+          else if constexpr (std::is_same_v<T, Box>)
+            add_box(shape, object.transform, i, mask);
+          else if constexpr (std::is_same_v<T, Plane>)
+            add_plane(shape, object.transform, i, transmissive);
+          else
+            add_triangles(triangulate(shape, object.transform), i, mask);
+        },
+        object.shape);
+    if (transmissive) {
+      // A plane has no record yet (the plane sets are added last), and no bounds anyway.
+      const bool plane = std::holds_alternative<Plane>(object.shape);
+      const auto [lo, hi] = plane ? std::pair(glm::vec3(-kInfinity), glm::vec3(kInfinity))
+                                  : geometry_bounds(records_.back());
+      transmissive_lo_ = glm::min(transmissive_lo_, lo);
+      transmissive_hi_ = glm::max(transmissive_hi_, hi);
+    }
+  }
+  if (!plane_sets_[1].planes.empty()) add_user_geometry(Kind::plane, 1, 0, kTransmissiveMask);
+  if (!plane_sets_[0].planes.empty()) {
+    opaque_planes_geometry_ = static_cast<unsigned>(records_.size());
+    if (opaque_planes == OpaquePlanes::also_in_embree)
+      add_user_geometry(Kind::plane, 0, 0, kOpaquePlaneMask);
+    else
+      records_.push_back({Kind::plane, 0, 0});
+  }
+  // Robust traversal closes the hairline cracks between neighbouring mesh triangles.
+  rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
+  rtcCommitScene(scene_.get());
+  device_.check("building the scene's BVH");
+}
+
+void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object,
+                                      unsigned mask) {
+  RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_USER);
+  rtcSetGeometryUserPrimitiveCount(geometry, 1);
+  rtcSetGeometryMask(geometry, mask);
+  if (kind == Kind::sphere) {
+    rtcSetGeometryUserData(geometry, spheres_[index].get());
+    set_sphere_callbacks(geometry);
+  } else if (kind == Kind::box) {
+    rtcSetGeometryUserData(geometry, boxes_[index].get());
+    set_box_callbacks(geometry);
+  } else {
+    rtcSetGeometryUserData(geometry, &plane_sets_[index]);
+    set_plane_callbacks(geometry);
+  }
+  rtcCommitGeometry(geometry);
+  const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
+  rtcReleaseGeometry(geometry);
+  device_.check("adding a user geometry");
+  if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
+  records_.push_back({kind, index, object});
+}
+
+void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
+                               unsigned mask) {
+  auto prepared = std::make_unique<PreparedSphere>();
+  prepared->center = sphere.center;
+  prepared->radius = sphere.radius;
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  // A similarity has orthogonal columns of one common length: MᵀM = s²·I.
+  const glm::dmat3 linear(transform);
+  const glm::dmat3 gram = glm::transpose(linear) * linear;
+  const double scale2 = (gram[0][0] + gram[1][1] + gram[2][2]) / 3.0;
+  bool similarity = scale2 > 0.0;
+  for (int i = 0; i < 3 && similarity; ++i)
+    for (int j = 0; j < 3; ++j)
+      similarity = similarity && std::fabs(gram[i][j] - (i == j ? scale2 : 0.0)) <= 1e-12 * scale2;
+  if (similarity) {
+    prepared->world_sphere = true;
+    prepared->world_center = Vec3(transform * glm::dvec4(sphere.center, 1.0));
+    prepared->world_radius = sphere.radius * std::sqrt(scale2);
+  }
+  spheres_.push_back(std::move(prepared));
+  add_user_geometry(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object, mask);
+}
+
+void SceneGeometry::add_box(const Box& box, const Mat4& transform, std::uint32_t object,
+                            unsigned mask) {
+  auto prepared = std::make_unique<PreparedBox>();
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  const glm::dmat3 linear(transform);
+  bool along_axes = true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) along_axes = along_axes && (i == j || linear[i][j] == 0.0);
+  if (along_axes) {
+    // A scale along the axes, negative ones included, keeps the box axis-aligned.
+    const Vec3 a(transform * glm::dvec4(box.min, 1.0));
+    const Vec3 b(transform * glm::dvec4(box.max, 1.0));
+    prepared->world_box = true;
+    prepared->lo = glm::min(a, b);
+    prepared->hi = glm::max(a, b);
+    for (int face = 0; face < 6; ++face) {
+      Vec3 n(0.0);
+      n[face / 2] = face % 2 == 1 ? 1.0 : -1.0;
+      prepared->face_normals[face] = n;
+    }
+  } else {
+    prepared->lo = box.min;
+    prepared->hi = box.max;
+    // Normals go through the inverse transpose, which keeps an outward normal outward even
+    // under a mirroring transform.
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(linear));
+    for (int face = 0; face < 6; ++face) {
+      Vec3 n(0.0);
+      n[face / 2] = face % 2 == 1 ? 1.0 : -1.0;
+      prepared->face_normals[face] = glm::normalize(normal_matrix * n);
+    }
+  }
+  boxes_.push_back(std::move(prepared));
+  add_user_geometry(Kind::box, static_cast<std::uint32_t>(boxes_.size() - 1), object, mask);
+}
+
+void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
+                              bool transmissive) {
+  const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
+  const Vec3 point(transform * glm::dvec4(plane.point, 1.0));
+  const Vec3 normal = glm::normalize(normal_matrix * plane.normal);
+  PlaneSet& set = plane_sets_[transmissive ? 1 : 0];
+  set.planes.push_back(PreparedPlane{point, normal, glm::dot(normal, point)});
+  set.objects.push_back(object);
+}
+
+void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object,
+                                  unsigned mask) {
+  RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryMask(geometry, mask);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               triangles.positions.size()));
+  auto* indices = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(unsigned), triangles.triangles.size()));
+  device_.check("allocating a triangle mesh");
+  for (std::size_t i = 0; i < triangles.positions.size(); ++i)
+    for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(triangles.positions[i][k]);
+  static_assert(sizeof(triangles.triangles[0]) == 3 * sizeof(unsigned));
+  std::memcpy(indices, triangles.triangles.data(),
+              triangles.triangles.size() * 3 * sizeof(unsigned));
+  rtcCommitGeometry(geometry);
+  const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
+  rtcReleaseGeometry(geometry);
+  device_.check("adding a triangle mesh");
+  if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
+  TriangleMesh mesh;
+  mesh.triangles.reserve(triangles.triangles.size());
+  if (!triangles.normals.empty()) mesh.normals.reserve(triangles.triangles.size());
+  for (const auto& tri : triangles.triangles) {
+    MeshTriangle& corners = mesh.triangles.emplace_back();
+    for (int k = 0; k < 3; ++k) corners.corners[k] = glm::vec3(triangles.positions[tri[k]]);
+    if (triangles.normals.empty()) continue;
+    MeshTriangleNormals& normals = mesh.normals.emplace_back();
+    for (int k = 0; k < 3; ++k) normals.corners[k] = glm::vec3(triangles.normals[tri[k]]);
+  }
+  // From the stored floats, in a pass of its own: in the loop above, GCC 12's vectoriser
+  // was seen to use the doubles the floats were rounded from (a different normal, and other
+  // pixels, than finish_hit() computed from the floats).
+  for (MeshTriangle& triangle : mesh.triangles) {
+    const Vec3 v0(triangle.corners[0]);
+    triangle.normal =
+        glm::normalize(glm::cross(Vec3(triangle.corners[1]) - v0, Vec3(triangle.corners[2]) - v0));
+  }
+  meshes_.push_back(std::move(mesh));
+  records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
+}
+
+std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
+  if (record.kind == Kind::sphere || record.kind == Kind::box) {
+    RTCBounds bounds{};
+    RTCBoundsFunctionArguments args{};
+    args.bounds_o = &bounds;
+    if (record.kind == Kind::sphere) {
+      args.geometryUserPtr = spheres_[record.index].get();
+      sphere_bounds(&args);
+    } else {
+      args.geometryUserPtr = boxes_[record.index].get();
+      box_bounds(&args);
+    }
+    return {{bounds.lower_x, bounds.lower_y, bounds.lower_z},
+            {bounds.upper_x, bounds.upper_y, bounds.upper_z}};
+  }
+  // A mesh: its corners are floats already, so their extremes bound it exactly.
+  glm::vec3 lo(kInfinity);
+  glm::vec3 hi(-kInfinity);
+  for (const MeshTriangle& triangle : meshes_[record.index].triangles)
+    for (const glm::vec3& p : triangle.corners) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+  return {lo, hi};
+}
+
+}  // namespace tessera
