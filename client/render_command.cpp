@@ -77,11 +77,12 @@ int run_render(const RenderOptions& options) {
     return 2;
   }
   try {
-    // The document is freed before tracing starts, not kept beside the Scene through it.
+    // The text and the document are freed before tracing starts, not kept beside the Scene
+    // through it.
     const Scene scene = [&] {
-      nlohmann::json document = read_json_file(options.scene_path);
-      apply_overrides(document, options);
-      return parse_scene(document);
+      const std::string text = read_text_file(options.scene_path);
+      return parse_scene_text(
+          text, Limits{}, [&](nlohmann::json& document) { apply_overrides(document, options); });
     }();
     return render_and_report(options, scene, output);
   } catch (const SceneError& e) {

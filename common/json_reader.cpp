@@ -21,6 +21,9 @@ namespace {
 // later walk of the tree (dump, comparison) would recurse that deep.
 constexpr int max_nesting = 64;
 
+// Smaller arrays cost little as nodes, and stay in the document for any other reader.
+constexpr std::size_t lifted_array_min_size = 64;
+
 // 1-based line and column of the byte at `offset`; columns count characters, so UTF-8
 // continuation bytes do not advance them.
 std::string describe_position(std::string_view text, std::size_t offset) {
@@ -108,7 +111,6 @@ class ErrorLocator : public nlohmann::json_sax<nlohmann::json> {
   }
 };
 
-
 }  // namespace
 
 nlohmann::json parse_json_text(std::string_view text) {
@@ -129,11 +131,22 @@ nlohmann::json parse_json_text(std::string_view text) {
   }
 }
 
-Scene parse_scene_text(std::string_view text, const Limits& limits) {
-  return parse_scene(parse_json_text(text), limits);
+Scene parse_scene_text(std::string_view text, const Limits& limits,
+                       const std::function<void(nlohmann::json&)>& edit) {
+  if (auto fast = parse_json_fast_lifted(text, max_nesting, lifted_array_min_size)) {
+    if (edit) edit(fast->document);
+    try {
+      return parse_scene(fast->document, limits, &fast->lifted);
+    } catch (const LiftedArrayRefused&) {
+      // Parsed again below, the ordinary way, for the error's words.
+    }
+  }
+  nlohmann::json document = parse_json_text(text);
+  if (edit) edit(document);
+  return parse_scene(document, limits);
 }
 
-nlohmann::json read_json_file(const std::filesystem::path& path) {
+std::string read_text_file(const std::filesystem::path& path) {
   std::error_code ignored;
   if (std::filesystem::is_directory(path, ignored))
     throw std::runtime_error("cannot read " + path.string() + ": is a directory");
@@ -154,7 +167,11 @@ nlohmann::json read_json_file(const std::filesystem::path& path) {
     text += rest.str();
   }
   if (in.bad()) throw std::runtime_error("cannot read " + path.string());
-  return parse_json_text(text);
+  return text;
+}
+
+nlohmann::json read_json_file(const std::filesystem::path& path) {
+  return parse_json_text(read_text_file(path));
 }
 
 }  // namespace tessera

@@ -75,12 +75,17 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
 Limits Limits::none() {
   constexpr int most = std::numeric_limits<int>::max();
   constexpr std::size_t many = std::numeric_limits<std::size_t>::max();
-  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most,
-                many, many, many, many};
+  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most, many, many,
+                many, many};
 }
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
-  const ObjectReader root(ValueReader(document, ""), "a JSON object");
+  return parse_scene(document, limits, nullptr);
+}
+
+Scene parse_scene(const nlohmann::json& document, const Limits& limits,
+                  const LiftedArrays* lifted) {
+  const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
   // Before the key check: a future version may well have keys this one does not know.
   if (const auto version = root.find("version")) {
     if (version->integer() != 1)

@@ -98,11 +98,72 @@ std::optional<std::array<std::uint32_t, 3>> plain_indices(const nlohmann::json& 
   return indices;
 }
 
+// A mesh whose arrays were lifted out of the document: the same checks as below, on the
+// same values; where one fails, LiftedArrayRefused sends the caller to the ordinary path,
+// which words the error.
+void read_lifted_positions(const LiftedTriples& lifted, Mesh& mesh) {
+  const std::size_t count = lifted.numbers.size() / 3;
+  if (count < 3) throw LiftedArrayRefused{};
+  mesh.positions.reserve(count);
+  for (std::size_t i = 0; i < count; ++i)
+    mesh.positions.emplace_back(lifted.numbers[3 * i], lifted.numbers[3 * i + 1],
+                                lifted.numbers[3 * i + 2]);
+}
+
+void read_lifted_triangles(const LiftedTriples& lifted, Mesh& mesh) {
+  const std::size_t count = lifted.indices.size() / 3;
+  if (count == 0) throw LiftedArrayRefused{};
+  mesh.triangles.reserve(count);
+  const std::size_t position_count = mesh.positions.size();
+  for (std::size_t t = 0; t < count; ++t) {
+    std::array<std::uint32_t, 3> indices{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint64_t index = lifted.indices[3 * t + k];
+      if (index >= position_count) throw LiftedArrayRefused{};
+      indices[k] = static_cast<std::uint32_t>(index);
+    }
+    if (is_degenerate(mesh.positions[indices[0]], mesh.positions[indices[1]],
+                      mesh.positions[indices[2]]))
+      throw LiftedArrayRefused{};
+    mesh.triangles.push_back(indices);
+  }
+}
+
+void read_lifted_normals(const LiftedTriples& lifted, Mesh& mesh) {
+  const std::size_t count = lifted.numbers.size() / 3;
+  if (count != mesh.positions.size()) throw LiftedArrayRefused{};
+  mesh.normals.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto unit = try_normalize(
+        {lifted.numbers[3 * i], lifted.numbers[3 * i + 1], lifted.numbers[3 * i + 2]});
+    if (!unit) throw LiftedArrayRefused{};
+    mesh.normals.push_back(*unit);
+  }
+}
+
 // Each element goes through the fast check first, and through ValueReader only when that
 // fails: the same values are accepted, and the first bad one gets the same message.
 Shape parse_mesh(const ObjectReader& object) {
   Mesh mesh;
   const ValueReader positions = object.require("positions");
+  // Found, not required, here: the ordinary path requires it after reading the positions,
+  // whose errors come first.
+  const auto found_triangles = object.find("triangles");
+  const auto normals = object.find("normals");
+  const LiftedTriples* lifted_positions = positions.lifted();
+  const LiftedTriples* lifted_triangles = found_triangles ? found_triangles->lifted() : nullptr;
+  const LiftedTriples* lifted_normals = normals ? normals->lifted() : nullptr;
+  if (lifted_positions != nullptr || lifted_triangles != nullptr || lifted_normals != nullptr) {
+    // All of the mesh's arrays or none: the ordinary path below reads the document only.
+    if (lifted_positions == nullptr || lifted_triangles == nullptr ||
+        (normals && lifted_normals == nullptr))
+      throw LiftedArrayRefused{};
+    read_lifted_positions(*lifted_positions, mesh);
+    read_lifted_triangles(*lifted_triangles, mesh);
+    if (lifted_normals != nullptr) read_lifted_normals(*lifted_normals, mesh);
+    mesh.thin = object.boolean_or("thin", false);
+    return mesh;
+  }
   const std::size_t position_count = positions.array_size("an array of points");
   if (position_count < 3)
     positions.fail("must have at least 3 points, got " + std::to_string(position_count));
@@ -127,7 +188,7 @@ Shape parse_mesh(const ObjectReader& object) {
       mesh.triangles.push_back(parse_mesh_triangle(triangles.element(t), mesh.positions, in_range));
   }
 
-  if (const auto normals = object.find("normals")) {
+  if (normals) {
     const std::size_t normal_count = normals->array_size("an array of normals");
     if (normal_count != position_count) {
       normals->fail("must have one normal per position (" + std::to_string(position_count) +

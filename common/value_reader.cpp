@@ -111,11 +111,17 @@ void ValueReader::fail_type(std::string_view expected) const {
 }
 
 ValueReader ValueReader::element(std::size_t index) const {
-  return ValueReader((*value_)[index], pointer_ + "/" + std::to_string(index));
+  return ValueReader((*value_)[index], pointer_ + "/" + std::to_string(index), lifted_);
 }
 
 ValueReader ValueReader::member(std::string_view key) const {
-  return ValueReader(*value_->find(key), pointer_ + "/" + pointer_token(key));
+  return ValueReader(*value_->find(key), pointer_ + "/" + pointer_token(key), lifted_);
+}
+
+const LiftedTriples* ValueReader::lifted() const {
+  if (lifted_ == nullptr) return nullptr;
+  const auto found = lifted_->find(pointer_);
+  return found == lifted_->end() ? nullptr : &found->second;
 }
 
 std::size_t ValueReader::array_size(std::string_view expected) const {

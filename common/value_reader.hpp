@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/json_fast_parse.hpp"
 #include "common/scene.hpp"
 #include "common/scene_error.hpp"
 
@@ -60,11 +61,15 @@ std::optional<Vec3> plain_vec3(const nlohmann::json& value);
 
 class ValueReader {
  public:
-  ValueReader(const nlohmann::json& value, std::string pointer)
-      : value_(&value), pointer_(std::move(pointer)) {}
+  // `lifted`: the arrays lifted out of the document (parse_json_fast_lifted()), if any.
+  ValueReader(const nlohmann::json& value, std::string pointer,
+              const LiftedArrays* lifted = nullptr)
+      : value_(&value), pointer_(std::move(pointer)), lifted_(lifted) {}
 
   const nlohmann::json& json() const { return *value_; }
   const std::string& pointer() const { return pointer_; }
+  // The lifted array this value stands for, or null.
+  const LiftedTriples* lifted() const;
 
   [[noreturn]] void fail(const std::string& detail) const { throw SceneError(pointer_, detail); }
   // Over `limit` (a Limits member's name), whose value is `value`.
@@ -96,6 +101,7 @@ class ValueReader {
  private:
   const nlohmann::json* value_;
   std::string pointer_;
+  const LiftedArrays* lifted_;
 };
 
 // A JSON object whose keys are checked against the ones its part of the format knows.

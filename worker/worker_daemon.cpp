@@ -1,13 +1,13 @@
 #include "worker/worker_daemon.hpp"
 
+#include <unistd.h>
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <mutex>
 #include <sstream>
-#include <cstring>
 #include <thread>
-#include <unistd.h>
 
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
@@ -80,7 +80,8 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
     } catch (const HttpError& e) {
       if (e.kind() == HttpError::Kind::interrupted) return std::nullopt;  // stopping
       report_reachable(false, what, e.what());
-      for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms) std::this_thread::sleep_for(50ms);
+      for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms)
+        std::this_thread::sleep_for(50ms);
       backoff = std::min<std::chrono::milliseconds>(backoff * 2, 5s);
     }
   } while (!stop_);
@@ -89,9 +90,8 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
 
 bool WorkerDaemon::register_self() {
   const json body = {{"name", options_.name}, {"host", host_name()}, {"threads", options_.threads}};
-  const auto result = with_retry("register", [&] {
-    return client_.request("POST", "/v1/workers", body.dump());
-  });
+  const auto result =
+      with_retry("register", [&] { return client_.request("POST", "/v1/workers", body.dump()); });
   if (!result) return false;
   if (result->status != 201) {
     spdlog::error("registration refused ({}): {}", result->status, result->body);
@@ -115,8 +115,8 @@ int WorkerDaemon::batch_tiles() const {
 }
 
 std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
-  const std::string target = "/v1/workers/" + worker_id_ + "/claim?wait_s=" +
-                             std::to_string(options_.claim_wait_s) +
+  const std::string target = "/v1/workers/" + worker_id_ +
+                             "/claim?wait_s=" + std::to_string(options_.claim_wait_s) +
                              "&max_tiles=" + std::to_string(batch_tiles());
   const auto result = with_retry("claim", [&] { return client_.request("POST", target); });
   if (!result || result->status == 204) return std::nullopt;
@@ -132,21 +132,20 @@ std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
   const json lease = json::parse(result->body);
   Claimed claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"), {}};
   for (const json& tile : lease.at("tiles"))
-    claimed.tiles.push_back(
-        {tile.at("index"), TileRect{tile.at("x"), tile.at("y"), tile.at("width"), tile.at("height")}});
+    claimed.tiles.push_back({tile.at("index"), TileRect{tile.at("x"), tile.at("y"),
+                                                        tile.at("width"), tile.at("height")}});
   return claimed;
 }
 
 const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   if (auto it = renderers_.find(digest); it != renderers_.end()) return *it->second;
-  const auto result = with_retry("scene", [&] { return client_.request("GET", "/v1/scenes/" + digest); });
-  if (!result || result->status != 200)
-    throw std::runtime_error("cannot fetch scene " + digest);
+  const auto result =
+      with_retry("scene", [&] { return client_.request("GET", "/v1/scenes/" + digest); });
+  if (!result || result->status != 200) throw std::runtime_error("cannot fetch scene " + digest);
   if (renderers_.size() >= kMaxCachedScenes) renderers_.erase(renderers_.begin());
   // The coordinator validated the scene against its own limits, which may be above the
   // defaults: here it is only rebuilt.
-  auto renderer =
-      std::make_unique<Renderer>(parse_scene(parse_json_text(result->body), Limits::none()));
+  auto renderer = std::make_unique<Renderer>(parse_scene_text(result->body, Limits::none()));
   return *renderers_.emplace(digest, std::move(renderer)).first->second;
 }
 
@@ -186,8 +185,8 @@ void WorkerDaemon::render(const Claimed& lease) {
     render_tiles();
   } else {
     arena_->execute([&] {
-      tbb::parallel_for(0, options_.threads, [&](int) { render_tiles(); },
-                        tbb::simple_partitioner());
+      tbb::parallel_for(
+          0, options_.threads, [&](int) { render_tiles(); }, tbb::simple_partitioner());
     });
   }
   const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
@@ -222,7 +221,8 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
   for (const FinishedTile& tile : tiles) bytes += tile.pixels.size() * sizeof(float);
   body.reserve(bytes);
   for (const FinishedTile& tile : tiles) {
-    body.append(reinterpret_cast<const char*>(tile.pixels.data()), tile.pixels.size() * sizeof(float));
+    body.append(reinterpret_cast<const char*>(tile.pixels.data()),
+                tile.pixels.size() * sizeof(float));
     indexes += (indexes.empty() ? "" : ",") + std::to_string(tile.index);
     rays += (rays.empty() ? "" : ",") + std::to_string(tile.rays);
   }
@@ -242,9 +242,8 @@ void WorkerDaemon::interrupt() { client_.interrupt(); }
 void WorkerDaemon::report_failure(const std::string& lease_id, int tile_index,
                                   const std::string& error) {
   const std::string body = json{{"tile", tile_index}, {"error", error}}.dump();
-  with_retry("failure report", [&] {
-    return client_.request("POST", "/v1/leases/" + lease_id + "/fail", body);
-  });
+  with_retry("failure report",
+             [&] { return client_.request("POST", "/v1/leases/" + lease_id + "/fail", body); });
 }
 
 void WorkerDaemon::inject_fault(int tile_index) const {
