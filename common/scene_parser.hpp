@@ -26,7 +26,8 @@ Scene parse_scene(const nlohmann::json& document, const Limits& limits, const Li
 nlohmann::json parse_json_text(std::string_view text);
 
 // Parses JSON text first; a syntax error is a SceneError at "" naming line and column.
-// `edit`, if given, changes the document before it is read as a scene. The Scene and the
+// `edit`, if given, changes the document before it is read as a scene (not the meshes'
+// arrays, which may have been lifted out of it). The Scene and the
 // errors are those of parse_scene(parse_json_text(text), limits), but a mesh's big arrays
 // go from simdjson straight into the Scene, without a node per number.
 Scene parse_scene_text(std::string_view text, const Limits& limits = {},
