@@ -49,6 +49,14 @@ json to_json(simdjson::dom::element value) {
   return json(nullptr);
 }
 
+// `root` lives in `parser`'s memory. False wherever simdjson refuses the text.
+bool parse_dom(simdjson::dom::parser& parser, std::string_view text, std::size_t max_depth,
+               simdjson::dom::element& root) {
+  if (parser.allocate(text.size(), max_depth) != simdjson::SUCCESS) return false;
+  // `true`: simdjson copies the text when reading past its end could cross a page.
+  return parser.parse(text.data(), text.size(), true).get(root) == simdjson::SUCCESS;
+}
+
 // Each element an array of exactly three numbers (`indices`: non-negative integers).
 bool lift(simdjson::dom::array array, bool indices, LiftedTriples& out) {
   if (indices)
@@ -122,10 +130,8 @@ json object_lifting_arrays(simdjson::dom::object object, const std::string& poin
 std::optional<LiftedDocument> parse_json_fast_lifted(std::string_view text, std::size_t max_depth,
                                                      std::size_t min_size) {
   simdjson::dom::parser parser;
-  if (parser.allocate(text.size(), max_depth) != simdjson::SUCCESS) return std::nullopt;
   simdjson::dom::element root;
-  if (parser.parse(text.data(), text.size(), true).get(root) != simdjson::SUCCESS)
-    return std::nullopt;
+  if (!parse_dom(parser, text, max_depth, root)) return std::nullopt;
   LiftedDocument result;
   if (root.type() != element_type::OBJECT) {
     result.document = to_json(root);
@@ -135,13 +141,12 @@ std::optional<LiftedDocument> parse_json_fast_lifted(std::string_view text, std:
   const simdjson::dom::object root_object = root.get_object().value_unsafe();
   for (const simdjson::dom::key_value_pair member : root_object) {
     const std::string key(member.key);
+    // Of repeated "objects", only the last one's arrays stay lifted.
+    if (key == "objects") result.lifted.clear();
     if (key != "objects" || member.value.type() != element_type::ARRAY) {
-      if (key == "objects") result.lifted.clear();
       members.insert_or_assign(key, to_json(member.value));
       continue;
     }
-    // A repeated "objects": only the last one's arrays stay lifted.
-    result.lifted.clear();
     const simdjson::dom::array objects = member.value.get_array().value_unsafe();
     json::array_t elements;
     elements.reserve(objects.size());
@@ -161,11 +166,8 @@ std::optional<LiftedDocument> parse_json_fast_lifted(std::string_view text, std:
 
 std::optional<json> parse_json_fast(std::string_view text, std::size_t max_depth) {
   simdjson::dom::parser parser;
-  if (parser.allocate(text.size(), max_depth) != simdjson::SUCCESS) return std::nullopt;
   simdjson::dom::element root;
-  // `true`: simdjson copies the text when reading past its end could cross a page.
-  if (parser.parse(text.data(), text.size(), true).get(root) != simdjson::SUCCESS)
-    return std::nullopt;
+  if (!parse_dom(parser, text, max_depth, root)) return std::nullopt;
   return to_json(root);
 }
 

@@ -162,21 +162,31 @@ void distances(const PreparedSphere& sphere, const Lanes& lanes, double (&t)[kPa
   }
 }
 
+// One lane of a box's test, in the box's frame: o and d are the lane's ray there.
+[[gnu::always_inline]] inline void box_lane(const Vec3& lo, const Vec3& hi, const Lanes& lanes,
+                                            std::size_t i, const double (&o)[3],
+                                            const double (&d)[3], double (&t)[kPacketSize],
+                                            unsigned (&primitive)[kPacketSize],
+                                            bool (&found)[kPacketSize]) {
+  double root;
+  unsigned face;
+  const bool meets = box_root(o, d, lo, hi, lanes.tnear[i], lanes.tfar[i], root, face);
+  found[i] = (lanes.valid[i] == -1) & meets;
+  t[i] = root;
+  primitive[i] = face;
+}
+
 void distances(const PreparedBox& box, const Lanes& lanes, double (&t)[kPacketSize],
                unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
   const std::size_t count = lanes.count;
   const Vec3 lo = box.lo;
   const Vec3 hi = box.hi;
+  // Two loops, so that the common one has no matrix product per lane.
   if (box.world_box) {
     for (std::size_t i = 0; i < count; ++i) {
       const double o[3] = {lanes.org_x[i], lanes.org_y[i], lanes.org_z[i]};
       const double d[3] = {lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]};
-      double root;
-      unsigned face;
-      const bool meets = box_root(o, d, lo, hi, lanes.tnear[i], lanes.tfar[i], root, face);
-      found[i] = (lanes.valid[i] == -1) & meets;
-      t[i] = root;
-      primitive[i] = face;
+      box_lane(lo, hi, lanes, i, o, d, t, primitive, found);
     }
     return;
   }
@@ -188,12 +198,7 @@ void distances(const PreparedBox& box, const Lanes& lanes, double (&t)[kPacketSi
     const Vec3 g = linear * Vec3(lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]);
     const double o[3] = {f.x, f.y, f.z};
     const double d[3] = {g.x, g.y, g.z};
-    double root;
-    unsigned face;
-    const bool meets = box_root(o, d, lo, hi, lanes.tnear[i], lanes.tfar[i], root, face);
-    found[i] = (lanes.valid[i] == -1) & meets;
-    t[i] = root;
-    primitive[i] = face;
+    box_lane(lo, hi, lanes, i, o, d, t, primitive, found);
   }
 }
 
