@@ -8,9 +8,11 @@
 
 #include <embree3/rtcore.h>
 
+#include "worker/tracer_api.hpp"
+
 namespace tessera {
 
-class EmbreeDevice {
+class TESSERA_TRACER_API EmbreeDevice {
  public:
   EmbreeDevice();
   ~EmbreeDevice();
@@ -29,7 +31,7 @@ class EmbreeDevice {
   mutable std::string pending_error_;
 };
 
-class EmbreeScene {
+class TESSERA_TRACER_API EmbreeScene {
  public:
   explicit EmbreeScene(const EmbreeDevice& device);
   ~EmbreeScene();

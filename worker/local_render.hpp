@@ -12,6 +12,7 @@ struct LocalRenderResult {
 };
 
 // `threads` 0 means one per core; `tile_size` 0 means the scene's render.tile_size.
-LocalRenderResult render_local(const Renderer& renderer, int threads = 0, int tile_size = 0);
+TESSERA_TRACER_API LocalRenderResult render_local(const Renderer& renderer, int threads = 0,
+                                                  int tile_size = 0);
 
 }  // namespace tessera

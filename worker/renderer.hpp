@@ -14,7 +14,7 @@
 
 namespace tessera {
 
-class Renderer {
+class TESSERA_TRACER_API Renderer {
  public:
   explicit Renderer(Scene scene);
 

@@ -35,33 +35,6 @@ std::optional<TriangleHit> intersect_triangle(const Vec3& v0, const Vec3& v1, co
 
 }  // namespace
 
-bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {
-  // Without branches, so that a packet's lanes go through it without mispredictions. Where a
-  // direction component is zero the quotients are infinite, which leaves the interval as it
-  // is when the origin lies inside the slab and empties it when it lies outside; NaN (the
-  // origin on a face) fails every comparison below and leaves it as it is too. `outside`
-  // also catches the one case the infinities miss, an infinite t_max.
-  float t_near = 0.0f;
-  float t_far = t_max;
-  bool outside = false;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float o = ray.origin[axis];
-    const float d = ray.direction[axis];
-    const float lo = transmissive_lo_[axis];
-    const float hi = transmissive_hi_[axis];
-    outside |= (d == 0.0f) & ((o < lo) | (o > hi));
-    float t0 = (lo - o) / d;
-    float t1 = (hi - o) / d;
-    const bool swap = t0 > t1;
-    const float entry = swap ? t1 : t0;
-    const float exit = swap ? t0 : t1;
-    // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
-    t_near = std::max(t_near, entry * (1.0f - 1e-5f));
-    t_far = std::min(t_far, exit * (1.0f + 1e-5f));
-  }
-  return !outside && !(t_near > t_far);
-}
-
 void SceneGeometry::may_meet_transmissive(const RayPacket& packet,
                                           const float (&t_max)[kPacketSize],
                                           bool (&may)[kPacketSize]) const {

@@ -26,21 +26,23 @@ struct RayCounts {
   }
 };
 
+// Exported from the tracer's library member by member, as SceneGeometry is.
 class Tracer {
  public:
   // Both must outlive the tracer.
-  Tracer(const Scene& scene, const SceneGeometry& geometry);
+  TESSERA_TRACER_API Tracer(const Scene& scene, const SceneGeometry& geometry);
 
   // The radiance arriving along `ray`; `depth` is the number of bounces before it.
-  Color trace(const Ray& ray, int depth, RayCounts& counts) const;
+  TESSERA_TRACER_API Color trace(const Ray& ray, int depth, RayCounts& counts) const;
   // The radiance along each active ray of a packet, `depth` bounces after the camera. The
   // packet's hits, the shadow rays of its hits towards each light, and its reflected and
   // transmitted rays go to Embree sixteen at a time; the arithmetic of each lane is
   // trace()'s own, in the same order, so a pixel gets the same bits either way. Only the
   // lanes in `keep` are shaded in full and counted: the others are traced only so that the
   // packets Embree sees never depend on which of their lanes a tile holds.
-  void trace_packet(const RayPacket& packet, int depth, const bool (&keep)[kPacketSize],
-                    Color (&out)[kPacketSize], RayCounts& counts) const;
+  TESSERA_TRACER_API void trace_packet(const RayPacket& packet, int depth,
+                                       const bool (&keep)[kPacketSize], Color (&out)[kPacketSize],
+                                       RayCounts& counts) const;
 
  private:
   // No default values: packets hold sixteen per light, and every member is always set.
