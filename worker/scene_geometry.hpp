@@ -134,8 +134,8 @@ TESSERA_TRACER_API void load_packet(const RayPacket& packet, int (&valid)[kPacke
 // benchmark's bare Embree loop, which knows nothing of that, needs them inside.
 enum class OpaquePlanes { outside_embree, also_in_embree };
 
-// Exported from the tracer's library member by member: the tracer's own helpers, such as
-// may_meet_transmissive(), stay hidden so that they inline where they are called.
+// Exported from the tracer's library member by member: the members only the tracer itself
+// calls, such as may_meet_transmissive(), stay hidden (tracer_api.hpp).
 class SceneGeometry {
  public:
   TESSERA_TRACER_API SceneGeometry(const Scene& scene, const EmbreeDevice& device,
