@@ -43,8 +43,9 @@ trap 'rm -rf "$work"' EXIT
 failed=0
 
 for file in "$base" "$library_dir"/glibc-hwcaps/*/libtessera_tracer.so; do
-  fused=$(objdump -d --no-show-raw-insn "$file" | grep -c -E '\<v?f(n?)m(add|sub)[0-9a-z]*\>' || true)
-  vector_math=$(objdump -d "$file" | grep -c -E 'call.*<_ZGV' || true)
+  code=$(objdump -d --no-show-raw-insn "$file")
+  fused=$(grep -c -E '\<v?f(n?)m(add|sub)[0-9a-z]*\>' <<<"$code" || true)
+  vector_math=$(grep -c -E 'call.*<_ZGV' <<<"$code" || true)
   if [ "$fused" -ne 0 ] || [ "$vector_math" -ne 0 ]; then
     echo "FAIL: $file has $fused fused multiply-adds and $vector_math calls into libmvec"
     failed=1
