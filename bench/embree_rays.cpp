@@ -63,7 +63,7 @@ std::uint64_t trace_bare(const tessera::Renderer& renderer, RTCScene embree,
                 const int y = row * kPacketSide + i / kPacketSide;
                 packet.active[i] = x < scene.width && y < scene.height;
                 if (packet.active[i])
-                  packet.rays[i] = renderer.camera().ray_through(x + 0.5, y + 0.5);
+                  packet.set(i, renderer.camera().ray_through(x + 0.5, y + 0.5));
               }
               tessera::load_packet(packet, valid, rayhit);
               rtcIntersect16(valid, embree, &context.embree, &rayhit);

@@ -110,7 +110,7 @@ TEST(Geometry, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
   const float reaches[4] = {5.5f, 6.5f, 11.0f, kInfinity};
   for (int i = 0; i < 8; ++i) {
     packet.active[i] = true;
-    packet.rays[i] = Ray{{i < 4 ? 0.0f : 3.0f, 10.0f, 0.0f}, {0.0f, -1.0f, 0.0f}};
+    packet.set(i, Ray{{i < 4 ? 0.0f : 3.0f, 10.0f, 0.0f}, {0.0f, -1.0f, 0.0f}});
     reach[i] = reaches[i % 4];
   }
   SurfaceHit hits[kPacketSize];
@@ -258,7 +258,7 @@ TEST(Geometry, BoxesAreMetOnEachFaceFromOutsideAndInside) {
       // Turned away from the box, the same ray meets nothing.
       EXPECT_FALSE(geometry.intersect(Ray{in.origin, -in.direction}, kInfinity)) << "face " << face;
       packet.active[face] = true;
-      packet.rays[face] = in;
+      packet.set(face, in);
     }
     // A packet finds the very hits single rays do.
     SurfaceHit hits[kPacketSize];
@@ -266,7 +266,7 @@ TEST(Geometry, BoxesAreMetOnEachFaceFromOutsideAndInside) {
     geometry.intersect(packet, hits, found);
     for (int face = 0; face < 6; ++face) {
       ASSERT_TRUE(found[face]) << "face " << face;
-      const auto single = geometry.intersect(packet.rays[face], kInfinity);
+      const auto single = geometry.intersect(packet.ray(face), kInfinity);
       EXPECT_EQ(hits[face].t, single->t) << "face " << face;
       EXPECT_EQ(hits[face].position, single->position) << "face " << face;
       EXPECT_EQ(hits[face].normal, normals[face]) << "face " << face;

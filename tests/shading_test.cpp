@@ -1,6 +1,7 @@
 // Each term of I = I_E + K_A·I_A + Σ_L (K_D·(N·L) + K_S·(V·R)^n)·S_L·I_L + K_R·I_R + K_T·I_T,
 // checked at one pixel against a value worked out by hand from the scene's geometry.
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -138,6 +139,44 @@ TEST(Shading, ShadowsFromOpaqueAndTransmissiveOccluders) {
                      {"vertices", {{-1, 2, -1}, {1, 2, -1}, {0, 2, 1}}},
                      {"material", {{"transmission", 0.5}}}};
   expect_color(render_pixel(shadow_scene(pane)), Color(0.1 + 0.6 * 0.5));
+}
+
+TEST(Shading, ShadowRaysWalkThroughEveryTransmissiveObjectOnTheirWay) {
+  // Two glass spheres and a glass box one above another over the shaded point: the walk goes
+  // on after leaving each of them, and each surface passes its K_T.
+  const json tinted = {{"diffuse", 0}, {"transmission", {1.0, 0.5, 0.8}}, {"ior", 1.5}};
+  const json clear = {{"diffuse", 0}, {"transmission", 0.9}, {"ior", 1.3}};
+  json scene = shadow_scene(sphere({0, 2, 0}, 0.5, tinted));
+  scene["objects"].push_back(sphere({0, 3.5, 0}, 0.5, clear));
+  scene["objects"].push_back(
+      {{"type", "box"}, {"min", {-0.5, 5, -0.5}}, {"max", {0.5, 6, 0.5}}, {"material", clear}});
+  const Color through = Color(1.0, 0.25, 0.64) * (0.9 * 0.9) * (0.9 * 0.9);
+  expect_color(render_pixel(scene), Color(0.1) + 0.6 * through);
+  // Past eight transmissive objects the tracer tests one box around them all, not a box
+  // each; these ten more lie off the shadow ray's way.
+  for (int k = 0; k < 10; ++k) scene["objects"].push_back(sphere({5.0 + 2 * k, 2, 5}, 0.5, clear));
+  expect_color(render_pixel(scene), Color(0.1) + 0.6 * through);
+}
+
+TEST(Shading, AShadowRayLeavingTheLastGlassOnItsWayStopsWalking) {
+  // Shadow rays: one query for anything opaque, then one per transmissive surface crossed.
+  // Leaving a sphere, the ray can never meet it again, and no other transmissive object's
+  // box lies ahead: the walk ends without asking Embree for the nothing that is there.
+  const json glass = {{"diffuse", 0}, {"transmission", 0.5}, {"ior", 1.5}};
+  json scene = shadow_scene(sphere({0, 2, 0}, 0.5, glass));
+  const auto shadow_rays = [&] {
+    const Renderer renderer(parse_scene(scene));
+    float rgb[3];
+    const std::uint64_t in_packets = renderer.render_tile({0, 0, 1, 1}, rgb).shadow;
+    RayCounts single;
+    renderer.tracer().trace(renderer.camera().ray_through(0.5, 0.5), 0, single);
+    EXPECT_EQ(single.shadow, in_packets);
+    return in_packets;
+  };
+  EXPECT_EQ(shadow_rays(), 3u);
+  // A second sphere above the first: the walk goes on after leaving the first.
+  scene["objects"].push_back(sphere({0, 3.5, 0}, 0.5, glass));
+  EXPECT_EQ(shadow_rays(), 5u);
 }
 
 TEST(Shading, MirrorReflectionAndDepthZero) {

@@ -92,7 +92,7 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
           const int x = block_x + i % kPacketSide;
           const int y = block_y + i / kPacketSide;
           const SampleOffset offset = sample_offset(x, y, s, samples);
-          packet.rays[i] = camera_.ray_through(x + offset.x, y + offset.y);
+          packet.set(i, camera_.ray_through(x + offset.x, y + offset.y));
         }
         tracer_.trace_packet(packet, 0, in_tile, colors, counts);
         for (int i = 0; i < kPacketSize; ++i)

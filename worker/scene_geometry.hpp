@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -17,6 +18,9 @@
 #include "worker/tracer_api.hpp"
 
 namespace tessera {
+
+// No object of the scene: Scene::objects never holds this many.
+inline constexpr std::uint32_t kNoObject = 0xffffffffu;
 
 // No default values: finish_hit() writes every member, and packets hold sixteen.
 struct SurfaceHit {
@@ -119,9 +123,33 @@ struct HitContext {
   double t[kPacketSize];
 };
 
+// Sixteen rays, each coordinate's lanes side by side as Embree's packets hold them, so that
+// filling one of those is a copy and the loops over lanes vectorise. Every lane starts as
+// a harmless ray (from the origin along +z), since Embree and those loops read inactive
+// lanes too; a lane keeps its last ray when it is turned off.
 struct RayPacket {
-  Ray rays[kPacketSize];
+  float origin[3][kPacketSize];
+  float direction[3][kPacketSize];
   bool active[kPacketSize] = {};
+
+  RayPacket() {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int i = 0; i < kPacketSize; ++i) {
+        origin[axis][i] = 0.0f;
+        direction[axis][i] = axis == 2 ? 1.0f : 0.0f;
+      }
+  }
+  Ray ray(int i) const {
+    return Ray{{origin[0][i], origin[1][i], origin[2][i]},
+               {direction[0][i], direction[1][i], direction[2][i]}};
+  }
+  void set(int i, const Ray& ray) {
+    set_origin(i, ray.origin);
+    for (int axis = 0; axis < 3; ++axis) direction[axis][i] = ray.direction[axis];
+  }
+  void set_origin(int i, const glm::vec3& point) {
+    for (int axis = 0; axis < 3; ++axis) origin[axis][i] = point[axis];
+  }
 };
 
 // Fills Embree's packet of sixteen rays (unbounded, under `mask`) and its valid mask.
@@ -150,13 +178,22 @@ class SceneGeometry {
   // with OpaquePlanes::also_in_embree, so that it holds the whole scene).
   RTCScene embree_scene() const { return scene_.get(); }
 
-  // False when the ray certainly meets no transmissive surface before t_max: a slab test
-  // against the box around all of them, which spares most shadow rays the walk through
-  // transmissive surfaces.
-  bool may_meet_transmissive(const Ray& ray, float t_max) const;
-  // The same for each lane of a packet; false on inactive lanes.
+  // False when the ray certainly meets no transmissive surface with 0 < t < t_max, leaving
+  // aside those of the object `left` (kNoObject: none): slab tests against the box around
+  // each transmissive object, which spare most shadow rays the walk through transmissive
+  // surfaces, and end a walk once nothing is left ahead of it.
+  bool may_meet_transmissive(const Ray& ray, float t_max, std::uint32_t left = kNoObject) const;
+  // The same for each lane of a packet; false on inactive lanes. Every lane of `t_max` and
+  // `left` is read, so that the lanes go through the test together.
   void may_meet_transmissive(const RayPacket& packet, const float (&t_max)[kPacketSize],
+                             const std::uint32_t (&left)[kPacketSize],
                              bool (&may)[kPacketSize]) const;
+  // The object that a ray leaving `hit` towards `direction` can never meet again, for
+  // may_meet_transmissive(): the one hit, where it is convex (a sphere or a box, under any
+  // transform) and the ray leaves its inside there; kNoObject otherwise.
+  std::uint32_t left_for_good(const SurfaceHit& hit, const Vec3& direction) const {
+    return convex_[hit.object] && glm::dot(hit.normal, direction) > 0.0 ? hit.object : kNoObject;
+  }
   // The closest hit of every active ray of a coherent packet (unbounded t). The lanes
   // Embree sees, and so the hits, depend only on the packet's contents; opaque planes are
   // tested here rather than in Embree. found[i] says whether hits[i] was written.
@@ -200,10 +237,16 @@ class SceneGeometry {
   const EmbreeDevice& device_;
   EmbreeScene scene_;
   std::vector<GeometryRecord> records_;  // by Embree geometry id
-  // Around every transmissive object (empty when there is none; everything when one is
-  // a plane).
-  glm::vec3 transmissive_lo_{kInfinity};
-  glm::vec3 transmissive_hi_{-kInfinity};
+  // The box around each transmissive object (everything for a plane), or past
+  // kListedTransmissive of them, one box around them all, for no object (kNoObject).
+  struct TransmissiveBounds {
+    glm::vec3 lo;
+    glm::vec3 hi;
+    std::uint32_t object;
+  };
+  static constexpr std::size_t kListedTransmissive = 8;
+  std::vector<TransmissiveBounds> transmissive_bounds_;
+  std::vector<std::uint8_t> convex_;  // by object: a sphere or a box
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
   std::vector<std::unique_ptr<PreparedBox>> boxes_;
@@ -214,33 +257,54 @@ class SceneGeometry {
   std::vector<TriangleMesh> meshes_;
 };
 
-// Here rather than in scene_geometry.cpp so that both of its callers inline it (in the
-// shared library, GCC kept it out of line and the showcase took 1.1% more instructions).
-inline bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max) const {
-  // Without branches, so that a packet's lanes go through it without mispredictions. Where a
-  // direction component is zero the quotients are infinite, which leaves the interval as it
-  // is when the origin lies inside the slab and empties it when it lies outside; NaN (the
-  // origin on a face) fails every comparison below and leaves it as it is too. `outside`
-  // also catches the one case the infinities miss, an infinite t_max.
+namespace geometry_detail {
+
+// Narrows [t_near, t_far] to the part of the ray along one axis that lies between that
+// axis's faces of the box.
+[[gnu::always_inline]] inline void narrow_to_slab(float o, float d, float lo, float hi,
+                                                  float& t_near, float& t_far, bool& outside) {
+  outside |= (d == 0.0f) & ((o < lo) | (o > hi));
+  const float t0 = (lo - o) / d;
+  const float t1 = (hi - o) / d;
+  const bool swap = t0 > t1;
+  const float entry = swap ? t1 : t0;
+  const float exit = swap ? t0 : t1;
+  // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
+  t_near = std::max(t_near, entry * (1.0f - 1e-5f));
+  t_far = std::min(t_far, exit * (1.0f + 1e-5f));
+}
+
+// Whether the ray from o along d may meet the box from lo to hi with 0 < t < t_max. Without
+// branches, so that a loop of these over a packet's lanes vectorises and no lane waits on
+// another's misprediction; it takes scalars, as GCC vectorises no loop through glm's
+// vectors. Where a direction component is zero the quotients are infinite, which leaves the
+// interval as it is when the origin lies inside the slab and empties it when it lies
+// outside; NaN (the origin on a face) fails every comparison in narrow_to_slab() and leaves it as
+// it is too. `outside` also catches the one case the infinities miss, an infinite t_max.
+[[gnu::always_inline]] inline bool may_meet_box(float ox, float oy, float oz, float dx, float dy,
+                                                float dz, const glm::vec3& lo, const glm::vec3& hi,
+                                                float t_max) {
   float t_near = 0.0f;
   float t_far = t_max;
   bool outside = false;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float o = ray.origin[axis];
-    const float d = ray.direction[axis];
-    const float lo = transmissive_lo_[axis];
-    const float hi = transmissive_hi_[axis];
-    outside |= (d == 0.0f) & ((o < lo) | (o > hi));
-    float t0 = (lo - o) / d;
-    float t1 = (hi - o) / d;
-    const bool swap = t0 > t1;
-    const float entry = swap ? t1 : t0;
-    const float exit = swap ? t0 : t1;
-    // Widened by a few ulps so that rounding can only let a ray through, never cut one off.
-    t_near = std::max(t_near, entry * (1.0f - 1e-5f));
-    t_far = std::min(t_far, exit * (1.0f + 1e-5f));
-  }
-  return !outside && !(t_near > t_far);
+  narrow_to_slab(ox, dx, lo.x, hi.x, t_near, t_far, outside);
+  narrow_to_slab(oy, dy, lo.y, hi.y, t_near, t_far, outside);
+  narrow_to_slab(oz, dz, lo.z, hi.z, t_near, t_far, outside);
+  return !outside & !(t_near > t_far);
+}
+
+}  // namespace geometry_detail
+
+// Here rather than in scene_geometry.cpp so that the tracer inlines it (in the shared
+// library, GCC kept it out of line and the showcase took 1.1% more instructions).
+inline bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max,
+                                                 std::uint32_t left) const {
+  bool may = false;
+  for (const TransmissiveBounds& box : transmissive_bounds_)
+    may |= ((box.object != left) | (left == kNoObject)) &
+           geometry_detail::may_meet_box(ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x,
+                                         ray.direction.y, ray.direction.z, box.lo, box.hi, t_max);
+  return may;
 }
 
 }  // namespace tessera

@@ -33,14 +33,24 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
             add_triangles(triangulate(shape, object.transform), i, mask);
         },
         object.shape);
+    convex_.push_back(std::holds_alternative<Sphere>(object.shape) ||
+                      std::holds_alternative<Box>(object.shape));
     if (transmissive) {
       // A plane has no record yet (the plane sets are added last), and no bounds anyway.
       const bool plane = std::holds_alternative<Plane>(object.shape);
       const auto [lo, hi] = plane ? std::pair(glm::vec3(-kInfinity), glm::vec3(kInfinity))
                                   : geometry_bounds(records_.back());
-      transmissive_lo_ = glm::min(transmissive_lo_, lo);
-      transmissive_hi_ = glm::max(transmissive_hi_, hi);
+      transmissive_bounds_.push_back({lo, hi, i});
     }
+  }
+  // Past a few boxes, testing each costs more than the walks they would spare.
+  if (transmissive_bounds_.size() > kListedTransmissive) {
+    TransmissiveBounds all{glm::vec3(kInfinity), glm::vec3(-kInfinity), kNoObject};
+    for (const TransmissiveBounds& box : transmissive_bounds_) {
+      all.lo = glm::min(all.lo, box.lo);
+      all.hi = glm::max(all.hi, box.hi);
+    }
+    transmissive_bounds_.assign(1, all);
   }
   if (!plane_sets_[1].planes.empty()) add_user_geometry(Kind::plane, 1, 0, kTransmissiveMask);
   if (!plane_sets_[0].planes.empty()) {

@@ -94,6 +94,11 @@ Color Tracer::unblocked_factor(const LightSample& light, Ray ray, float reach,
     if (is_zero(factor)) return factor;
     ray.origin = offset_ray_origin(blocker->position, blocker->normal, light.to_light);
     reach = shadow_reach(light, ray);
+    // Often nothing transmissive is left ahead, as when the ray has just left the one glass
+    // sphere on its way: the box tests say so, and spare the query that would find nothing.
+    if (!geometry_.may_meet_transmissive(ray, reach,
+                                         geometry_.left_for_good(*blocker, light.to_light)))
+      return factor;
   }
   return factor;
 }

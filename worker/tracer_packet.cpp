@@ -25,7 +25,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   for (int i = 0; i < kPacketSize; ++i) {
     if (packet.active[i] & keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (!found[i]) continue;
-    begin_shading(packet.rays[i], hits[i], shading[i]);
+    begin_shading(packet.ray(i), hits[i], shading[i]);
     if (!rays_leave) continue;
     lifted[0][i] = offset_ray_origin(hits[i].position, hits[i].normal, 1.0f);
     lifted[1][i] = offset_ray_origin(hits[i].position, hits[i].normal, -1.0f);
@@ -37,7 +37,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   for (const PreparedLight& light : lights_) {
     LightSample samples[kPacketSize];
     double n_dot_l[kPacketSize];
-    float reach[kPacketSize];
+    float reach[kPacketSize] = {};  // every lane's is read (may_meet_transmissive())
     RayPacket shadows;
     sample_light_packet(light, hits, found, samples);
     for (int i = 0; i < kPacketSize; ++i)
@@ -45,8 +45,9 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     for (int i = 0; i < kPacketSize; ++i) {
       if (!shadows.active[i]) continue;
       // shadow_ray(), from the point already moved off the surface.
-      shadows.rays[i] = Ray{leaving(i, samples[i].to_light), glm::vec3(samples[i].to_light)};
-      reach[i] = shadow_reach(samples[i], shadows.rays[i]);
+      const Ray ray{leaving(i, samples[i].to_light), glm::vec3(samples[i].to_light)};
+      shadows.set(i, ray);
+      reach[i] = shadow_reach(samples[i], ray);
     }
     // Anything opaque on the way leaves the point in shadow whatever else is there.
     bool blocked[kPacketSize];
@@ -74,7 +75,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
       if (!rays.active[i]) continue;
       // ray_from(), from the point already moved off the surface.
       const Vec3 towards = direction(i);
-      rays.rays[i] = Ray{leaving(i, towards), glm::vec3(glm::normalize(towards))};
+      rays.set(i, Ray{leaving(i, towards), glm::vec3(glm::normalize(towards))});
       any = true;
     }
     if (!any) return;
@@ -96,12 +97,14 @@ void Tracer::unblocked_factors(const LightSample (&samples)[kPacketSize], const 
   if (!any_transmissive_) return;
   RayPacket walk;
   float walk_reach[kPacketSize] = {};
+  std::uint32_t left[kPacketSize];
+  for (int i = 0; i < kPacketSize; ++i) left[i] = kNoObject;
   bool any = false;
-  geometry_.may_meet_transmissive(shadows, reach, walk.active);
+  geometry_.may_meet_transmissive(shadows, reach, left, walk.active);
   for (int i = 0; i < kPacketSize; ++i) {
     walk.active[i] = walk.active[i] & !blocked[i];
     if (!walk.active[i]) continue;
-    walk.rays[i] = shadows.rays[i];
+    walk.set(i, shadows.ray(i));
     walk_reach[i] = reach[i];
     any = true;
   }
@@ -116,10 +119,17 @@ void Tracer::unblocked_factors(const LightSample (&samples)[kPacketSize], const 
       if (found[i]) factor[i] *= material_of(blockers[i].object).transmission;
       walk.active[i] = found[i] && !is_zero(factor[i]);
       if (!walk.active[i]) continue;
-      walk.rays[i].origin =
-          offset_ray_origin(blockers[i].position, blockers[i].normal, samples[i].to_light);
-      walk_reach[i] = shadow_reach(samples[i], walk.rays[i]);
-      any = true;
+      walk.set_origin(
+          i, offset_ray_origin(blockers[i].position, blockers[i].normal, samples[i].to_light));
+      walk_reach[i] = shadow_reach(samples[i], walk.ray(i));
+      left[i] = geometry_.left_for_good(blockers[i], samples[i].to_light);
+    }
+    // The lanes with nothing transmissive left ahead stop here, as unblocked_factor()'s do.
+    bool may[kPacketSize];
+    geometry_.may_meet_transmissive(walk, walk_reach, left, may);
+    for (int i = 0; i < kPacketSize; ++i) {
+      walk.active[i] = walk.active[i] & may[i];
+      any = any | walk.active[i];
     }
   }
 }
