@@ -43,7 +43,8 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
       transmissive_bounds_.push_back({lo, hi, i});
     }
   }
-  // Past a few boxes, testing each costs more than the walks they would spare.
+  // Every shadow ray that may reach a transmissive surface tests each box: past a few, one
+  // box around them all keeps that to one test.
   if (transmissive_bounds_.size() > kListedTransmissive) {
     TransmissiveBounds all{glm::vec3(kInfinity), glm::vec3(-kInfinity), kNoObject};
     for (const TransmissiveBounds& box : transmissive_bounds_) {
