@@ -45,9 +45,9 @@ void SceneGeometry::may_meet_transmissive(const RayPacket& packet,
   std::int32_t any[kPacketSize] = {};
   for (const TransmissiveBounds& box : transmissive_bounds_)
     for (int i = 0; i < kPacketSize; ++i)
-      any[i] |= ((box.object != left[i]) | (left[i] == kNoObject)) &
-                geometry_detail::may_meet_box(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i],
-                                              box.lo, box.hi, t_max[i]);
+      any[i] |= tested(box, left[i]) & geometry_detail::may_meet_box(o[0][i], o[1][i], o[2][i],
+                                                                     d[0][i], d[1][i], d[2][i],
+                                                                     box.lo, box.hi, t_max[i]);
   for (int i = 0; i < kPacketSize; ++i)
     may[i] = (packet.active[i] & static_cast<std::uint8_t>(any[i])) != 0;
 }

@@ -245,6 +245,11 @@ class SceneGeometry {
     std::uint32_t object;
   };
   static constexpr std::size_t kListedTransmissive = 8;
+  // Whether may_meet_transmissive() tests `box` for a ray that has left the object `left`:
+  // one rule for the single ray and the packets, so that they agree bit for bit.
+  static bool tested(const TransmissiveBounds& box, std::uint32_t left) {
+    return (box.object != left) | (left == kNoObject);
+  }
   std::vector<TransmissiveBounds> transmissive_bounds_;
   std::vector<std::uint8_t> convex_;  // by object: a sphere or a box
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
@@ -301,7 +306,7 @@ inline bool SceneGeometry::may_meet_transmissive(const Ray& ray, float t_max,
                                                  std::uint32_t left) const {
   bool may = false;
   for (const TransmissiveBounds& box : transmissive_bounds_)
-    may |= ((box.object != left) | (left == kNoObject)) &
+    may |= tested(box, left) &
            geometry_detail::may_meet_box(ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x,
                                          ray.direction.y, ray.direction.z, box.lo, box.hi, t_max);
   return may;
