@@ -2,6 +2,7 @@
 // checked at one pixel against a value worked out by hand from the scene's geometry.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -44,6 +45,45 @@ TEST(Shading, AmbientAndEmissionOnly) {
       sphere({0, 0, 0}, 1,
              {{"ambient", {0.2, 0.4, 0.6}}, {"diffuse", 0.9}, {"emission", {0.01, 0.02, 0.03}}}));
   expect_color(render_pixel(scene), {0.01 + 0.1, 0.02 + 0.1, 0.03 + 0.6});
+}
+
+TEST(Shading, AHitThatSendsNoRayOnTakesItsCheckerCellsEmissionAndAmbient) {
+  // With no lights and no bounce left, a hit's colour is I_E + K_A·I_A alone, worked out by
+  // a shorter path than a hit that sends rays on: it must still follow the checkerboard,
+  // and give every pixel the bits the full path gives it.
+  json scene = pinhole_scene({0.3, 4, 0.2}, {0, 0, 0}, {0, 0, -1});
+  scene["image"] = {{"width", 24}, {"height", 24}};
+  scene["camera"]["fov_y"] = 60;
+  scene["ambient_light"] = {0.5, 0.25, 1.0};
+  scene["render"]["max_depth"] = 0;
+  scene["objects"].push_back(floor_plane({{"ambient", {0.2, 0.4, 0.6}},
+                                          {"emission", {0.01, 0.02, 0.03}},
+                                          {"reflection", 0},
+                                          {"checker", {{"size", 1}, {"ambient", 0.8}}}}));
+  const Image shortcut = test::render_image(scene, 1);
+  const Color even(0.01 + 0.5 * 0.2, 0.02 + 0.25 * 0.4, 0.03 + 1.0 * 0.6);
+  const Color odd(0.01 + 0.5 * 0.8, 0.02 + 0.25 * 0.8, 0.03 + 1.0 * 0.8);
+  int evens = 0;
+  int odds = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const float* pixel = shortcut.pixel(x, y);
+      const Color value(pixel[0], pixel[1], pixel[2]);
+      const bool is_even = glm::all(glm::lessThan(glm::abs(value - even), Color(kTolerance)));
+      const bool is_odd = glm::all(glm::lessThan(glm::abs(value - odd), Color(kTolerance)));
+      EXPECT_TRUE(is_even || is_odd) << "pixel " << x << ", " << y;
+      evens += is_even;
+      odds += is_odd;
+    }
+  EXPECT_GT(evens, 24);
+  EXPECT_GT(odds, 24);
+  // One bounce left: each hit now takes the full path, and sends a reflected ray that adds
+  // nothing (K_R = 0).
+  scene["render"]["max_depth"] = 1;
+  const Image full = test::render_image(scene, 1);
+  EXPECT_EQ(
+      std::memcmp(full.pixels().data(), shortcut.pixels().data(), shortcut.pixels().size_bytes()),
+      0);
 }
 
 TEST(Shading, MissShowsTheBackground) {

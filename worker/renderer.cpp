@@ -64,19 +64,24 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
   // the tile: a block cut by the tile's edge is traced whole and only its pixels inside the
   // tile are kept, so that Embree always sees the same packet for a pixel and its hit
   // cannot depend on how the image was tiled.
+  // Lanes outside the image are never traced, and keep a value that is never read.
   Color colors[kPacketSize];
+  for (Color& color : colors) color = Color(0.0);
   const int x_end = tile.x + tile.width;
   const int y_end = tile.y + tile.height;
   for (int block_y = tile.y - tile.y % kPacketSide; block_y < y_end; block_y += kPacketSide) {
     for (int block_x = tile.x - tile.x % kPacketSide; block_x < x_end; block_x += kPacketSide) {
-      Color sums[kPacketSize];
+      // By channel, lanes side by side: added to channel by channel and read back as a
+      // pixel's three, never loaded wider than they were stored (which would stall).
+      double sums[3][kPacketSize];
       bool in_tile[kPacketSize];
       RayPacket packet;
       // Most blocks lie wholly inside the tile, and so inside the image.
       const bool whole = block_x >= tile.x && block_x + kPacketSide <= x_end && block_y >= tile.y &&
                          block_y + kPacketSide <= y_end;
+      for (int channel = 0; channel < 3; ++channel)
+        for (int i = 0; i < kPacketSize; ++i) sums[channel][i] = 0.0;
       for (int i = 0; i < kPacketSize; ++i) {
-        sums[i] = Color(0.0);
         if (whole) {
           packet.active[i] = in_tile[i] = true;
           continue;
@@ -85,6 +90,23 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
         const int y = block_y + i / kPacketSide;
         packet.active[i] = x < scene_.width && y < scene_.height;
         in_tile[i] = x >= tile.x && x < x_end && y >= tile.y && y < y_end;
+      }
+      // Row by row of the block, only its pixels inside the tile.
+      const int column_begin = std::max(block_x, tile.x) - block_x;
+      const int column_end = std::min(block_x + kPacketSide, x_end) - block_x;
+      const int row_begin = std::max(block_y, tile.y) - block_y;
+      const int row_end = std::min(block_y + kPacketSide, y_end) - block_y;
+      const auto first_pixel = [&](int row) {
+        return out.data() + static_cast<std::size_t>(block_y + row - tile.y) * row_stride +
+               3 * static_cast<std::size_t>(block_x + column_begin - tile.x);
+      };
+      // The block's pixels lie in as many rows of the image as the block has, each of which
+      // may be far from the cache (a whole image is tens of megabytes): asked for now, for
+      // writing, they arrive while the block is traced, and the stores below do not wait.
+      for (int row = row_begin; row < row_end; ++row) {
+        const float* begin = first_pixel(row);
+        __builtin_prefetch(begin, 1);
+        __builtin_prefetch(begin + 3 * (column_end - column_begin) - 1, 1);
       }
       for (int s = 0; s < samples; ++s) {
         for (int i = 0; i < kPacketSize; ++i) {
@@ -95,19 +117,16 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
           packet.set(i, camera_.ray_through(x + offset.x, y + offset.y));
         }
         tracer_.trace_packet(packet, 0, in_tile, colors, counts);
-        for (int i = 0; i < kPacketSize; ++i)
-          if (in_tile[i]) sums[i] += colors[i];
+        // Every lane, in tile or not: a loop without a condition stores whole vectors, which
+        // the loads below can take straight from the store, where masked stores make them wait.
+        for (int channel = 0; channel < 3; ++channel)
+          for (int i = 0; i < kPacketSize; ++i) sums[channel][i] += colors[i][channel];
       }
-      // Row by row of the block, only its pixels inside the tile.
-      const int column_begin = std::max(block_x, tile.x) - block_x;
-      const int column_end = std::min(block_x + kPacketSide, x_end) - block_x;
-      const int row_begin = std::max(block_y, tile.y) - block_y;
-      const int row_end = std::min(block_y + kPacketSide, y_end) - block_y;
       for (int row = row_begin; row < row_end; ++row) {
-        float* pixel = out.data() + static_cast<std::size_t>(block_y + row - tile.y) * row_stride +
-                       3 * static_cast<std::size_t>(block_x + column_begin - tile.x);
+        float* pixel = first_pixel(row);
         for (int column = column_begin; column < column_end; ++column, pixel += 3) {
-          const Color value = divide_by_samples(sums[row * kPacketSide + column]);
+          const int i = row * kPacketSide + column;
+          const Color value = divide_by_samples(Color(sums[0][i], sums[1][i], sums[2][i]));
           pixel[0] = static_cast<float>(value.r);
           pixel[1] = static_cast<float>(value.g);
           pixel[2] = static_cast<float>(value.b);

@@ -5,6 +5,7 @@
 #include "worker/scene_geometry.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "worker/user_geometry.hpp"
 
@@ -29,6 +30,41 @@ std::optional<TriangleHit> intersect_triangle(const Vec3& v0, const Vec3& v1, co
   const Vec3 s = o - v0;
   const Vec3 q = glm::cross(s, e1);
   return TriangleHit{glm::dot(e2, q) * inv, glm::dot(s, p) * inv, glm::dot(d, q) * inv};
+}
+
+// A hit on a sphere that is a sphere in world space too, from the ray and the exact
+// distance t: the unit normal at o + t·d, and the point snapped onto the surface along it,
+// which removes the error that o + t·d accumulates. On scalars, so that the packets' loop
+// over lanes vectorises, in glm's order of operations (normalize(v) is v · (1 / sqrt(v·v)),
+// sums go (x + y) + z), so that a single ray's hit has the same bits as a lane's.
+[[gnu::always_inline]] inline void world_sphere_hit(double ox, double oy, double oz, double dx,
+                                                    double dy, double dz, double t, double cx,
+                                                    double cy, double cz, double radius,
+                                                    double (&normal)[3], double (&point)[3]) {
+  const double vx = ox + t * dx - cx;
+  const double vy = oy + t * dy - cy;
+  const double vz = oz + t * dz - cz;
+  const double inverse_length = 1.0 / std::sqrt(vx * vx + vy * vy + vz * vz);
+  normal[0] = vx * inverse_length;
+  normal[1] = vy * inverse_length;
+  normal[2] = vz * inverse_length;
+  point[0] = cx + radius * normal[0];
+  point[1] = cy + radius * normal[1];
+  point[2] = cz + radius * normal[2];
+}
+
+// A hit on a plane through q with unit normal n: o + t·d projected onto the plane, which
+// removes the error that o + t·d accumulates. Scalars and glm's order, as above.
+[[gnu::always_inline]] inline void plane_hit(double ox, double oy, double oz, double dx, double dy,
+                                             double dz, double t, double qx, double qy, double qz,
+                                             double nx, double ny, double nz, double (&point)[3]) {
+  const double px = ox + t * dx;
+  const double py = oy + t * dy;
+  const double pz = oz + t * dz;
+  const double height = (px - qx) * nx + (py - qy) * ny + (pz - qz) * nz;
+  point[0] = px - height * nx;
+  point[1] = py - height * ny;
+  point[2] = pz - height * nz;
 }
 
 }  // namespace
@@ -149,48 +185,121 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
   load_packet(packet, valid, rayhit, opaque_planes ? mask & ~kOpaquePlaneMask : mask);
   if (t_max != nullptr)
     for (int i = 0; i < kPacketSize; ++i) rayhit.ray.tfar[i] = (*t_max)[i];
-  double plane_t[kPacketSize];
+  double plane_t[kPacketSize] = {};
   int plane[kPacketSize];
+  for (int i = 0; i < kPacketSize; ++i) plane[i] = -1;
   if (opaque_planes) {
     nearest_planes(plane_sets_[0], rayhit, valid, plane_t, plane);
     for (int i = 0; i < kPacketSize; ++i) {
-      // As the plane callback has it: t < t_max, compared in double.
-      if ((plane[i] >= 0) & (plane_t[i] < rayhit.ray.tfar[i]))
-        rayhit.ray.tfar[i] = static_cast<float>(plane_t[i]);
-      else
-        plane[i] = -1;
+      // As the plane callback has it: t < t_max, compared in double. Without branches, so
+      // that the lanes go through together.
+      const bool nearer = (plane[i] >= 0) & (plane_t[i] < rayhit.ray.tfar[i]);
+      rayhit.ray.tfar[i] = nearer ? static_cast<float>(plane_t[i]) : rayhit.ray.tfar[i];
+      plane[i] = nearer ? plane[i] : -1;
     }
   }
+  // The callbacks set the lanes they hit; the others are read too, below.
+  for (double& t : context.t) t = 0.0;
   rtcIntersect16(valid, scene_.get(), &context.embree, &rayhit);
-  // A mesh's triangles are read back from memory Embree's traversal did not touch, and a
-  // large mesh's are far out of cache: asking for all sixteen at once lets their misses
-  // overlap instead of coming one after another.
+  // Hits on world spheres and on planes, nearly all hits in most scenes, are rebuilt for all
+  // sixteen lanes at once, in loops the compiler vectorises: lane by lane, each sphere's
+  // square root and division made the next lane wait (a fifth of the ray-casting
+  // benchmark's time went there). First each lane's shape is gathered; other hits go
+  // through finish_hit() afterwards.
+  enum class Rebuilt : std::uint8_t { none, sphere, plane, other };
+  Rebuilt rebuilt[kPacketSize];
+  unsigned geometry[kPacketSize];
+  unsigned primitive[kPacketSize];
+  double t[kPacketSize];
+  double anchor[3][kPacketSize];  // a sphere's centre, a point on a plane
+  double radius[kPacketSize];
+  double normal[3][kPacketSize];  // a plane's
+  // Each lane's hit, Embree's or else the opaque plane's, and the arrays the lanes without
+  // a sphere or a plane keep at zero: without branches, so that every lane is done at once.
   for (int i = 0; i < kPacketSize; ++i) {
-    const unsigned geometry = rayhit.hit.geomID[i];
-    if (!packet.active[i] || geometry == RTC_INVALID_GEOMETRY_ID) continue;
-    const GeometryRecord& record = records_[geometry];
-    if (record.kind != Kind::triangles) continue;
-    const TriangleMesh& mesh = meshes_[record.index];
-    const unsigned primitive = rayhit.hit.primID[i];
-    __builtin_prefetch(&mesh.triangles[primitive]);
-    if (mesh.normals.empty()) continue;
-    // Both ends: 36 bytes often straddle two cache lines.
-    const auto* normals = reinterpret_cast<const char*>(&mesh.normals[primitive]);
-    __builtin_prefetch(normals);
-    __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
+    const bool by_plane = (rayhit.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) & (plane[i] >= 0);
+    geometry[i] = by_plane ? opaque_planes_geometry_ : rayhit.hit.geomID[i];
+    primitive[i] = by_plane ? static_cast<unsigned>(plane[i]) : rayhit.hit.primID[i];
+    const bool hit = packet.active[i] & (geometry[i] != RTC_INVALID_GEOMETRY_ID);
+    t[i] = !hit ? 0.0 : by_plane ? plane_t[i] : context.t[i];
+    rebuilt[i] = hit ? Rebuilt::other : Rebuilt::none;
+  }
+  for (int i = 0; i < kPacketSize; ++i) radius[i] = 0.0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < kPacketSize; ++i) anchor[axis][i] = normal[axis][i] = 0.0;
+  for (int i = 0; i < kPacketSize; ++i) {
+    if (rebuilt[i] == Rebuilt::none) continue;
+    const GeometryRecord& record = records_[geometry[i]];
+    if (record.kind == Kind::sphere && spheres_[record.index]->world_sphere) {
+      const PreparedSphere& sphere = *spheres_[record.index];
+      rebuilt[i] = Rebuilt::sphere;
+      hits[i].object = record.object;
+      for (int axis = 0; axis < 3; ++axis) anchor[axis][i] = sphere.world_center[axis];
+      radius[i] = sphere.world_radius;
+    } else if (record.kind == Kind::plane) {
+      const PlaneSet& set = plane_sets_[record.index];
+      const PreparedPlane& prepared = set.planes[primitive[i]];
+      rebuilt[i] = Rebuilt::plane;
+      hits[i].object = set.objects[primitive[i]];
+      for (int axis = 0; axis < 3; ++axis) {
+        anchor[axis][i] = prepared.point[axis];
+        normal[axis][i] = prepared.normal[axis];
+      }
+    } else {
+      if (record.kind != Kind::triangles) continue;
+      t[i] = 0.0;  // no callback's: finish_hit() recomputes a triangle's
+      // A mesh's triangles are read back from memory Embree's traversal did not touch, and
+      // a large mesh's are far out of cache: asking for all sixteen before finish_hit()
+      // reads the first lets their misses overlap instead of coming one after another.
+      const TriangleMesh& mesh = meshes_[record.index];
+      __builtin_prefetch(&mesh.triangles[primitive[i]]);
+      if (mesh.normals.empty()) continue;
+      // Both ends: 36 bytes often straddle two cache lines.
+      const auto* normals = reinterpret_cast<const char*>(&mesh.normals[primitive[i]]);
+      __builtin_prefetch(normals);
+      __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
+    }
+  }
+  // Both rebuilds on every lane, the one that does not apply on harmless zeros.
+  const auto& o = packet.origin;
+  const auto& d = packet.direction;
+  double sphere_normal[3][kPacketSize];
+  double sphere_point[3][kPacketSize];
+  double plane_point[3][kPacketSize];
+  for (int i = 0; i < kPacketSize; ++i) {
+    double n[3];
+    double p[3];
+    world_sphere_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
+                     anchor[1][i], anchor[2][i], radius[i], n, p);
+    for (int axis = 0; axis < 3; ++axis) {
+      sphere_normal[axis][i] = n[axis];
+      sphere_point[axis][i] = p[axis];
+    }
   }
   for (int i = 0; i < kPacketSize; ++i) {
-    found[i] = false;
-    if (!packet.active[i]) continue;
-    if (rayhit.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
-      finish_hit(packet.ray(i), rayhit.hit.geomID[i], rayhit.hit.primID[i], rayhit.ray.tfar[i],
-                 rayhit.hit.u[i], rayhit.hit.v[i], context.t[i], hits[i]);
-      found[i] = true;
-    } else if (opaque_planes && plane[i] >= 0) {
-      finish_hit(packet.ray(i), opaque_planes_geometry_, static_cast<unsigned>(plane[i]),
-                 rayhit.ray.tfar[i], 0.0f, 0.0f, plane_t[i], hits[i]);
-      found[i] = true;
-    }
+    double p[3];
+    plane_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
+              anchor[1][i], anchor[2][i], normal[0][i], normal[1][i], normal[2][i], p);
+    for (int axis = 0; axis < 3; ++axis) plane_point[axis][i] = p[axis];
+  }
+  for (int i = 0; i < kPacketSize; ++i) {
+    found[i] = rebuilt[i] != Rebuilt::none;
+    if (rebuilt[i] == Rebuilt::other)
+      finish_hit(packet.ray(i), geometry[i], primitive[i], rayhit.ray.tfar[i], rayhit.hit.u[i],
+                 rayhit.hit.v[i], t[i], hits[i]);
+    if ((rebuilt[i] != Rebuilt::sphere) & (rebuilt[i] != Rebuilt::plane)) continue;
+    const bool sphere = rebuilt[i] == Rebuilt::sphere;
+    // Each member stored from registers: copying the normal just stored into the shading
+    // normal would load it back before its pieces reached the cache, and stall.
+    const auto pick = [&](const double(&a)[3][kPacketSize], const double(&b)[3][kPacketSize]) {
+      return sphere ? Vec3(a[0][i], a[1][i], a[2][i]) : Vec3(b[0][i], b[1][i], b[2][i]);
+    };
+    const Vec3 n = pick(sphere_normal, normal);
+    SurfaceHit& hit = hits[i];
+    hit.t = t[i];
+    hit.position = pick(sphere_point, plane_point);
+    hit.normal = n;
+    hit.shading_normal = n;
   }
 }
 
@@ -257,11 +366,14 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       const PreparedSphere& sphere = *spheres_[record.index];
       hit.t = exact_t;
       if (sphere.world_sphere) {
-        const Vec3 n =
-            glm::normalize(Vec3(ray.origin) + hit.t * Vec3(ray.direction) - sphere.world_center);
-        hit.position = sphere.world_center + sphere.world_radius * n;
-        hit.normal = n;
-        hit.shading_normal = n;
+        double n[3];
+        double p[3];
+        world_sphere_hit(ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y,
+                         ray.direction.z, hit.t, sphere.world_center.x, sphere.world_center.y,
+                         sphere.world_center.z, sphere.world_radius, n, p);
+        hit.position = Vec3(p[0], p[1], p[2]);
+        hit.normal = Vec3(n[0], n[1], n[2]);
+        hit.shading_normal = hit.normal;
         break;
       }
       const Vec3 o = Vec3(sphere.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
@@ -297,8 +409,11 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       const PreparedPlane& plane = set.planes[primitive];
       hit.object = set.objects[primitive];
       hit.t = exact_t;
-      const Vec3 p = Vec3(ray.origin) + hit.t * Vec3(ray.direction);
-      hit.position = p - glm::dot(p - plane.point, plane.normal) * plane.normal;
+      double p[3];
+      plane_hit(ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y,
+                ray.direction.z, hit.t, plane.point.x, plane.point.y, plane.point.z, plane.normal.x,
+                plane.normal.y, plane.normal.z, p);
+      hit.position = Vec3(p[0], p[1], p[2]);
       hit.normal = plane.normal;
       hit.shading_normal = plane.normal;
       break;

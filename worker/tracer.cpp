@@ -54,13 +54,25 @@ Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry)
     solid_.push_back(is_solid(object));
     if (!is_zero(scene.materials[object.material].transmission)) any_transmissive_ = true;
   }
-  checker_inverse_size_.reserve(scene.materials.size());
-  for (const Material& material : scene.materials)
-    checker_inverse_size_.push_back(material.checker ? 1.0 / material.checker->size : 0.0);
+  surfaces_.reserve(scene.objects.size());
+  for (const Object& object : scene.objects) {
+    const Material& material = scene.materials[object.material];
+    Surface surface{&material, 0.0, {material.diffuse, material.diffuse}, {}};
+    const Color* ambient[2] = {&material.ambient, &material.ambient};
+    if (material.checker) {
+      surface.checker_inverse_size = 1.0 / material.checker->size;
+      surface.diffuse[1] = material.checker->diffuse;
+      ambient[1] = &material.checker->ambient;
+    }
+    // The very sum shading made per hit before, so every pixel keeps its bits.
+    for (int odd = 0; odd < 2; ++odd)
+      surface.start[odd] = material.emission + *ambient[odd] * scene.ambient_light;
+    surfaces_.push_back(surface);
+  }
 }
 
 const Material& Tracer::material_of(std::uint32_t object) const {
-  return scene_.materials[scene_.objects[object].material];
+  return *surfaces_[object].material;
 }
 
 Color Tracer::trace(const Ray& ray, int depth, RayCounts& counts) const {
@@ -104,6 +116,7 @@ Color Tracer::unblocked_factor(const LightSample& light, Ray ray, float reach,
 }
 
 Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const {
+  if (lights_.empty() && depth >= scene_.render.max_depth) return emitted_and_ambient(hit);
   Shading shading;
   begin_shading(ray, hit, shading);
   for (const PreparedLight& light : lights_) {

@@ -78,7 +78,22 @@ class Tracer {
     Color result;  // I_E + K_A·I_A, then each light's term as it is added
   };
 
+  // What begin_shading() needs of an object's material, worked out once, so that shading a
+  // hit reads one record and takes its colours by index rather than by branch: on a
+  // checkerboard seen from afar, neighbouring pixels fall in cells of either parity.
+  struct Surface {
+    const Material* material;
+    double checker_inverse_size;  // 1 / the cell's edge; 0 where there is no checker
+    Color diffuse[2];             // K_D in even and in odd cells (the same without a checker)
+    Color start[2];               // I_E + K_A·I_A in even and in odd cells
+  };
+
   Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
+  // 1 where the hit lies in an odd cell of its surface's checkerboard, else 0.
+  static int checker_parity(const Surface& surface, const SurfaceHit& hit);
+  // I_E + K_A·I_A at the hit: all there is to the colour of a hit that sends no ray on (no
+  // lights, and no bounce left), which then needs nothing else begin_shading() works out.
+  Color emitted_and_ambient(const SurfaceHit& hit) const;
   void begin_shading(const Ray& ray, const SurfaceHit& hit, Shading& shading) const;
   // False when the light cannot reach the side of the surface facing the ray.
   static bool lit_by(const Shading& shading, const LightSample& sample, double& n_dot_l);
@@ -131,7 +146,7 @@ class Tracer {
   std::vector<PreparedLight> lights_;
   std::vector<bool> solid_;  // by object
   bool any_transmissive_ = false;
-  std::vector<double> checker_inverse_size_;  // by material; 0 where it has no checker
+  std::vector<Surface> surfaces_;  // by object
 };
 
 }  // namespace tessera

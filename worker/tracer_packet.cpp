@@ -25,8 +25,11 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   for (int i = 0; i < kPacketSize; ++i) {
     if (packet.active[i] & keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (!found[i]) continue;
+    if (!rays_leave) {
+      shading[i].result = emitted_and_ambient(hits[i]);
+      continue;
+    }
     begin_shading(packet.ray(i), hits[i], shading[i]);
-    if (!rays_leave) continue;
     lifted[0][i] = offset_ray_origin(hits[i].position, hits[i].normal, 1.0f);
     lifted[1][i] = offset_ray_origin(hits[i].position, hits[i].normal, -1.0f);
   }

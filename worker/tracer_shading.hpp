@@ -74,22 +74,25 @@ inline bool in_odd_checker_cell(double inverse_size, const SurfaceHit& hit) {
 
 namespace tessera {
 
+inline int Tracer::checker_parity(const Surface& surface, const SurfaceHit& hit) {
+  return surface.checker_inverse_size != 0.0 &&
+         shading_detail::in_odd_checker_cell(surface.checker_inverse_size, hit);
+}
+
+inline Color Tracer::emitted_and_ambient(const SurfaceHit& hit) const {
+  const Surface& surface = surfaces_[hit.object];
+  return surface.start[checker_parity(surface, hit)];
+}
+
 inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, Shading& shading) const {
-  const std::uint32_t material_index = scene_.objects[hit.object].material;
-  const Material& material = scene_.materials[material_index];
-  shading.material = &material;
+  const Surface& surface = surfaces_[hit.object];
+  shading.material = surface.material;
   shading.d = Vec3(ray.direction);
   shading.front = glm::dot(shading.d, hit.normal) < 0.0;
   shading.n = shading.front ? hit.shading_normal : -hit.shading_normal;  // faces the ray
-
-  const Color* ambient = &material.ambient;
-  shading.diffuse = material.diffuse;
-  if (material.checker &&
-      shading_detail::in_odd_checker_cell(checker_inverse_size_[material_index], hit)) {
-    ambient = &material.checker->ambient;
-    shading.diffuse = material.checker->diffuse;
-  }
-  shading.result = material.emission + *ambient * scene_.ambient_light;
+  const int odd = checker_parity(surface, hit);
+  shading.diffuse = surface.diffuse[odd];
+  shading.result = surface.start[odd];
 }
 
 inline double Tracer::inverse_attenuation(const PreparedLight& light, double distance) {
