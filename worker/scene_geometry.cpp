@@ -260,28 +260,37 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
       __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
     }
   }
-  // Both rebuilds on every lane, the one that does not apply on harmless zeros.
+  // Each rebuild on every lane, where any lane needs it (those that do not work on harmless
+  // zeros): the packets of secondary rays often hold a few active lanes, on one kind.
+  bool any_sphere = false;
+  bool any_plane = false;
+  for (int i = 0; i < kPacketSize; ++i) {
+    any_sphere = any_sphere | (rebuilt[i] == Rebuilt::sphere);
+    any_plane = any_plane | (rebuilt[i] == Rebuilt::plane);
+  }
   const auto& o = packet.origin;
   const auto& d = packet.direction;
   double sphere_normal[3][kPacketSize];
   double sphere_point[3][kPacketSize];
   double plane_point[3][kPacketSize];
-  for (int i = 0; i < kPacketSize; ++i) {
-    double n[3];
-    double p[3];
-    world_sphere_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
-                     anchor[1][i], anchor[2][i], radius[i], n, p);
-    for (int axis = 0; axis < 3; ++axis) {
-      sphere_normal[axis][i] = n[axis];
-      sphere_point[axis][i] = p[axis];
+  if (any_sphere)
+    for (int i = 0; i < kPacketSize; ++i) {
+      double n[3];
+      double p[3];
+      world_sphere_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
+                       anchor[1][i], anchor[2][i], radius[i], n, p);
+      for (int axis = 0; axis < 3; ++axis) {
+        sphere_normal[axis][i] = n[axis];
+        sphere_point[axis][i] = p[axis];
+      }
     }
-  }
-  for (int i = 0; i < kPacketSize; ++i) {
-    double p[3];
-    plane_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
-              anchor[1][i], anchor[2][i], normal[0][i], normal[1][i], normal[2][i], p);
-    for (int axis = 0; axis < 3; ++axis) plane_point[axis][i] = p[axis];
-  }
+  if (any_plane)
+    for (int i = 0; i < kPacketSize; ++i) {
+      double p[3];
+      plane_hit(o[0][i], o[1][i], o[2][i], d[0][i], d[1][i], d[2][i], t[i], anchor[0][i],
+                anchor[1][i], anchor[2][i], normal[0][i], normal[1][i], normal[2][i], p);
+      for (int axis = 0; axis < 3; ++axis) plane_point[axis][i] = p[axis];
+    }
   for (int i = 0; i < kPacketSize; ++i) {
     found[i] = rebuilt[i] != Rebuilt::none;
     if (rebuilt[i] == Rebuilt::other)
@@ -291,8 +300,10 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
     const bool sphere = rebuilt[i] == Rebuilt::sphere;
     // Each member stored from registers: copying the normal just stored into the shading
     // normal would load it back before its pieces reached the cache, and stall.
+    // The lane's own array is chosen before it is read: the other may not have been written.
     const auto pick = [&](const double(&a)[3][kPacketSize], const double(&b)[3][kPacketSize]) {
-      return sphere ? Vec3(a[0][i], a[1][i], a[2][i]) : Vec3(b[0][i], b[1][i], b[2][i]);
+      const auto& chosen = sphere ? a : b;
+      return Vec3(chosen[0][i], chosen[1][i], chosen[2][i]);
     };
     const Vec3 n = pick(sphere_normal, normal);
     SurfaceHit& hit = hits[i];
