@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/large_buffer.hpp"
+
 namespace tessera {
 
 // A rectangle of pixels; (x, y) is its top-left corner, y = 0 is the top row.
@@ -48,26 +50,9 @@ class Image {
   void paste(const TileRect& tile, std::span<const float> tile_pixels);
 
  private:
-  // Constructs elements by default-initialising them: for floats, nothing at all.
-  template <typename T>
-  struct UnsetAllocator : std::allocator<T> {
-    template <typename U>
-    struct rebind {
-      using other = UnsetAllocator<U>;
-    };
-    template <typename U>
-    void construct(U* p) noexcept {
-      ::new (static_cast<void*>(p)) U;
-    }
-    template <typename U, typename... Args>
-    void construct(U* p, Args&&... args) {
-      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-  };
-
   int width_ = 0;
   int height_ = 0;
-  std::vector<float, UnsetAllocator<float>> pixels_;
+  LargeBuffer<float> pixels_;
 };
 
 }  // namespace tessera

@@ -86,9 +86,10 @@ class Srgb8Table {
   std::uint8_t start_[kBuckets];
 };
 
+// Every element of the result is written, so it is not zeroed first.
 template <typename T>
-std::vector<T> encode(const Image& image, OutputTransfer transfer) {
-  std::vector<T> out(image.pixels().size());
+LargeBuffer<T> encode(const Image& image, OutputTransfer transfer) {
+  LargeBuffer<T> out(image.pixels().size());
   if constexpr (std::is_same_v<T, std::uint8_t>) {
     if (transfer == OutputTransfer::srgb) {
       static const Srgb8Table table;
@@ -141,8 +142,8 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
   content.width = image.width();
   content.height = image.height();
   content.srgb = kind != ImageFileKind::exr && transfer == OutputTransfer::srgb;
-  std::vector<std::uint16_t> codes16;
-  std::vector<std::uint8_t> codes8;
+  LargeBuffer<std::uint16_t> codes16;
+  LargeBuffer<std::uint8_t> codes8;
   if (kind == ImageFileKind::exr) {
     content.pixels = image.pixels().data();
   } else if (kind == ImageFileKind::tif) {
