@@ -260,8 +260,9 @@ void SceneGeometry::intersect(const RayPacket& packet, const float (*t_max)[kPac
       __builtin_prefetch(normals + sizeof(MeshTriangleNormals) - 1);
     }
   }
-  // Each rebuild on every lane, where any lane needs it (those that do not work on harmless
-  // zeros): the packets of secondary rays often hold a few active lanes, on one kind.
+  // Each kind's rebuild runs on all sixteen lanes, the lanes of other kinds on harmless
+  // zeros, and only where some lane needs it: packets of secondary rays often hold a few
+  // active lanes, all of one kind.
   bool any_sphere = false;
   bool any_plane = false;
   for (int i = 0; i < kPacketSize; ++i) {
