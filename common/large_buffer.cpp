@@ -1,38 +1,29 @@
 #include "common/large_buffer.hpp"
 
-#include <cstdlib>
+#include <cstdint>
 
 #include <sys/mman.h>
 
 namespace tessera {
-namespace {
-
-std::size_t whole_huge_pages(std::size_t bytes) {
-  return (bytes + kLargeBufferBytes - 1) / kLargeBufferBytes * kLargeBufferBytes;
-}
-
-}  // namespace
 
 void* allocate_large(std::size_t bytes) {
-  if (bytes < kLargeBufferBytes) return ::operator new(bytes);
-  // Aligned to a huge page and a whole number of them, so that every page of the buffer
-  // can be a huge one.
-  const std::size_t size = whole_huge_pages(bytes);
-  void* memory = std::aligned_alloc(kLargeBufferBytes, size);
-  if (memory == nullptr) throw std::bad_alloc();
+  // From malloc, as any buffer: freed and asked for again, as images are frame after frame,
+  // it comes back from malloc's heap already in memory, where memory of its own would be
+  // mapped and faulted in afresh each time.
+  void* memory = ::operator new(bytes);
 #ifdef MADV_HUGEPAGE
-  // Only advice: where the kernel has no huge pages to give (or they are switched off),
-  // the buffer gets ordinary pages.
-  ::madvise(memory, size, MADV_HUGEPAGE);
+  if (bytes >= kLargeBufferBytes) {
+    // The whole huge pages inside the buffer. Only advice: where the kernel has none to give
+    // (or they are switched off), the buffer keeps ordinary pages.
+    const auto begin = reinterpret_cast<std::uintptr_t>(memory);
+    const std::uintptr_t first = (begin + kLargeBufferBytes - 1) & ~(kLargeBufferBytes - 1);
+    const std::uintptr_t last = (begin + bytes) & ~(kLargeBufferBytes - 1);
+    if (first < last) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  }
 #endif
   return memory;
 }
 
-void free_large(void* memory, std::size_t bytes) noexcept {
-  if (bytes < kLargeBufferBytes)
-    ::operator delete(memory);
-  else
-    std::free(memory);
-}
+void free_large(void* memory, std::size_t) noexcept { ::operator delete(memory); }
 
 }  // namespace tessera

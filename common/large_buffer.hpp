@@ -12,13 +12,14 @@
 
 namespace tessera {
 
-// At least `bytes` of memory aligned for any type: on huge pages from kLargeBufferBytes
-// up, from operator new below that. Throws std::bad_alloc.
+// At least `bytes` of memory aligned for any type, from operator new; from
+// kLargeBufferBytes up, the whole huge pages inside it are advised MADV_HUGEPAGE. Throws
+// std::bad_alloc.
 void* allocate_large(std::size_t bytes);
 // Frees what allocate_large(bytes) returned, given the same `bytes`.
 void free_large(void* memory, std::size_t bytes) noexcept;
 
-// The size from which a buffer is given huge pages: one huge page.
+// The size from which a buffer asks for huge pages: one huge page.
 inline constexpr std::size_t kLargeBufferBytes = std::size_t{2} << 20;
 
 // An allocator for such buffers. Elements constructed without arguments are
