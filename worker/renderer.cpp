@@ -64,7 +64,8 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
   // the tile: a block cut by the tile's edge is traced whole and only its pixels inside the
   // tile are kept, so that Embree always sees the same packet for a pixel and its hit
   // cannot depend on how the image was tiled.
-  // Lanes outside the image are never traced, and keep a value that is never read.
+  // Lanes outside the image are never traced: they keep this value, which goes only into
+  // sums that are never written out.
   Color colors[kPacketSize];
   for (Color& color : colors) color = Color(0.0);
   const int x_end = tile.x + tile.width;
