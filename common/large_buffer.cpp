@@ -24,6 +24,4 @@ void* allocate_large(std::size_t bytes) {
   return memory;
 }
 
-void free_large(void* memory, std::size_t) noexcept { ::operator delete(memory); }
-
 }  // namespace tessera

@@ -16,8 +16,6 @@ namespace tessera {
 // kLargeBufferBytes up, the whole huge pages inside it are advised MADV_HUGEPAGE. Throws
 // std::bad_alloc.
 void* allocate_large(std::size_t bytes);
-// Frees what allocate_large(bytes) returned, given the same `bytes`.
-void free_large(void* memory, std::size_t bytes) noexcept;
 
 // The size from which a buffer asks for huge pages: one huge page.
 inline constexpr std::size_t kLargeBufferBytes = std::size_t{2} << 20;
@@ -37,7 +35,7 @@ struct LargeBufferAllocator {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_array_new_length();
     return static_cast<T*>(allocate_large(n * sizeof(T)));
   }
-  void deallocate(T* memory, std::size_t n) noexcept { free_large(memory, n * sizeof(T)); }
+  void deallocate(T* memory, std::size_t) noexcept { ::operator delete(memory); }
 
   template <typename U>
   void construct(U* p) noexcept {
