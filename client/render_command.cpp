@@ -47,10 +47,16 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
   // OpenImageIO's libraries load beside the tracing rather than after it. Not earlier:
   // building the Renderer starts TBB, which opens libtbbmalloc with dlopen() and would
   // wait for the dynamic loader's lock that this load holds until it is done.
-  start_loading_image_files();
-  const LocalRenderResult result = render_local(renderer, options.threads);
-  const auto rendered = std::chrono::steady_clock::now();
-  write_image(result.image, output, scene.render.output_transfer);
+  LocalRenderResult result;
+  std::optional<EncodedImage> encoded;
+  auto rendered = start;
+  while_loading_image_files([&] {
+    result = render_local(renderer, options.threads);
+    rendered = std::chrono::steady_clock::now();
+    // Encoding needs none of OpenImageIO either.
+    encoded.emplace(result.image, output, scene.render.output_transfer);
+  });
+  write_image(*encoded);
 
   const double build_s = std::chrono::duration<double>(built - start).count();
   const double trace_s = std::chrono::duration<double>(rendered - built).count();

@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 
 #include <filesystem>
+#include <future>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -34,26 +35,19 @@ ImageFileLoader& ImageFileLoader::instance() {
   return loader;
 }
 
-ImageFileLoader::~ImageFileLoader() {
-  const std::lock_guard lock(background_mutex_);
-  if (background_.joinable()) background_.join();
-}
-
-void ImageFileLoader::start_in_background() {
+void ImageFileLoader::open_during(const std::function<void()>& work) {
   // A missing module is found now rather than after a long render.
   const std::filesystem::path path = module_path();
   std::error_code error;
   if (!std::filesystem::exists(path, error))
     throw std::runtime_error(cannot_load(path.string() + ": no such file"));
-  const std::lock_guard lock(background_mutex_);
-  if (background_.joinable()) return;
-  background_ = std::thread([this] {
-    try {
-      module();
-    } catch (const std::exception&) {
-      // module() says why when it is called for an image.
-    }
-  });
+  std::future<void> done = std::async(std::launch::async, work);
+  try {
+    module();
+  } catch (const std::exception&) {
+    // module() says why when it is called for an image.
+  }
+  done.get();
 }
 
 const ImageFileModule& ImageFileLoader::module() {

@@ -1,8 +1,8 @@
 // Opens the image-file module (image_file_module.hpp says why there is one) once per process.
 #pragma once
 
+#include <functional>
 #include <mutex>
-#include <thread>
 
 #include "common/image_file_module.hpp"
 
@@ -16,14 +16,14 @@ class ImageFileLoader {
 
   ImageFileLoader(const ImageFileLoader&) = delete;
   ImageFileLoader& operator=(const ImageFileLoader&) = delete;
-  ~ImageFileLoader();
 
-  // Starts opening the module on a thread of its own and returns at once, so that a program
-  // that will write an image pays for the loading while it does other work. That work
-  // should not itself call dlopen(), which waits for the load to finish. Throws at once
-  // if the module's file is missing; another failure there is not reported: module()
+  // Runs `work` on a thread of its own while the calling thread opens the module, and
+  // returns when both are done, rethrowing what `work` threw: a program that will write an
+  // image pays for the loading while it does other work. That work should not itself call
+  // dlopen(), which waits for the load to finish. Throws before starting anything if the
+  // module's file is missing; another failure in opening it is not reported here: module()
   // tries again and throws.
-  void start_in_background();
+  void open_during(const std::function<void()>& work);
 
   // The module, opened on first use (waiting for a load already under way). Throws
   // std::runtime_error naming the file it looked for and the dynamic loader's reason.
@@ -35,8 +35,6 @@ class ImageFileLoader {
 
   std::once_flag opened_;
   const ImageFileModule* module_ = nullptr;
-  std::mutex background_mutex_;
-  std::thread background_;
 };
 
 // ImageFileLoader::instance().module().

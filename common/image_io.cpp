@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "common/image_file_loader.hpp"
 
@@ -120,47 +121,54 @@ float linear_to_srgb(float linear) {
 
 void encode_images_on_calling_thread() { image_files().encode_on_calling_thread(); }
 
-void start_loading_image_files() { ImageFileLoader::instance().start_in_background(); }
+void while_loading_image_files(const std::function<void()>& work) {
+  ImageFileLoader::instance().open_during(work);
+}
 
 bool is_supported_image_path(const std::filesystem::path& path) {
   return kind_of(path) != ImageFileKind::unknown;
 }
 
-void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer) {
-  const ImageFileKind kind = kind_of(path);
+EncodedImage::EncodedImage(const Image& image, std::filesystem::path path,
+                           OutputTransfer transfer)
+    : path_(std::move(path)) {
+  const ImageFileKind kind = kind_of(path_);
   if (kind == ImageFileKind::unknown)
-    throw std::runtime_error("cannot write " + path.string() +
+    throw std::runtime_error("cannot write " + path_.string() +
                              ": unknown image extension (use .exr, .png, .jpg or .tif)");
+  content_.kind = kind;
+  content_.width = image.width();
+  content_.height = image.height();
+  content_.srgb = kind != ImageFileKind::exr && transfer == OutputTransfer::srgb;
+  if (kind == ImageFileKind::exr) {
+    content_.pixels = image.pixels().data();
+  } else if (kind == ImageFileKind::tif) {
+    codes16_ = encode<std::uint16_t>(image, transfer);
+    content_.pixels = codes16_.data();
+  } else {
+    codes8_ = encode<std::uint8_t>(image, transfer);
+    content_.pixels = codes8_.data();
+  }
+}
 
+void write_image(const EncodedImage& encoded) {
+  const std::filesystem::path& path = encoded.path();
   // Same directory and extension, so the rename is atomic and OIIO picks the right format.
   std::filesystem::path temp = path;
   temp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
                         path.extension().string());
-
-  ImageFileContent content;
-  content.kind = kind;
-  content.width = image.width();
-  content.height = image.height();
-  content.srgb = kind != ImageFileKind::exr && transfer == OutputTransfer::srgb;
-  LargeBuffer<std::uint16_t> codes16;
-  LargeBuffer<std::uint8_t> codes8;
-  if (kind == ImageFileKind::exr) {
-    content.pixels = image.pixels().data();
-  } else if (kind == ImageFileKind::tif) {
-    codes16 = encode<std::uint16_t>(image, transfer);
-    content.pixels = codes16.data();
-  } else {
-    codes8 = encode<std::uint8_t>(image, transfer);
-    content.pixels = codes8.data();
-  }
   try {
-    image_files().write(temp.string(), content);
+    image_files().write(temp.string(), encoded.content());
   } catch (const std::exception& e) {
     std::error_code ignored;
     std::filesystem::remove(temp, ignored);
     throw std::runtime_error("cannot write " + path.string() + ": " + e.what());
   }
   std::filesystem::rename(temp, path);
+}
+
+void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer) {
+  write_image(EncodedImage(image, path, transfer));
 }
 
 Image read_image(const std::filesystem::path& path) {

@@ -6,8 +6,11 @@
 #include <string>
 
 #include <bit>
+#include <chrono>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -25,6 +28,16 @@ std::filesystem::path temp_dir() {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// Whether OpenImageIO's library is mapped into this process. ctest runs each test in a
+// process of its own, so a test that needs the libraries unloaded finds them so there.
+bool openimageio_loaded() {
+  std::ifstream maps("/proc/self/maps");
+  std::string line;
+  while (std::getline(maps, line))
+    if (line.find("libOpenImageIO.so") != std::string::npos) return true;
+  return false;
 }
 
 TEST(Tiles, CoverTheImageExactlyOnce) {
@@ -185,6 +198,43 @@ TEST(ImageIo, WriteIsAtomicAndLeavesNoTemporaryFiles) {
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     names.push_back(entry.path().filename().string());
   EXPECT_EQ(names, std::vector<std::string>{"out.png"});
+}
+
+TEST(ImageIo, EncodingNeedsNoneOfOpenImageIO) {
+  if (openimageio_loaded()) GTEST_SKIP() << "OpenImageIO is loaded already (run by ctest)";
+  const auto dir = temp_dir();
+  Image image(3, 2);
+  for (std::size_t i = 0; i < image.pixels().size(); ++i) image.pixels()[i] = 0.1f * i;
+  const EncodedImage encoded(image, dir / "a.png", OutputTransfer::srgb);
+  EXPECT_FALSE(openimageio_loaded());
+  EXPECT_THROW(EncodedImage(image, dir / "a.bmp", OutputTransfer::srgb), std::runtime_error);
+
+  write_image(encoded);
+  write_image(image, dir / "b.png", OutputTransfer::srgb);
+  const Image a = read_image(dir / "a.png"), b = read_image(dir / "b.png");
+  ASSERT_EQ(a.width(), 3);
+  EXPECT_TRUE(std::equal(a.pixels().begin(), a.pixels().end(), b.pixels().begin()));
+  EXPECT_FLOAT_EQ(a.pixel(2, 1)[2], 255.0f / 255.0f);  // 1.7, clamped
+}
+
+TEST(ImageIo, TheLibrariesLoadWhileTheWorkRunsOnAThreadOfItsOwn) {
+  if (openimageio_loaded()) GTEST_SKIP() << "OpenImageIO is loaded already (run by ctest)";
+  // The work waits until it sees the libraries mapped, which, were they loaded only after
+  // it, would never happen.
+  const auto caller = std::this_thread::get_id();
+  std::thread::id worker;
+  bool seen = false;
+  while_loading_image_files([&] {
+    worker = std::this_thread::get_id();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!(seen = openimageio_loaded()) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  });
+  EXPECT_TRUE(seen);
+  EXPECT_NE(worker, caller);
+
+  EXPECT_THROW(while_loading_image_files([] { throw std::invalid_argument("from the work"); }),
+               std::invalid_argument);
 }
 
 TEST(ImageIo, RejectsUnknownExtensionsAndUnwritablePaths) {
