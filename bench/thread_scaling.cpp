@@ -1,8 +1,8 @@
 // The tracer's scaling from 1 to 2 threads: render_local(), the path `tessera render`
 // takes from its "tracing" clock, run on one Renderer with 1 and with 2 threads
 // alternately, in one process that does nothing else meanwhile. (`tessera render` loads
-// OpenImageIO on a thread of its own while it traces, which shares the cores with the
-// 2-thread render but not with the 1-thread one, so its own "tracing" figure measures
+// OpenImageIO on its main thread while other threads trace, which shares the cores with
+// the 2-thread render but not with the 1-thread one, so its own "tracing" figure measures
 // that too.) Prints the median of each and their ratio.
 //
 // Usage: tessera_thread_scaling SCENE.json SPP RUNS

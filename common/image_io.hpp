@@ -53,8 +53,8 @@ void encode_images_on_calling_thread();
 // image files, for a program that will write one after that work (otherwise it loads when
 // first used: 0.25 to 0.5 s here, docs/performance.md). Returns when both are done and
 // rethrows what `work` threw; throws at once, starting nothing, if the image module is
-// missing. Call it on the main thread: the libraries' constructors allocate about 28 MB,
-// and glibc's malloc backs only the main thread's heap with huge pages
+// missing. Call it on the main thread: the libraries' constructors allocate tens of
+// megabytes, and glibc's malloc backs only the main thread's heap with huge pages
 // (huge_page_malloc.hpp), which took a quarter off the load.
 void while_loading_image_files(const std::function<void()>& work);
 
