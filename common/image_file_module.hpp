@@ -4,7 +4,7 @@
 // Why a module: Debian's OpenImageIO brings about 260 shared libraries, and loading them
 // takes about 0.13 s at every start of every program linked against it, including each
 // `tessera status` that never touches an image. Opened with dlopen() when an image is first
-// read or written (or earlier, in the background, by a program that knows it will write
+// read or written (or earlier, while other work runs, by a program that knows it will write
 // one), they cost only the programs that use them. Both sides are built from this tree
 // by one compiler, so C++ types cross the boundary unchanged; errors cross as exceptions.
 #pragma once
