@@ -57,14 +57,21 @@ std::uint64_t trace_bare(const tessera::Renderer& renderer, RTCScene embree,
           alignas(64) RTCRayHit16 rayhit;
           for (int row = rows.begin(); row != rows.end(); ++row)
             for (int bx = 0; bx < scene.width; bx += kPacketSide) {
+              // The camera rays as render_tile() makes them, all lanes at once.
               tessera::RayPacket packet;
+              double px[kPacketSize];
+              double py[kPacketSize];
               for (int i = 0; i < kPacketSize; ++i) {
                 const int x = bx + i % kPacketSide;
                 const int y = row * kPacketSide + i / kPacketSide;
                 packet.active[i] = x < scene.width && y < scene.height;
-                if (packet.active[i])
-                  packet.set(i, renderer.camera().ray_through(x + 0.5, y + 0.5));
+                px[i] = x + 0.5;
+                py[i] = y + 0.5;
               }
+              const glm::vec3 eye = renderer.camera().origin();
+              for (int axis = 0; axis < 3; ++axis)
+                for (int i = 0; i < kPacketSize; ++i) packet.origin[axis][i] = eye[axis];
+              renderer.camera().directions_through(px, py, packet.direction);
               tessera::load_packet(packet, valid, rayhit);
               rtcIntersect16(valid, embree, &context.embree, &rayhit);
               // A missed lane's primID is whatever the last hit there left.

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/render_helpers.hpp"
+#include "worker/pixel_sampler.hpp"
 
 namespace tessera {
 namespace {
@@ -79,6 +80,59 @@ TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
                    pixel[2] != static_cast<float>(single.b);
     }
   EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels";
+}
+
+TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
+  // With several samples, render_tile makes each sample's sixteen camera rays at once; every
+  // pixel must still be the mean of single rays through sample_offset()'s positions, summed
+  // in sample order and divided as render_tile divides (by a reciprocal for powers of two).
+  for (int samples : {3, 4}) {
+    json scene = busy_scene();
+    scene["render"]["samples_per_pixel"] = samples;
+    const Renderer renderer(parse_scene(scene));
+    const Image image = render_local(renderer, 1, 16).image;
+    int differing = 0;
+    for (int y = 0; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) {
+        Color sum(0.0);
+        for (int s = 0; s < samples; ++s) {
+          RayCounts counts;
+          const SampleOffset offset = sample_offset(x, y, s, samples);
+          sum += renderer.tracer().trace(renderer.camera().ray_through(x + offset.x, y + offset.y),
+                                         0, counts);
+        }
+        const Color mean = samples == 4 ? sum * 0.25 : sum / static_cast<double>(samples);
+        const float* pixel = image.pixel(x, y);
+        differing += pixel[0] != static_cast<float>(mean.r) ||
+                     pixel[1] != static_cast<float>(mean.g) ||
+                     pixel[2] != static_cast<float>(mean.b);
+      }
+    EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels, " << samples
+                            << " samples";
+  }
+}
+
+TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
+  const Renderer renderer(parse_scene(busy_scene()));
+  const PinholeCamera& camera = renderer.camera();
+  // Positions anywhere on the image plane and a little beyond it, as edge blocks have.
+  double x[kPacketSize];
+  double y[kPacketSize];
+  float direction[3][kPacketSize];
+  for (int round = 0; round < 64; ++round) {
+    for (int i = 0; i < kPacketSize; ++i) {
+      x[i] = (round * kPacketSize + i) * 0.0371 - 1.3;
+      y[i] = (round * 7 + i * 3) * 0.113 - 0.9;
+    }
+    camera.directions_through(x, y, direction);
+    for (int i = 0; i < kPacketSize; ++i) {
+      const Ray single = camera.ray_through(x[i], y[i]);
+      for (int axis = 0; axis < 3; ++axis)
+        ASSERT_EQ(direction[axis][i], single.direction[axis])
+            << "position (" << x[i] << ", " << y[i] << "), axis " << axis;
+      EXPECT_EQ(camera.origin(), single.origin);
+    }
+  }
 }
 
 TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {

@@ -23,19 +23,37 @@ inline std::uint64_t mix_bits(std::uint64_t v) {
   return v;
 }
 
-inline SampleOffset sample_offset(int pixel_x, int pixel_y, int index, int count) {
-  if (count == 1) return {0.5, 0.5};
-  // 1/φ₂ and 1/φ₂², φ₂ being the plastic number, the 2D analogue of the golden ratio.
-  constexpr double kA1 = 0.7548776662466927;
-  constexpr double kA2 = 0.5698402909980532;
+// The rotation of a pixel's sequence: two fractions from a hash of its coordinates.
+struct SampleRotation {
+  double x;
+  double y;
+};
+
+inline SampleRotation sample_rotation(int pixel_x, int pixel_y) {
   const std::uint64_t h =
       mix_bits((static_cast<std::uint64_t>(static_cast<std::uint32_t>(pixel_x)) << 32) |
                static_cast<std::uint32_t>(pixel_y));
-  const double rx = static_cast<double>(h >> 40) * 0x1p-24;
-  const double ry = static_cast<double>((h >> 16) & 0xffffff) * 0x1p-24;
-  double x = rx + kA1 * index;
-  double y = ry + kA2 * index;
-  return {x - std::floor(x), y - std::floor(y)};
+  return {static_cast<double>(h >> 40) * 0x1p-24,
+          static_cast<double>((h >> 16) & 0xffffff) * 0x1p-24};
+}
+
+// 1/φ₂ and 1/φ₂², φ₂ being the plastic number, the 2D analogue of the golden ratio: the
+// sequence's steps along x and y.
+inline constexpr double kSampleStepX = 0.7548776662466927;
+inline constexpr double kSampleStepY = 0.5698402909980532;
+
+// Sample `index`'s place across the pixel along one axis, from that axis's rotation and
+// step, in [0, 1).
+inline double sample_fraction(double rotation, double step, int index) {
+  const double v = rotation + step * index;
+  return v - std::floor(v);
+}
+
+inline SampleOffset sample_offset(int pixel_x, int pixel_y, int index, int count) {
+  if (count == 1) return {0.5, 0.5};
+  const SampleRotation rotation = sample_rotation(pixel_x, pixel_y);
+  return {sample_fraction(rotation.x, kSampleStepX, index),
+          sample_fraction(rotation.y, kSampleStepY, index)};
 }
 
 }  // namespace tessera

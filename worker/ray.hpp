@@ -20,7 +20,24 @@ struct Ray {
   glm::vec3 direction;  // unit
 };
 
+// Primary rays go to Embree sixteen at a time, as a 4x4 block of pixels.
+inline constexpr int kPacketSide = 4;
+inline constexpr int kPacketSize = kPacketSide * kPacketSide;
+
 inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// glm::vec3(glm::normalize(v)) for sixteen vectors at once: lane by lane glm's operations
+// in glm's order, v · (1 / sqrt(v · v)) with the sum (x + y) + z, so each lane has the bits
+// of a single vector's; but in a loop over plain arrays, which vectorises, where lane by
+// lane each square root and division waited on the previous lane's.
+inline void normalize_lanes(const double (&v)[3][kPacketSize], float (&unit)[3][kPacketSize]) {
+  for (int i = 0; i < kPacketSize; ++i) {
+    const double inverse_length =
+        1.0 / std::sqrt(v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i]);
+    for (int axis = 0; axis < 3; ++axis)
+      unit[axis][i] = static_cast<float>(v[axis][i] * inverse_length);
+  }
+}
 
 // Moves a surface point off the surface, to the side `towards` points to, by an amount
 // that grows with the magnitude of its coordinates: a few hundred units in the last place

@@ -109,14 +109,39 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
         __builtin_prefetch(begin, 1);
         __builtin_prefetch(begin + 3 * (column_end - column_begin) - 1, 1);
       }
+      // Each lane's pixel, and with several samples the rotation of its sequence, once for
+      // the block: the rays of a sample are then loops over plain arrays, which vectorise.
+      // The lanes outside the image get rays too, which are never traced.
+      double pixel_x[kPacketSize];
+      double pixel_y[kPacketSize];
+      double rotation_x[kPacketSize];
+      double rotation_y[kPacketSize];
+      for (int i = 0; i < kPacketSize; ++i) {
+        const int x = block_x + i % kPacketSide;
+        const int y = block_y + i / kPacketSide;
+        pixel_x[i] = x;
+        pixel_y[i] = y;
+        const SampleRotation rotation = samples > 1 ? sample_rotation(x, y) : SampleRotation{};
+        rotation_x[i] = rotation.x;
+        rotation_y[i] = rotation.y;
+      }
+      const glm::vec3 eye = camera_.origin();
+      for (int axis = 0; axis < 3; ++axis)
+        for (int i = 0; i < kPacketSize; ++i) packet.origin[axis][i] = eye[axis];
       for (int s = 0; s < samples; ++s) {
-        for (int i = 0; i < kPacketSize; ++i) {
-          if (!packet.active[i]) continue;
-          const int x = block_x + i % kPacketSide;
-          const int y = block_y + i / kPacketSide;
-          const SampleOffset offset = sample_offset(x, y, s, samples);
-          packet.set(i, camera_.ray_through(x + offset.x, y + offset.y));
+        // sample_offset()'s positions.
+        double x[kPacketSize];
+        double y[kPacketSize];
+        if (samples == 1) {
+          for (int i = 0; i < kPacketSize; ++i) x[i] = pixel_x[i] + 0.5;
+          for (int i = 0; i < kPacketSize; ++i) y[i] = pixel_y[i] + 0.5;
+        } else {
+          for (int i = 0; i < kPacketSize; ++i)
+            x[i] = pixel_x[i] + sample_fraction(rotation_x[i], kSampleStepX, s);
+          for (int i = 0; i < kPacketSize; ++i)
+            y[i] = pixel_y[i] + sample_fraction(rotation_y[i], kSampleStepY, s);
         }
+        camera_.directions_through(x, y, packet.direction);
         tracer_.trace_packet(packet, 0, in_tile, colors, counts);
         // Every lane, in tile or not: a loop without a condition stores whole vectors, which
         // the loads below can take straight from the store, where masked stores make them wait.

@@ -111,10 +111,6 @@ inline constexpr unsigned kOpaquePlaneMask = 4u;
 inline constexpr unsigned kOpaqueMask = kOpaqueSolidMask | kOpaquePlaneMask;
 inline constexpr unsigned kAnyMask = kOpaqueMask | kTransmissiveMask;
 
-// Primary rays go to Embree sixteen at a time, as a 4x4 block of pixels.
-inline constexpr int kPacketSide = 4;
-inline constexpr int kPacketSize = kPacketSide * kPacketSide;
-
 // Embree's intersect context, extended as Embree's tutorials do: the sphere and plane
 // callbacks leave here the exact (double) distance of the hit they report for each ray,
 // indexed by the ray's id, so that it need not be computed a second time.
