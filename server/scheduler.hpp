@@ -155,6 +155,12 @@ class Scheduler {
   std::optional<Lease> claim(const std::string& worker_id, int max_tiles = 1);
   // Extends the lease; nothing when it is no longer live.
   std::optional<Lease> heartbeat(const std::string& lease_id);
+  // More tiles for a live lease, so that its worker renders on without the round trips of
+  // a claim between batches: up to `max_tiles` more of the lease's job, cut as claim()
+  // cuts a batch, while that job is the one claim() would give this worker. Renews the
+  // lease as heartbeat() does. The Lease returned lists only the tiles added, which may
+  // be none; nothing when the lease is no longer live.
+  std::optional<Lease> extend(const std::string& lease_id, int max_tiles);
   // Stores the results of some or all of the lease's tiles, atomically: every tile is
   // accepted or none is.
   ResultOutcome complete(const std::string& lease_id, std::span<const TileResult> results);
@@ -247,6 +253,12 @@ class Scheduler {
   std::string new_lease_id() const;
   // How many tiles a claim for up to `max_tiles` of `job` gets.
   int batch_size(const JobEntry& job, int max_tiles) const;
+  // Stages up to `count` of the job's pending tiles, in hand-out order, onto the lease;
+  // returns their indexes. An extension (`extending`) stops before a tile that failed
+  // before, which goes out alone under a lease of its own.
+  std::vector<int> stage_batch(StagedChange& change, JobEntry& job, const std::string& lease_id,
+                               const std::string& worker_id, int count, std::int64_t expires_ms,
+                               bool extending);
   // Records contact; persisted at most once per second per worker.
   void note_seen(WorkerEntry& worker, std::int64_t now);
 

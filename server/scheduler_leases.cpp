@@ -62,21 +62,10 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
         staged_worker.info.state = worker_idle;  // asking for work also revives a gone worker
         if (chosen) {
           const std::string lease_id = new_lease_id();
-          const int count = batch_size(*chosen, max_tiles);
-          int position = chosen->pending.first_from(0);  // staging leaves the pending set alone
-          for (int i = 0; i < count; ++i, position = chosen->pending.first_from(position + 1)) {
-            const int index = chosen->order[position];
-            // A tile that failed before goes out alone, so that another failure is
-            // charged to it and not to tiles that happened to share its batch.
-            if (i > 0 && chosen->tiles[index].attempts > 0) break;
-            TileSlot& tile = change.tile(*chosen, index);
-            tile.state = TileState::leased;
-            tile.lease_id = lease_id;
-            tile.worker_id = worker_id;
-            tile.lease_expires_ms = now + config_.lease_timeout_ms;
-            if (i == 0) staged_worker.info.current_tile = index;
-            if (tile.attempts > 0) break;
-          }
+          const std::vector<int> batch =
+              stage_batch(change, *chosen, lease_id, worker_id, batch_size(*chosen, max_tiles),
+                          now + config_.lease_timeout_ms, false);
+          staged_worker.info.current_tile = batch.front();
           if (chosen->status.state == JobState::queued) {
             JobStatus& status = change.job(*chosen);
             status.state = JobState::running;
@@ -89,6 +78,73 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
         commit(change);
         if (chosen) result = lease_of(worker->lease_id);
       }
+    }
+  }
+  for (const auto& callback : notify) callback();
+  return result;
+}
+
+std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
+                                        const std::string& lease_id, const std::string& worker_id,
+                                        int count, std::int64_t expires_ms, bool extending) {
+  std::vector<int> batch;
+  int position = job.pending.first_from(0);  // staging leaves the pending set alone
+  for (int i = 0; i < count; ++i, position = job.pending.first_from(position + 1)) {
+    const int index = job.order[position];
+    // A tile that failed before goes out alone, as the first of a new lease, so that
+    // another failure is charged to it and not to tiles that happened to share its batch.
+    if ((i > 0 || extending) && job.tiles[index].attempts > 0) break;
+    TileSlot& tile = change.tile(job, index);
+    tile.state = TileState::leased;
+    tile.lease_id = lease_id;
+    tile.worker_id = worker_id;
+    tile.lease_expires_ms = expires_ms;
+    batch.push_back(index);
+    if (tile.attempts > 0) break;
+  }
+  return batch;
+}
+
+std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tiles) {
+  Callbacks notify;
+  std::optional<Lease> result;
+  {
+    std::lock_guard lock(mutex_);
+    const std::int64_t now = clock_.now_ms();
+    if (expire_locked(now)) notify = callbacks_;
+    const auto it = leases_.find(lease_id);
+    if (it != leases_.end() && !it->second.live.empty()) {
+      const std::vector<int> live = it->second.live;  // commit() rewrites the index
+      JobEntry& job = *jobs_.at(it->second.job_id);
+      const std::string worker_id = job.tiles[live.front()].worker_id;
+      WorkerEntry* worker = find_worker(worker_id);
+      // Only while the lease's job is the one a claim would choose for this worker: a
+      // job of higher priority gets the worker at the end of this lease, as it would
+      // after any batch.
+      const JobEntry* first = nullptr;
+      for (const auto& key : active_) {
+        const JobEntry& candidate = *jobs_.at(std::get<2>(key));
+        if (!candidate.pending.empty() && (!worker || !kept_off(candidate, *worker))) {
+          first = &candidate;
+          break;
+        }
+      }
+      StagedChange change;
+      // Every live tile shares one expiry: the old ones are renewed with the new.
+      const std::int64_t expires = now + config_.lease_timeout_ms;
+      for (const int index : live) change.tile(job, index).lease_expires_ms = expires;
+      std::vector<int> added;
+      if (worker && first == &job)
+        added = stage_batch(change, job, lease_id, worker_id, batch_size(job, max_tiles), expires,
+                            true);
+      commit(change);
+      if (worker) note_seen(*worker, now);
+      Lease lease = lease_of(lease_id);
+      lease.tiles.clear();
+      std::sort(added.begin(), added.end(),
+                [&](int a, int b) { return job.rank[a] < job.rank[b]; });
+      for (const int index : added) lease.tiles.push_back({index, job.tiles[index].rect});
+      result = std::move(lease);
     }
   }
   for (const auto& callback : notify) callback();

@@ -81,19 +81,29 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
                              {"lease_timeout_s", config.lease_timeout_ms / 1e3}});
 }
 
+// The request's max_tiles (1 when absent), or nothing when it is out of range.
+std::optional<int> max_tiles_of(const HttpRequest& request) {
+  const auto it = request.query.find("max_tiles");
+  if (it == request.query.end()) return 1;
+  const auto parsed = parse_number_list(it->second);
+  if (!parsed || parsed->size() != 1 || parsed->front() < 1 || parsed->front() > max_batch_tiles)
+    return std::nullopt;
+  return static_cast<int>(parsed->front());
+}
+
+HttpResponse bad_max_tiles() {
+  return error_response(
+      400, "invalid_request",
+      "max_tiles must be an integer from 1 to " + std::to_string(max_batch_tiles));
+}
+
 void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string worker = request.params.at("id");
   if (!context.scheduler.worker_known(worker))
     return respond(error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
-  int max_tiles = 1;
-  if (auto it = request.query.find("max_tiles"); it != request.query.end()) {
-    const auto parsed = parse_number_list(it->second);
-    if (!parsed || parsed->size() != 1 || parsed->front() < 1 || parsed->front() > max_batch_tiles)
-      return respond(error_response(400, "invalid_request",
-                                    "max_tiles must be an integer from 1 to " +
-                                        std::to_string(max_batch_tiles)));
-    max_tiles = static_cast<int>(parsed->front());
-  }
+  const auto max_tiles_or_none = max_tiles_of(request);
+  if (!max_tiles_or_none) return respond(bad_max_tiles());
+  const int max_tiles = *max_tiles_or_none;
   const auto wait = wait_of(request, 20);
   if (!wait) return respond(bad_wait());
   context.scheduler.touch_worker(worker);
@@ -252,6 +262,21 @@ void add_worker_routes(Router& router, ApiContext& context) {
   router.add("POST", "/v1/leases/{id}/heartbeat", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
     const auto lease = context.scheduler.heartbeat(id);
+    if (lease) context.scheduler.touch_worker(lease->worker_id);
+    respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
+  }, std::nullopt, role_worker);
+  router.add("POST", "/v1/leases/{id}/extend", [&context](HttpRequest&& request, Respond respond) {
+    const std::string& id = request.params.at("id");
+    const auto max_tiles = max_tiles_of(request);
+    if (!max_tiles) return respond(bad_max_tiles());
+    std::optional<Lease> lease;
+    try {
+      lease = context.scheduler.extend(id, *max_tiles);
+    } catch (const std::exception& e) {
+      // As for a claim: the store refused the new tiles, and the job has failed.
+      return respond(error_response(507, "storage_failed",
+                                    std::string("cannot store the lease: ") + e.what()));
+    }
     if (lease) context.scheduler.touch_worker(lease->worker_id);
     respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
   }, std::nullopt, role_worker);

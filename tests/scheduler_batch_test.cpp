@@ -194,6 +194,56 @@ TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
   EXPECT_EQ(s().job(job)->tiles_rendering, 3);
 }
 
+TEST_F(SchedulerBatchTest, AnExtensionAddsTheJobsNextTilesToTheLiveLeaseAndRenewsIt) {
+  const std::string job = submit(96, 96, 32).id;  // centre-first 4 1 3 5 7 0 2 6 8
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 100);
+  ASSERT_EQ(indexes_of(lease), (std::vector<int>{4, 1, 3, 5}));
+  clock_.advance_ms(timeout_ms - 1);
+  const auto added = s().extend(lease.id, 100);
+  ASSERT_TRUE(added);
+  EXPECT_EQ(added->id, lease.id);
+  EXPECT_EQ(indexes_of(*added), (std::vector<int>{7, 0}));  // cut as a claim: 5 pending / 2
+  EXPECT_EQ(s().job(job)->tiles_rendering, 6);
+  clock_.advance_ms(2);  // past the claim's expiry, not the extension's
+  s().expire_leases();
+  const auto owed = s().heartbeat(lease.id);
+  ASSERT_TRUE(owed);
+  EXPECT_EQ(indexes_of(*owed), (std::vector<int>{4, 1, 3, 5, 7, 0}));
+  EXPECT_EQ(indexes_of(*s().extend(lease.id, 1)), (std::vector<int>{2}));  // max_tiles caps
+  ASSERT_EQ(deliver(*s().heartbeat(lease.id)), ResultOutcome::accepted);
+  EXPECT_EQ(s().job(job)->tiles_done, 7);
+  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_FALSE(s().extend(lease.id, 100));  // the lease is over once it owes nothing
+}
+
+TEST_F(SchedulerBatchTest, AnExtensionAddsNothingWhileAJobOfHigherPriorityWaits) {
+  submit(96, 96, 32, 50);
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 100);
+  const std::string urgent = submit(64, 64, 32, 80).id;
+  const auto added = s().extend(lease.id, 100);
+  ASSERT_TRUE(added);
+  EXPECT_TRUE(added->tiles.empty());
+  EXPECT_EQ(s().heartbeat(lease.id)->tiles.size(), lease.tiles.size());  // goes on as it was
+  ASSERT_EQ(deliver(lease), ResultOutcome::accepted);
+  EXPECT_EQ(s().claim(w, 100)->job_id, urgent);
+}
+
+TEST_F(SchedulerBatchTest, AnExtensionStopsBeforeATileThatFailedBefore) {
+  submit(96, 96, 32);
+  const std::string w1 = worker("one");
+  const std::string w2 = worker("two");
+  const Lease first = *s().claim(w1, 1);
+  const Lease second = *s().claim(w2, 1);
+  ASSERT_EQ(indexes_of(second), (std::vector<int>{1}));
+  s().fail_tile(second.id, 1, "out of memory");  // tile 1 is next in line, and failed once
+  EXPECT_TRUE(s().extend(first.id, 100)->tiles.empty());
+  EXPECT_EQ(indexes_of(*s().claim(w2, 100)), (std::vector<int>{1}));  // alone
+  // The next in line again, cut as a claim would be: 7 pending / (2 * 2).
+  EXPECT_EQ(indexes_of(*s().extend(first.id, 100)), (std::vector<int>{3}));
+}
+
 TEST_F(SchedulerBatchTest, AJobWhoseImageCannotBeWrittenFails) {
   const std::string job = submit(32, 32, 32).id;
   // A file where the images directory should be: the image write must fail.

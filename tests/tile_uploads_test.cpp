@@ -81,6 +81,32 @@ TEST(TileUploads, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
   EXPECT_EQ(order, (std::vector<int>{0, 1, 2, 3, 4, 9}));
 }
 
+TEST(TileUploads, AfterSendPromptlyTilesGoWithoutWaitingForTheGatherUntilTheFlush) {
+  Recorder recorder;
+  // A gather far longer than the waits below: only send_promptly() can make these go.
+  TileUploads uploads(recorder.send(), 60s, 1 << 20);
+  const auto wait_for_groups = [&](std::size_t count) {
+    for (int i = 0; i < 500 && recorder.sent().size() < count; ++i)
+      std::this_thread::sleep_for(10ms);
+  };
+  uploads.push(tile(1));
+  uploads.send_promptly();
+  wait_for_groups(1);
+  EXPECT_EQ(recorder.sent(), (std::vector<std::vector<int>>{{1}}));
+  uploads.push(tile(2));  // pushed after the call: goes as soon as it is ready
+  wait_for_groups(2);
+  EXPECT_EQ(recorder.sent(), (std::vector<std::vector<int>>{{1}, {2}}));
+  EXPECT_TRUE(uploads.flush());
+
+  // The flush ends it: the next lease's tiles are gathered again, and wait for the flush.
+  uploads.push(tile(3));
+  uploads.push(tile(4));
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(recorder.sent().size(), 2u);
+  EXPECT_TRUE(uploads.flush());
+  EXPECT_EQ(recorder.sent().back(), (std::vector<int>{3, 4}));
+}
+
 TEST(TileUploads, ARefusalDropsTheLeasesLaterTilesUntilTheFlush) {
   Recorder recorder;
   recorder.refuse = true;

@@ -34,7 +34,16 @@ bool TileUploads::flush() {
   changed_.notify_all();
   changed_.wait(lock, [&] { return ready_.empty() && !sending_; });
   flushing_ = false;
+  prompt_ = false;
   return !refused_.exchange(false);
+}
+
+void TileUploads::send_promptly() {
+  {
+    std::lock_guard lock(mutex_);
+    prompt_ = true;
+  }
+  changed_.notify_all();
 }
 
 std::vector<FinishedTile> TileUploads::take_group() {
@@ -57,7 +66,7 @@ void TileUploads::run() {
     changed_.wait(lock, [&] { return stopping_ || !ready_.empty(); });
     if (ready_.empty()) return;  // stopping with nothing left to send
     changed_.wait_for(lock, gather_, [&] {
-      return stopping_ || flushing_ || ready_bytes_ >= max_group_bytes_;
+      return stopping_ || flushing_ || prompt_ || ready_bytes_ >= max_group_bytes_;
     });
     std::vector<FinishedTile> group = take_group();
     sending_ = true;

@@ -37,6 +37,11 @@ class TileUploads {
   // Sends what is left and waits until every pushed tile has been sent or dropped. Returns
   // false when the coordinator refused a group since the last flush; then clears that.
   bool flush();
+  // Ends the gathering until the next flush(): what is ready goes now, and each tile pushed
+  // after it goes as soon as the thread is free. For the last tiles of a lease, which have
+  // no later tiles to share a group with, so that flush() waits for little more than the
+  // very last one.
+  void send_promptly();
   // True once the coordinator refused a group of the current lease.
   bool refused() const { return refused_; }
 
@@ -52,6 +57,7 @@ class TileUploads {
   std::vector<FinishedTile> ready_;
   std::size_t ready_bytes_ = 0;
   bool flushing_ = false;
+  bool prompt_ = false;
   bool sending_ = false;
   bool stopping_ = false;
   std::atomic<bool> refused_{false};

@@ -36,6 +36,20 @@ constexpr int kMaxBatchTiles = 256;  // the coordinator's limit
 // Finished tiles wait this long for others to share their upload with.
 constexpr auto kUploadGather = std::chrono::milliseconds(50);
 constexpr std::size_t kMaxUploadBytes = 16u << 20;  // under the coordinator's 64 MiB
+// The last tiles of a lease, this many per thread, go up without waiting to be gathered:
+// the next claim waits on their upload, and with nothing left to render no later tile
+// would share their group.
+constexpr int kPromptTilesPerThread = 4;
+// More tiles are asked for no later than when this many per thread are left to take.
+constexpr int kExtendTilesLeftPerThread = 2;
+
+std::vector<ClaimedTile> tiles_of(const json& lease) {
+  std::vector<ClaimedTile> tiles;
+  for (const json& tile : lease.at("tiles"))
+    tiles.push_back({tile.at("index"),
+                     TileRect{tile.at("x"), tile.at("y"), tile.at("width"), tile.at("height")}});
+  return tiles;
+}
 
 }  // namespace
 
@@ -44,12 +58,14 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
       stop_(stop),
       client_(options_.server_url,
               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
-      upload_client_(options_.server_url, std::chrono::seconds(60)) {
+      upload_client_(options_.server_url, std::chrono::seconds(60)),
+      extend_client_(options_.server_url, std::chrono::seconds(15)) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
   client_.set_bearer_token(options_.token);
   upload_client_.set_bearer_token(options_.token);
+  extend_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
       [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
       kUploadGather, kMaxUploadBytes);
@@ -107,9 +123,9 @@ bool WorkerDaemon::register_self() {
   return true;
 }
 
-int WorkerDaemon::batch_tiles() const {
-  if (tile_thread_seconds_ <= 0) return options_.threads;  // nothing measured yet
-  const double tiles = kBatchSeconds * options_.threads / tile_thread_seconds_;
+int WorkerDaemon::batch_tiles(double tile_thread_seconds) const {
+  if (tile_thread_seconds <= 0) return options_.threads;  // nothing measured yet
+  const double tiles = kBatchSeconds * options_.threads / tile_thread_seconds;
   return static_cast<int>(std::clamp(tiles, static_cast<double>(options_.threads),
                                      static_cast<double>(kMaxBatchTiles)));
 }
@@ -117,7 +133,7 @@ int WorkerDaemon::batch_tiles() const {
 std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
   const std::string target = "/v1/workers/" + worker_id_ +
                              "/claim?wait_s=" + std::to_string(options_.claim_wait_s) +
-                             "&max_tiles=" + std::to_string(batch_tiles());
+                             "&max_tiles=" + std::to_string(batch_tiles(tile_thread_seconds_));
   const auto result = with_retry("claim", [&] { return client_.request("POST", target); });
   if (!result || result->status == 204) return std::nullopt;
   if (result->status == 404) {  // the coordinator forgot us (a new data dir): join again
@@ -130,11 +146,22 @@ std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
     return std::nullopt;
   }
   const json lease = json::parse(result->body);
-  Claimed claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"), {}};
-  for (const json& tile : lease.at("tiles"))
-    claimed.tiles.push_back({tile.at("index"), TileRect{tile.at("x"), tile.at("y"),
-                                                        tile.at("width"), tile.at("height")}});
-  return claimed;
+  return Claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"), tiles_of(lease)};
+}
+
+std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& lease_id,
+                                                             double tile_thread_seconds) {
+  // One try: without an answer the lease simply ends with the tiles it has, and the next
+  // claim goes through with_retry().
+  try {
+    const auto result = extend_client_.request(
+        "POST", "/v1/leases/" + lease_id +
+                    "/extend?max_tiles=" + std::to_string(batch_tiles(tile_thread_seconds)));
+    if (result.status != 200) return std::nullopt;
+    return tiles_of(json::parse(result.body));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
 }
 
 const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
@@ -153,18 +180,26 @@ void WorkerDaemon::render(const Claimed& lease) {
   const Renderer& renderer = renderer_for(lease.scene_digest);
   uploading_lease_ = lease.lease_id;  // uploads_ is idle between leases
   heartbeat_->begin(lease.lease_id);
-  const int count = static_cast<int>(lease.tiles.size());
-  std::atomic<int> next{0};
   std::atomic<int> rendered{0};
+  // Thread time spent on this lease's tiles so far, for the size of its extensions.
+  std::atomic<std::int64_t> busy_ns{0};
+  BatchTiles tiles(lease.tiles, kExtendTilesLeftPerThread * options_.threads,
+                   kPromptTilesPerThread * options_.threads, [&] {
+                     const int done = rendered.load();
+                     return extend(lease.lease_id,
+                                   done > 0 ? busy_ns.load() * 1e-9 / done : tile_thread_seconds_);
+                   });
   std::mutex failure_mutex;
   std::optional<std::pair<int, std::string>> failure;  // the first tile that could not be rendered
   // Each thread takes the next tile in the lease's (centre-first) order until none is
   // left, or the lease is lost, or a tile failed, or the worker is asked to stop.
   const auto render_tiles = [&] {
     while (!stop_ && !heartbeat_->lost() && !uploads_->refused()) {
-      const int i = next++;
-      if (i >= count) return;
-      const ClaimedTile& tile = lease.tiles[i];
+      const auto taken = tiles.take();
+      if (!taken) return;
+      if (taken->among_last) uploads_->send_promptly();
+      const ClaimedTile& tile = taken->tile;
+      const auto tile_start = std::chrono::steady_clock::now();
       try {
         inject_fault(tile.index);
         FinishedTile finished{tile.index, std::vector<float>(tile.rect.pixel_count() * 3), 0};
@@ -173,9 +208,12 @@ void WorkerDaemon::render(const Claimed& lease) {
       } catch (const std::exception& e) {
         std::lock_guard lock(failure_mutex);
         if (!failure) failure.emplace(tile.index, e.what());
-        next = count;  // the others finish their tiles and take no more
+        tiles.close();  // the others finish their tiles and take no more
         return;
       }
+      busy_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                     std::chrono::steady_clock::now() - tile_start)
+                     .count();
       ++rendered;
       ++tiles_rendered_;
     }
@@ -190,6 +228,10 @@ void WorkerDaemon::render(const Claimed& lease) {
     });
   }
   const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  // No more tiles once the threads are done: an extension on its way is waited for, and
+  // the tiles it added count as owed (released below when stopping).
+  tiles.finish();
+  const int count = tiles.count();
   const bool delivered = uploads_->flush();
   const bool kept = heartbeat_->end();
   if (rendered == count && !stop_) {
@@ -237,7 +279,10 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
   return false;
 }
 
-void WorkerDaemon::interrupt() { client_.interrupt(); }
+void WorkerDaemon::interrupt() {
+  client_.interrupt();
+  extend_client_.interrupt();  // a lease's threads may wait on an extension
+}
 
 void WorkerDaemon::report_failure(const std::string& lease_id, int tile_index,
                                   const std::string& error) {

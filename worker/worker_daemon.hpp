@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include "client/http_client.hpp"
+#include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
 #include "worker/tile_uploads.hpp"
 #include "worker/renderer.hpp"
@@ -40,15 +41,11 @@ class WorkerDaemon {
 
   // Returns the process exit code.
   int run();
-  // Safe from any thread, after setting `stop`: cuts a waiting claim short, so that an
-  // idle worker exits at once instead of when its long poll ends.
+  // Safe from any thread, after setting `stop`: cuts a waiting claim (or extension) short,
+  // so that an idle worker exits at once instead of when its long poll ends.
   void interrupt();
 
  private:
-  struct ClaimedTile {
-    int index = 0;
-    TileRect rect;
-  };
   struct Claimed {
     std::string lease_id;
     std::string job_id;
@@ -68,13 +65,18 @@ class WorkerDaemon {
   // returns once they are all sent. Stops early when the lease is lost or the worker is
   // asked to stop; the tiles not rendered then are released.
   void render(const Claimed& lease);
+  // Asks the coordinator for more tiles of the lease (BatchTiles::Extend), about a
+  // batch's worth at `tile_thread_seconds` a tile on one thread.
+  std::optional<std::vector<ClaimedTile>> extend(const std::string& lease_id,
+                                                 double tile_thread_seconds);
   bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
   void report_failure(const std::string& lease_id, int tile_index, const std::string& error);
   // Applies options_.fault to a tile about to be rendered.
   void inject_fault(int tile_index) const;
   void release(const std::string& lease_id);
-  // How many tiles to ask for: about batch_seconds of work, from the speed seen so far.
-  int batch_tiles() const;
+  // How many tiles to ask for: about batch_seconds of work at `tile_thread_seconds` a
+  // tile (0: nothing measured yet).
+  int batch_tiles(double tile_thread_seconds) const;
 
   WorkerOptions options_;
   const std::atomic<bool>& stop_;
@@ -82,6 +84,7 @@ class WorkerDaemon {
   std::string worker_id_;
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
   HttpClient upload_client_;                   // used by uploads_' thread only
+  HttpClient extend_client_;                   // used by a lease's BatchTiles only
   std::string uploading_lease_;                // the lease uploads_ sends for
   std::unique_ptr<TileUploads> uploads_;
   double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet
