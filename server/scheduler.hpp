@@ -251,6 +251,9 @@ class Scheduler {
   bool expire_locked(std::int64_t now);
   Lease lease_of(const std::string& lease_id) const;
   std::string new_lease_id() const;
+  // The job a claim by `worker` takes tiles of: the first in claim order with a pending
+  // tile it is not kept off; none when there is none.
+  JobEntry* next_job_for(const WorkerEntry& worker) const;
   // How many tiles a claim for up to `max_tiles` of `job` gets.
   int batch_size(const JobEntry& job, int max_tiles) const;
   // Stages up to `count` of the job's pending tiles, in hand-out order, onto the lease;

@@ -45,14 +45,7 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
       note_seen(*worker, now);
       result = lease_of(worker->lease_id);
     } else {
-      JobEntry* chosen = nullptr;
-      for (const auto& key : active_) {
-        JobEntry& job = *jobs_.at(std::get<2>(key));
-        if (!job.pending.empty() && !kept_off(job, *worker)) {
-          chosen = &job;
-          break;
-        }
-      }
+      JobEntry* chosen = next_job_for(*worker);
       if (!chosen && worker->info.state == worker_idle) {
         note_seen(*worker, now);
       } else {
@@ -82,6 +75,14 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
   }
   for (const auto& callback : notify) callback();
   return result;
+}
+
+JobEntry* Scheduler::next_job_for(const WorkerEntry& worker) const {
+  for (const auto& key : active_) {
+    JobEntry& job = *jobs_.at(std::get<2>(key));
+    if (!job.pending.empty() && !kept_off(job, worker)) return &job;
+  }
+  return nullptr;
 }
 
 std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
@@ -118,23 +119,15 @@ std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tile
       JobEntry& job = *jobs_.at(it->second.job_id);
       const std::string worker_id = job.tiles[live.front()].worker_id;
       WorkerEntry* worker = find_worker(worker_id);
-      // Only while the lease's job is the one a claim would choose for this worker: a
-      // job of higher priority gets the worker at the end of this lease, as it would
-      // after any batch.
-      const JobEntry* first = nullptr;
-      for (const auto& key : active_) {
-        const JobEntry& candidate = *jobs_.at(std::get<2>(key));
-        if (!candidate.pending.empty() && (!worker || !kept_off(candidate, *worker))) {
-          first = &candidate;
-          break;
-        }
-      }
       StagedChange change;
       // Every live tile shares one expiry: the old ones are renewed with the new.
       const std::int64_t expires = now + config_.lease_timeout_ms;
       for (const int index : live) change.tile(job, index).lease_expires_ms = expires;
       std::vector<int> added;
-      if (worker && first == &job)
+      // Only while the lease's job is the one a claim would choose for this worker: a
+      // job of higher priority gets the worker at the end of this lease, as it would
+      // after any batch.
+      if (worker && next_job_for(*worker) == &job)
         added = stage_batch(change, job, lease_id, worker_id, batch_size(job, max_tiles), expires,
                             true);
       commit(change);
