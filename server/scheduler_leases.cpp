@@ -134,8 +134,7 @@ std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tile
       if (worker) note_seen(*worker, now);
       Lease lease = lease_of(lease_id);
       lease.tiles.clear();
-      std::sort(added.begin(), added.end(),
-                [&](int a, int b) { return job.rank[a] < job.rank[b]; });
+      // In hand-out order, as stage_batch() took them.
       for (const int index : added) lease.tiles.push_back({index, job.tiles[index].rect});
       result = std::move(lease);
     }
