@@ -257,8 +257,8 @@ class Scheduler {
   // How many tiles a claim for up to `max_tiles` of `job` gets.
   int batch_size(const JobEntry& job, int max_tiles) const;
   // Stages up to `count` of the job's pending tiles, in hand-out order, onto the lease;
-  // returns their indexes in that order. An extension (`extending`) stops before a tile that failed
-  // before, which goes out alone under a lease of its own.
+  // returns their indexes in that order. An extension (`extending`) stops before a tile
+  // that failed before, which goes out alone under a lease of its own.
   std::vector<int> stage_batch(StagedChange& change, JobEntry& job, const std::string& lease_id,
                                const std::string& worker_id, int count, std::int64_t expires_ms,
                                bool extending);
