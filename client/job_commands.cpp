@@ -60,6 +60,33 @@ std::string format_duration(double seconds) {
   return text;
 }
 
+// Signs of trouble the coordinator saw on a job, when there are any: a farm that renders
+// the same tiles again, or delivers nothing, must not look like a slow one.
+void print_health(const json& job) {
+  const auto it = job.find("health");
+  if (it == job.end() || !it->is_object()) return;  // a coordinator from before they were shown
+  const json& health = *it;
+  std::string trouble;
+  const auto add = [&](int count, const char* one, const char* many) {
+    if (count <= 0) return;
+    trouble +=
+        (trouble.empty() ? "" : ", ") + std::to_string(count) + " " + (count == 1 ? one : many);
+  };
+  add(health.value("tile_failures", 0), "tile failure", "tile failures");
+  add(health.value("refused_results", 0), "result refused", "results refused");
+  add(health.value("repeated_handouts", 0), "tile sent out again", "tiles sent out again");
+  // Half a minute without a tile while rendering is long for any tile size people use.
+  const double stalled_s = health.value("no_progress_s", 0.0);
+  if (stalled_s >= 30) {
+    trouble += (trouble.empty() ? "" : ", ") + std::string("no tile delivered for ") +
+               format_duration(stalled_s);
+  }
+  if (trouble.empty()) return;
+  std::printf("  trouble: %s\n", trouble.c_str());
+  if (health.contains("last_problem") && health["last_problem"].is_string())
+    std::printf("  last problem: %s\n", health["last_problem"].get<std::string>().c_str());
+}
+
 void print_status(const json& job) {
   std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
               job["id"].get<std::string>().c_str(), job["state"].get<std::string>().c_str(),
@@ -68,6 +95,7 @@ void print_status(const json& job) {
               job["tiles"]["total"].get<int>(), job["priority"].get<int>(), job["width"].get<int>(),
               job["height"].get<int>());
   if (!job["error"].is_null()) std::printf("  error: %s\n", job["error"].get<std::string>().c_str());
+  print_health(job);
 }
 
 bool finished(const json& job) {

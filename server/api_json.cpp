@@ -49,6 +49,24 @@ nlohmann::json timestamp_or_null(std::int64_t ms) {
 
 }  // namespace
 
+namespace {
+
+nlohmann::json to_json(const JobHealth& health, const JobStatus& job, std::int64_t now_ms) {
+  // How long its tiles have rendered with none delivered; 0 unless some are under lease.
+  const bool rendering = job.state == JobState::running && job.tiles_rendering > 0;
+  const double no_progress_s = rendering && health.progress_at_ms > 0
+                                   ? std::max<std::int64_t>(0, now_ms - health.progress_at_ms) / 1e3
+                                   : 0.0;
+  return {{"tile_failures", health.tile_failures},
+          {"refused_results", health.refused_results},
+          {"repeated_handouts", health.repeated_handouts},
+          {"last_problem", health.last_problem.empty() ? nlohmann::json(nullptr)
+                                                       : nlohmann::json(health.last_problem)},
+          {"no_progress_s", no_progress_s}};
+}
+
+}  // namespace
+
 nlohmann::json to_json(const JobStatus& job, std::int64_t now_ms) {
   const double progress =
       job.tiles_total > 0 ? static_cast<double>(job.tiles_done) / job.tiles_total : 0.0;
@@ -62,23 +80,24 @@ nlohmann::json to_json(const JobStatus& job, std::int64_t now_ms) {
   } else if (!is_finished(job.state) && job.tiles_done > 0 && elapsed_s > 0) {
     eta = elapsed_s * (job.tiles_total - job.tiles_done) / job.tiles_done;
   }
-  return {{"id", job.id},
-          {"name", job.name},
-          {"state", to_string(job.state)},
-          {"priority", job.priority},
-          {"width", job.width},
-          {"height", job.height},
-          {"tiles",
-           {{"total", job.tiles_total}, {"done", job.tiles_done}, {"rendering", job.tiles_rendering}}},
-          {"progress", progress},
-          {"created_at", format_timestamp(job.created_at_ms)},
-          {"started_at", timestamp_or_null(job.started_at_ms)},
-          {"finished_at", timestamp_or_null(job.finished_at_ms)},
-          {"elapsed_s", elapsed_s},
-          {"eta_s", eta},
-          {"error", job.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(job.error)},
-          {"stats",
-           {{"rays", job.rays}, {"rays_per_s", elapsed_s > 0 ? job.rays / elapsed_s : 0.0}}}};
+  return {
+      {"id", job.id},
+      {"name", job.name},
+      {"state", to_string(job.state)},
+      {"priority", job.priority},
+      {"width", job.width},
+      {"height", job.height},
+      {"tiles",
+       {{"total", job.tiles_total}, {"done", job.tiles_done}, {"rendering", job.tiles_rendering}}},
+      {"progress", progress},
+      {"created_at", format_timestamp(job.created_at_ms)},
+      {"started_at", timestamp_or_null(job.started_at_ms)},
+      {"finished_at", timestamp_or_null(job.finished_at_ms)},
+      {"elapsed_s", elapsed_s},
+      {"eta_s", eta},
+      {"error", job.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(job.error)},
+      {"health", to_json(job.health, job, now_ms)},
+      {"stats", {{"rays", job.rays}, {"rays_per_s", elapsed_s > 0 ? job.rays / elapsed_s : 0.0}}}};
 }
 
 nlohmann::json to_json(const WorkerInfo& worker) {

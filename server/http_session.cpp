@@ -1,5 +1,7 @@
 #include "server/http_session.hpp"
 
+#include "common/protocol_limits.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -231,10 +233,15 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     close();
   }
 
-  static HttpResponse too_large(std::size_t limit) {
-    return error_response(413, "body_too_large",
-                          "the request body exceeds this route's limit of " + std::to_string(limit) +
-                              " bytes");
+  // Names the limit and, when the request announced it, the body's size: a worker over a
+  // limit must be told by how much, not only that it is.
+  HttpResponse too_large(std::size_t limit) const {
+    const auto announced = parser_ ? parser_->content_length() : boost::none;
+    return error_response(
+        413, "body_too_large",
+        "the request body " +
+            (announced ? "of " + with_thousands(*announced) + " bytes " : std::string()) +
+            "exceeds this route's limit of " + with_thousands(limit) + " bytes");
   }
 
   void dispatch();

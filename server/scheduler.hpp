@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "common/image.hpp"
+#include "common/protocol_limits.hpp"
 #include "common/scene.hpp"
 #include "server/clock.hpp"
 #include "server/store.hpp"
@@ -35,6 +36,17 @@ struct SchedulerConfig {
   // A worker that failed this often on a job gets no more of its tiles while another
   // worker could take them.
   int worker_failures_per_job = 2;
+  // The most tiles a lease may owe at once (ProtocolLimits::max_lease_tiles, stated to
+  // workers at registration): an extension adds no more than what keeps the lease within.
+  int max_lease_tiles = ProtocolLimits{}.max_lease_tiles;
+  // A tile handed out this often without its result being accepted fails its job: a worker
+  // whose results are refused, or that drops its lease and claims it back, would otherwise
+  // render the same tiles forever. Failures count against max_tile_attempts too; this
+  // catches the loops that no failure reports.
+  int max_tile_handouts = 10;
+  // A running job whose tiles are being rendered but of which no tile has been delivered
+  // for this long fails, saying so, instead of stalling unseen; 0: never.
+  std::int64_t stall_timeout_ms = 30 * 60 * 1000;
 };
 
 enum class JobState { queued, running, completed, failed, canceled };
@@ -43,6 +55,19 @@ std::optional<JobState> job_state_from_string(std::string_view text);
 inline bool is_finished(JobState s) {
   return s == JobState::completed || s == JobState::failed || s == JobState::canceled;
 }
+
+// Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
+// that renders the same tiles again and again, or delivers nothing, must be seen as such.
+// Kept in memory; tile_failures and last_problem are recounted from the stored tiles after
+// a restart.
+struct JobHealth {
+  int tile_failures = 0;    // failures charged to its tiles: expired leases, errors reported
+  int refused_results = 0;  // results the coordinator refused for a reason other than a lost lease
+  int repeated_handouts = 0;  // times one of its tiles went out again after going out before
+  std::string last_problem;   // the latest of those, in words; "" when none
+  // When a tile was last delivered, or rendering began (again) after none was under lease.
+  std::int64_t progress_at_ms = 0;
+};
 
 struct JobStatus {
   std::string id;
@@ -61,6 +86,7 @@ struct JobStatus {
   std::string error;                // set when failed
   std::uint64_t rays = 0;           // summed over the tiles done
   std::string scene_digest;         // hex SHA-256 of the scene JSON as stored
+  JobHealth health;                 // in memory; only the Scheduler changes it, in place
 };
 
 struct WorkerInfo {
@@ -178,13 +204,17 @@ class Scheduler {
   // and the lease's other tiles go back as by release(). Nothing when the lease is not
   // live or does not owe that tile.
   void fail_tile(const std::string& lease_id, int tile_index, const std::string& error);
+  // The coordinator refused a result under this lease for a reason other than a lost lease
+  // (over a limit, malformed): a bug or a version mismatch, shown on the lease's job.
+  void note_refused_result(const std::string& lease_id, const std::string& why);
   // Records that a worker is alive (any request from it).
   void touch_worker(const std::string& worker_id);
   void worker_left(const std::string& worker_id);
   std::vector<WorkerInfo> workers() const;
 
   // --- time -----------------------------------------------------------------
-  // Returns expired leases' tiles to the queue. Call periodically.
+  // Returns expired leases' tiles to the queue, and fails jobs stalled past
+  // stall_timeout_ms. Call periodically.
   void expire_leases();
   // Called (outside the lock) whenever a tile may have become claimable.
   void on_work_available(std::function<void()> callback);
@@ -245,6 +275,14 @@ class Scheduler {
   // Stages one failure of a tile by a worker; at the limit, the job fails with `error`.
   void stage_tile_failure(StagedChange& change, JobEntry& job, int index, const WorkerEntry* worker,
                           const std::string& error);
+  // Counts one more hand-out of a staged tile (claim(), extend(), a lease given back on a
+  // reconnect); a tile that goes out again is shown on its job.
+  void count_handout(JobEntry& job, TileSlot& staged);
+  // Stages the job's failure with `error`, withdrawing its other tiles from their workers;
+  // nothing when it has finished already.
+  void stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error);
+  // Fails the running jobs that delivered nothing for stall_timeout_ms while rendering.
+  void fail_stalled_locked(std::int64_t now, StagedChange& change);
   // Whether `worker` should get none of `job`'s tiles, having failed on it too often.
   bool kept_off(const JobEntry& job, const WorkerEntry& worker) const;
   // Returns the tiles of leases expired at `now` to the queue; true when there were any.

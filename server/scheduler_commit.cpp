@@ -73,6 +73,7 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   updated.tiles_total = s.tiles_total;
   updated.tiles_done = s.tiles_done;
   updated.tiles_rendering = s.tiles_rendering;
+  updated.health = s.health;  // changed in place only, never staged
   job.status = std::move(updated);
   if (!is_finished(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});

@@ -37,6 +37,7 @@ struct TileSlot {
   std::uint64_t rays = 0;
   std::string result_lease_id;  // the lease whose pixels are stored
   std::string last_error;       // why it failed last
+  int handouts = 0;  // times it went out under a lease; in memory only (see count_handouts)
 };
 
 struct JobEntry {

@@ -19,6 +19,22 @@
 #include "server/scheduler_entries.hpp"
 
 namespace tessera {
+namespace {
+
+// Why a job fails of tiles handed out too often; names the first of them.
+std::string handouts_error(const JobEntry& job, const std::vector<int>& tiles, int limit) {
+  const int index = *std::min_element(tiles.begin(), tiles.end(),
+                                      [&](int a, int b) { return job.rank[a] < job.rank[b]; });
+  const TileRect& rect = job.tiles[index].rect;
+  std::string error = "tile " + std::to_string(index) + " at (" + std::to_string(rect.x) + ", " +
+                      std::to_string(rect.y) + ") went out to workers " + std::to_string(limit) +
+                      " times without its result being accepted";
+  if (!job.status.health.last_problem.empty())
+    error += "; the last problem: " + job.status.health.last_problem;
+  return error;
+}
+
+}  // namespace
 
 int Scheduler::batch_size(const JobEntry& job, int max_tiles) const {
   const int pending = static_cast<int>(job.pending.size());
@@ -41,9 +57,26 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
 
     if (!worker->lease_id.empty()) {
       // A reconnecting worker (or a retried request) gets its own live lease back, so
-      // one worker never holds two leases.
+      // one worker never holds two leases. It renders those tiles again: that counts as
+      // a hand-out, so that a worker that keeps dropping its lease and claiming it back
+      // (its results refused, say) ends at the limit instead of looping.
       note_seen(*worker, now);
-      result = lease_of(worker->lease_id);
+      const std::string lease_id = worker->lease_id;
+      const LeaseTiles& entry = leases_.at(lease_id);
+      JobEntry& job = *jobs_.at(entry.job_id);
+      StagedChange change;
+      bool over = false;
+      for (const int index : entry.live) {
+        TileSlot& tile = change.tile(job, index);
+        count_handout(job, tile);
+        over = over || tile.handouts > config_.max_tile_handouts;
+      }
+      if (over) {
+        stage_job_failure(change, job, handouts_error(job, entry.live, config_.max_tile_handouts));
+        notify = callbacks_;
+      }
+      commit(change);
+      if (!over) result = lease_of(lease_id);
     } else {
       JobEntry* chosen = next_job_for(*worker);
       if (!chosen && worker->info.state == worker_idle) {
@@ -59,6 +92,9 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
               stage_batch(change, *chosen, lease_id, worker_id, batch_size(*chosen, max_tiles),
                           now + config_.lease_timeout_ms, false);
           staged_worker.info.current_tile = batch.front();
+          // Rendering (re)starts: the stall clock counts from here, not from the last
+          // delivery before a pause (no workers, a job of higher priority in between).
+          if (chosen->status.tiles_rendering == 0) chosen->status.health.progress_at_ms = now;
           if (chosen->status.state == JobState::queued) {
             JobStatus& status = change.job(*chosen);
             status.state = JobState::running;
@@ -100,6 +136,7 @@ std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
     tile.lease_id = lease_id;
     tile.worker_id = worker_id;
     tile.lease_expires_ms = expires_ms;
+    count_handout(job, tile);
     batch.push_back(index);
     if (tile.attempts > 0) break;
   }
@@ -127,9 +164,10 @@ std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tile
       // Only while the lease's job is the one a claim would choose for this worker: a
       // job of higher priority gets the worker at the end of this lease, as it would
       // after any batch.
-      if (worker && next_job_for(*worker) == &job)
-        added = stage_batch(change, job, lease_id, worker_id, batch_size(job, max_tiles), expires,
-                            true);
+      const int room = config_.max_lease_tiles - static_cast<int>(live.size());
+      if (worker && room > 0 && next_job_for(*worker) == &job)
+        added = stage_batch(change, job, lease_id, worker_id,
+                            std::min(batch_size(job, max_tiles), room), expires, true);
       commit(change);
       if (worker) note_seen(*worker, now);
       Lease lease = lease_of(lease_id);
@@ -231,6 +269,7 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
     change.pixels[{&job, result->tile_index}] = result->pixels;
     status.rays += result->rays;
   }
+  job.status.health.progress_at_ms = now;
   const bool job_done =
       job.status.tiles_done + static_cast<int>(fresh.size()) == job.status.tiles_total;
   if (job_done) {
@@ -309,7 +348,14 @@ void Scheduler::expire_leases() {
   Callbacks notify;
   {
     std::lock_guard lock(mutex_);
-    if (expire_locked(clock_.now_ms())) notify = callbacks_;
+    const std::int64_t now = clock_.now_ms();
+    if (expire_locked(now)) notify = callbacks_;
+    StagedChange change;
+    fail_stalled_locked(now, change);
+    if (!change.empty()) {
+      commit(change);
+      notify = callbacks_;
+    }
   }
   for (const auto& callback : notify) callback();
 }
@@ -346,6 +392,13 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
     tile.lease_expires_ms = 0;
     ended.push_back(index);
   }
+  // A tile back in the queue after its last allowed hand-out: going out again would only
+  // repeat whatever kept its result from being accepted.
+  std::vector<int> worn;
+  for (const int index : ended)
+    if (change.tile(job, index).handouts >= config_.max_tile_handouts) worn.push_back(index);
+  if (!worn.empty())
+    stage_job_failure(change, job, handouts_error(job, worn, config_.max_tile_handouts));
   if (worker) {
     WorkerEntry& staged = change.worker(*worker);
     if (staged.lease_id == lease_id) {
@@ -370,19 +423,58 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
   tile.last_error = error;
   // Not staged: a count kept in memory only, and harmless should the commit fail.
   if (worker) job.failures_by_worker[worker->key()] += 1;
+  job.status.health.tile_failures += 1;
+  job.status.health.last_problem = "tile " + std::to_string(index) + ": " + error;
   spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index, tile.attempts,
                config_.max_tile_attempts, error);
   if (tile.attempts < config_.max_tile_attempts) return;
+  stage_job_failure(change, job,
+                    "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
+                        std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
+                        " times; the last error: " + error);
+}
+
+void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error) {
   JobStatus& status = change.job(job);
   if (is_finished(status.state)) return;
   status.state = JobState::failed;
   status.finished_at_ms = clock_.now_ms();
-  status.error = "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
-                 std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
-                 " times; the last error: " + error;
+  status.error = error;
   // Its other tiles are withdrawn from their workers, as for a cancel.
   for (const auto& [lease_id, entry] : leases_)
     if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+}
+
+void Scheduler::count_handout(JobEntry& job, TileSlot& staged) {
+  staged.handouts += 1;
+  if (staged.handouts > 1) job.status.health.repeated_handouts += 1;
+}
+
+void Scheduler::note_refused_result(const std::string& lease_id, const std::string& why) {
+  std::lock_guard lock(mutex_);
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return;
+  JobEntry& job = *jobs_.at(it->second.job_id);
+  job.status.health.refused_results += 1;
+  job.status.health.last_problem = "a result was refused: " + why;
+}
+
+void Scheduler::fail_stalled_locked(std::int64_t now, StagedChange& change) {
+  if (config_.stall_timeout_ms <= 0) return;
+  for (const auto& key : active_) {
+    JobEntry& job = *jobs_.at(std::get<2>(key));
+    const JobHealth& health = job.status.health;
+    if (job.status.state != JobState::running || job.status.tiles_rendering == 0 ||
+        health.progress_at_ms <= 0 || now - health.progress_at_ms < config_.stall_timeout_ms)
+      continue;
+    std::string error = "no tile was delivered for " +
+                        std::to_string((now - health.progress_at_ms) / 1000) +
+                        " s while its tiles were being rendered";
+    if (health.repeated_handouts > 0)
+      error += "; tiles went out again " + std::to_string(health.repeated_handouts) + " times";
+    if (!health.last_problem.empty()) error += "; the last problem: " + health.last_problem;
+    stage_job_failure(change, job, error);
+  }
 }
 
 void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {

@@ -84,7 +84,18 @@ void Scheduler::load_and_reconcile() {
     if (tile.state == TileState::done && row.pixel_bytes != expected_bytes)
       bad_pixels.insert({job, row.tile_index});
   }
-  for (auto& [id, job] : jobs_) index_tiles(*job);
+  for (auto& [id, job] : jobs_) {
+    index_tiles(*job);
+    // What the store keeps of a job's health: its tiles' failures and their last errors.
+    JobHealth& health = job->status.health;
+    for (std::size_t index = 0; index < job->tiles.size(); ++index) {
+      const TileSlot& tile = job->tiles[index];
+      health.tile_failures += tile.attempts;
+      if (!tile.last_error.empty())
+        health.last_problem = "tile " + std::to_string(index) + ": " + tile.last_error;
+    }
+    health.progress_at_ms = clock_.now_ms();  // the stall clock starts again with the process
+  }
 
   StagedChange change;
   std::map<WorkerEntry*, std::string> holders;  // worker -> the one lease it keeps

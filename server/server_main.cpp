@@ -34,6 +34,8 @@ struct ServerOptions {
   double lease_timeout_s = 30;
   double heartbeat_interval_s = 5;
   int max_tile_attempts = 3;
+  int max_tile_handouts = tessera::SchedulerConfig{}.max_tile_handouts;
+  double stall_timeout_s = tessera::SchedulerConfig{}.stall_timeout_ms / 1e3;
   std::string log_level = "info";
   std::string port_file;
   tessera::Limits limits;
@@ -107,6 +109,8 @@ int run(const ServerOptions& options) {
   config.lease_timeout_ms = static_cast<std::int64_t>(options.lease_timeout_s * 1000);
   config.heartbeat_interval_ms = static_cast<std::int64_t>(options.heartbeat_interval_s * 1000);
   config.max_tile_attempts = options.max_tile_attempts;
+  config.max_tile_handouts = options.max_tile_handouts;
+  config.stall_timeout_ms = static_cast<std::int64_t>(options.stall_timeout_s * 1000);
   Scheduler scheduler(store, clock, config);
 
   boost::asio::io_context io;
@@ -209,6 +213,16 @@ int main(int argc, char** argv) {
                  "Failures of one tile (lease expired, or an error reported) that fail its job")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
+  app.add_option("--max-tile-handouts", options.max_tile_handouts,
+                 "Times one tile may go out to workers without its result being accepted before "
+                 "its job fails")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  app.add_option(
+         "--stall-timeout", options.stall_timeout_s,
+         "Seconds a job's tiles may render with none delivered before the job fails; 0: never")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,

@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/protocol_limits.hpp"
 #include "common/scene_parser.hpp"
 #include "server/access.hpp"
 #include "server/api_json.hpp"
@@ -19,15 +20,12 @@ using nlohmann::json;
 static_assert(std::endian::native == std::endian::little,
               "tile pixels travel as little-endian float32");
 
-// The most tiles one lease may hold, and so one upload carry.
-constexpr std::uint64_t max_batch_tiles = 256;
-
-// The largest upload: the largest tile a scene may ask for as float32 RGB, and no less than
-// what workers send at most in one request (worker/tile_uploads.hpp).
-constexpr std::size_t max_upload_bytes(const Limits& limits) {
-  return std::max<std::size_t>(
-      static_cast<std::size_t>(limits.max_tile_size) * limits.max_tile_size * 3 * sizeof(float),
-      64u << 20);
+// What this coordinator's worker protocol allows, as stated at registration: one
+// definition, common/protocol_limits.hpp, for the checks here and the worker's groups.
+ProtocolLimits protocol_limits(const ApiContext& context) {
+  ProtocolLimits limits = coordinator_limits(context.limits.max_tile_size);
+  limits.max_lease_tiles = context.scheduler.config().max_lease_tiles;
+  return limits;
 }
 
 // "3,17,4" -> {3, 17, 4}; nothing when the list is not whole numbers separated by commas.
@@ -73,36 +71,53 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
       return error_response(400, "invalid_request", "must be a positive integer", "/threads");
     threads = body["threads"].get<int>();
   }
+  // A worker of another protocol version would misread what this coordinator states (or
+  // state nothing, like the builds before version 2): refused here, plainly, rather than
+  // meeting later as results refused one by one.
+  const auto version = body.find("protocol");
+  if (version == body.end() || !version->is_number_integer() ||
+      version->get<std::int64_t>() != kWorkerProtocolVersion)
+    return error_response(
+        409, "protocol_mismatch",
+        "this coordinator speaks worker protocol " + std::to_string(kWorkerProtocolVersion) +
+            "; the worker " +
+            (version == body.end() ? std::string("states none (a build older than protocol 2)")
+                                   : "speaks " + version->dump().substr(0, 40)) +
+            ". Run the same Tessera release on the coordinator and its workers",
+        "/protocol");
   const WorkerInfo worker =
       context.scheduler.register_worker(body["name"].get<std::string>(), host, threads);
   const SchedulerConfig& config = context.scheduler.config();
   return json_response(201, {{"id", worker.id},
                              {"heartbeat_interval_s", config.heartbeat_interval_ms / 1e3},
-                             {"lease_timeout_s", config.lease_timeout_ms / 1e3}});
+                             {"lease_timeout_s", config.lease_timeout_ms / 1e3},
+                             {"protocol", kWorkerProtocolVersion},
+                             {"limits", to_json(protocol_limits(context))}});
 }
 
 // The request's max_tiles (1 when absent), or nothing when it is out of range.
-std::optional<int> max_tiles_of(const HttpRequest& request) {
+std::optional<int> max_tiles_of(const ApiContext& context, const HttpRequest& request) {
   const auto it = request.query.find("max_tiles");
   if (it == request.query.end()) return 1;
   const auto parsed = parse_number_list(it->second);
-  if (!parsed || parsed->size() != 1 || parsed->front() < 1 || parsed->front() > max_batch_tiles)
+  if (!parsed || parsed->size() != 1 || parsed->front() < 1 ||
+      parsed->front() > static_cast<std::uint64_t>(protocol_limits(context).max_batch_tiles))
     return std::nullopt;
   return static_cast<int>(parsed->front());
 }
 
-HttpResponse bad_max_tiles() {
-  return error_response(
-      400, "invalid_request",
-      "max_tiles must be an integer from 1 to " + std::to_string(max_batch_tiles));
+HttpResponse bad_max_tiles(const ApiContext& context) {
+  return error_response(400, "invalid_request",
+                        "max_tiles must be an integer from 1 to " +
+                            std::to_string(protocol_limits(context).max_batch_tiles));
 }
 
 void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string worker = request.params.at("id");
   if (!context.scheduler.worker_known(worker))
     return respond(error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
-  const auto max_tiles_or_none = max_tiles_of(request);
-  if (!max_tiles_or_none) return respond(bad_max_tiles());
+  const auto max_tiles_or_none = max_tiles_of(context, request);
+  if (!max_tiles_or_none) return respond(bad_max_tiles(context));
   const int max_tiles = *max_tiles_or_none;
   const auto wait = wait_of(request, 20);
   if (!wait) return respond(bad_wait());
@@ -145,7 +160,7 @@ std::span<const float> floats_of(std::string& body, std::vector<float>& copy) {
           count};
 }
 
-HttpResponse upload(ApiContext& context, HttpRequest& request) {
+HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
   const std::string& id = request.params.at("id");
   if (request.body.size() % (3 * sizeof(float)) != 0)
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
@@ -166,9 +181,15 @@ HttpResponse upload(ApiContext& context, HttpRequest& request) {
 
   ResultOutcome outcome{};
   if (const std::string* text = header("x-tessera-tiles")) {
-    // Some of the lease's tiles, in the order given, each the size of its tile.
+    // Some of the lease's tiles, in the order given, each the size of its tile. Counted
+    // before the list is parsed, so that an over-long one costs no more than its header.
+    const ProtocolLimits limits = protocol_limits(context);
+    const std::uint64_t named =
+        static_cast<std::uint64_t>(std::count(text->begin(), text->end(), ',')) + 1;
+    if (named > static_cast<std::uint64_t>(limits.max_result_tiles))
+      return error_response(413, "too_many_tiles", result_tiles_over_limit(limits, named));
     const auto tiles = parse_number_list(*text);
-    if (!tiles || tiles->size() > max_batch_tiles)
+    if (!tiles)
       return error_response(400, "invalid_request",
                             "X-Tessera-Tiles must be tile indexes separated by commas");
     if (rays.size() != tiles->size())
@@ -215,6 +236,23 @@ HttpResponse upload(ApiContext& context, HttpRequest& request) {
                             "a tile named in X-Tessera-Tiles is not this lease's, or is named twice");
   }
   return error_response(500, "internal", "unexpected result outcome");
+}
+
+// A result refused for any reason but a lost lease is a bug or a version mismatch on one
+// side: shown on the job, not only in the worker's log.
+HttpResponse upload(ApiContext& context, HttpRequest& request) {
+  HttpResponse response = check_upload(context, request);
+  if (response.status >= 400 && response.status < 500 && response.status != 409) {
+    const std::string& id = request.params.at("id");
+    std::string why = std::to_string(response.status);
+    try {
+      why += ": " + json::parse(response.body).at("error").at("message").get<std::string>();
+    } catch (const std::exception&) {
+    }
+    spdlog::warn("result for lease {} refused ({})", id, why);
+    context.scheduler.note_refused_result(id, why);
+  }
+  return response;
 }
 
 // {"tile": 17, "error": "..."}: the worker could not render that tile of its lease.
@@ -267,8 +305,8 @@ void add_worker_routes(Router& router, ApiContext& context) {
   }, std::nullopt, role_worker);
   router.add("POST", "/v1/leases/{id}/extend", [&context](HttpRequest&& request, Respond respond) {
     const std::string& id = request.params.at("id");
-    const auto max_tiles = max_tiles_of(request);
-    if (!max_tiles) return respond(bad_max_tiles());
+    const auto max_tiles = max_tiles_of(context, request);
+    if (!max_tiles) return respond(bad_max_tiles(context));
     std::optional<Lease> lease;
     try {
       lease = context.scheduler.extend(id, *max_tiles);
@@ -280,13 +318,14 @@ void add_worker_routes(Router& router, ApiContext& context) {
     if (lease) context.scheduler.touch_worker(lease->worker_id);
     respond(lease ? json_response(200, to_json(*lease, context.clock.now_ms())) : lease_lost(id));
   }, std::nullopt, role_worker);
-  router.add("PUT", "/v1/leases/{id}/result",
-             [&context](HttpRequest&& request, Respond respond) {
-               HttpResponse response = upload(context, request);
-               request.body = std::string();  // the pixels are stored: free them before answering
-               respond(std::move(response));
-             },
-             max_upload_bytes(context.limits), role_worker);
+  router.add(
+      "PUT", "/v1/leases/{id}/result",
+      [&context](HttpRequest&& request, Respond respond) {
+        HttpResponse response = upload(context, request);
+        request.body = std::string();  // the pixels are stored: free them before answering
+        respond(std::move(response));
+      },
+      protocol_limits(context).max_result_bytes, role_worker);
   router.add("POST", "/v1/leases/{id}/fail", [&context](HttpRequest&& request, Respond respond) {
     respond(report_failure(context, request));
   }, std::nullopt, role_worker);

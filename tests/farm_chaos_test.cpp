@@ -30,13 +30,13 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
     fs::remove(dir / "port");
     auto server = std::make_unique<test::Process>(
         TESSERA_SERVER_BIN,
-        std::vector<std::string>{"--listen", "127.0.0.1:" + std::to_string(port), "--data-dir",
-                                 (dir / "data").string(), "--local-workers", "0", "--port-file",
-                                 (dir / "port").string(), "--lease-timeout", "1", "--heartbeat-interval",
-                                 "0.2",
-                                 // A kill charges the tiles of the leases it ends: many kills must
-                                 // not add up to a failed job here.
-                                 "--max-tile-attempts", "1000", "--log-level", "info"},
+        std::vector<std::string>{
+            "--listen", "127.0.0.1:" + std::to_string(port), "--data-dir", (dir / "data").string(),
+            "--local-workers", "0", "--port-file", (dir / "port").string(), "--lease-timeout", "1",
+            "--heartbeat-interval", "0.2",
+            // A kill charges the tiles of the leases it ends, and sends
+            // them out again: many kills must not add up to a failed job.
+            "--max-tile-attempts", "1000", "--max-tile-handouts", "1000", "--log-level", "info"},
         dir / ("coordinator-" + std::to_string(++coordinator_starts) + ".log"));
     EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s)) << "the coordinator did not start";
     std::ifstream(dir / "port") >> port;

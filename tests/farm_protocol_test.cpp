@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/protocol_limits.hpp"
 #include "tests/farm_fixture.hpp"
 
 namespace tessera {
@@ -61,8 +62,10 @@ std::string tile_body(int width, int height, float value) {
 class RawWorker {
  public:
   RawWorker(const std::string& url, const std::string& name) : url_(url), http_(url, 30s) {
-    const HttpResult reply =
-        http_.request("POST", "/v1/workers", json{{"name", name}, {"host", "test"}, {"threads", 1}}.dump());
+    const HttpResult reply = http_.request(
+        "POST", "/v1/workers",
+        json{{"name", name}, {"host", "test"}, {"threads", 1}, {"protocol", kWorkerProtocolVersion}}
+            .dump());
     if (reply.status != 201) throw std::runtime_error("register answered " + reply.body);
     registration_ = json::parse(reply.body);
     id_ = registration_["id"];
@@ -582,6 +585,87 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_EQ(json::parse(health.body)["status"], "ok");
   EXPECT_EQ(farm.api().submit("after", 50, one_tile_scene())["state"], "queued");
   EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+}
+
+TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {
+  Farm farm("proto-version", 0, {"--max-tile-size", "4096"});
+  HttpClient http(farm.url(), 10s);
+  RawWorker worker(farm.url(), "current");
+  const json& reply = worker.registration();
+  EXPECT_EQ(reply["protocol"], kWorkerProtocolVersion);
+  const ParsedLimits limits = limits_from_json(reply["limits"]);
+  ASSERT_TRUE(limits.limits) << limits.error << ": " << reply.dump();
+  EXPECT_EQ(limits.limits->max_result_tiles, 256);
+  EXPECT_EQ(limits.limits->max_batch_tiles, 256);
+  EXPECT_EQ(limits.limits->max_lease_tiles, 1024);
+  // Room for the largest tile this coordinator takes: 4096 x 4096 float32 RGB.
+  EXPECT_EQ(limits.limits->max_result_bytes, std::size_t{4096} * 4096 * 12);
+
+  // Builds before protocol 2 state no version; a later one states another.
+  for (const json& body :
+       {json{{"name", "old"}}, json{{"name", "new"}, {"protocol", kWorkerProtocolVersion + 1}},
+        json{{"name", "odd"}, {"protocol", "2"}}}) {
+    const HttpResult refused = http.request("POST", "/v1/workers", body.dump());
+    EXPECT_TRUE(is_error(refused, 409, "protocol_mismatch")) << body.dump();
+    const std::string message = json::parse(refused.body)["error"]["message"];
+    EXPECT_NE(message.find("speaks worker protocol " + std::to_string(kWorkerProtocolVersion)),
+              std::string::npos)
+        << message;
+    EXPECT_EQ(json::parse(refused.body)["error"]["path"], "/protocol");
+  }
+  const json workers = farm.api().workers();
+  EXPECT_EQ(workers["workers"].size(), 1u);  // none of them joined
+}
+
+TEST(FarmProtocol, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJob) {
+  Farm farm("proto-over", 0);
+  HttpClient http(farm.url(), 10s);
+  RawWorker worker(farm.url(), "over");
+  // 64 tiles of 8 px.
+  const std::string job_id = farm.api().submit("over", 50, test::showcase(64, 64, 1, 8))["id"];
+  const HttpResult claimed = worker.claim(5, "&max_tiles=4");
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const json lease = json::parse(claimed.body);
+  const std::string lease_id = lease["id"];
+
+  std::string tiles = "0";
+  std::string rays = "1";
+  for (int i = 1; i < 1365; ++i) {
+    tiles += "," + std::to_string(i);
+    rays += ",1";
+  }
+  const HttpResult over = worker.upload_tiles(lease_id, tiles, "", rays);
+  ASSERT_TRUE(is_error(over, 413, "too_many_tiles"));
+  EXPECT_EQ(json::parse(over.body)["error"]["message"],
+            "a result carries at most 256 tiles; this one has 1,365");
+
+  // Seen on the job, which goes on, and the coordinator keeps serving.
+  json job = farm.api().job(job_id);
+  EXPECT_EQ(job["state"], "running");
+  EXPECT_EQ(job["health"]["refused_results"], 1) << job.dump();
+  EXPECT_NE(job["health"]["last_problem"].get<std::string>().find("this one has 1,365"),
+            std::string::npos)
+      << job.dump();
+  const int first = lease["tiles"][0]["index"];
+  const HttpResult good =
+      worker.upload_tiles(lease_id, std::to_string(first), tile_body(8, 8, 1.0f), "5");
+  EXPECT_EQ(good.status, 200) << good.body;
+  EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 1);
+
+  // One byte over the bytes it stated: refused from the headers, naming the limit and the size.
+  const std::uint64_t max_bytes = worker.registration()["limits"]["max_result_bytes"];
+  const RawAnswer too_big = send_head_only(
+      farm.port(), "PUT /v1/leases/" + lease_id +
+                       "/result HTTP/1.1\r\nHost: test\r\n"
+                       "Content-Type: application/octet-stream\r\nX-Tessera-Tiles: 0\r\n"
+                       "Content-Length: " +
+                       std::to_string(max_bytes + 1) + "\r\n\r\n");
+  ASSERT_EQ(too_big.status, 413) << too_big.body;
+  EXPECT_NE(too_big.body.find("the request body of " + with_thousands(max_bytes + 1) +
+                              " bytes exceeds this route's limit of " + with_thousands(max_bytes) +
+                              " bytes"),
+            std::string::npos)
+      << too_big.body;
 }
 
 }  // namespace

@@ -86,9 +86,7 @@ class SchedulerTest : public ::testing::Test {
 
   void open() {
     store_ = std::make_unique<Store>(dir_);
-    SchedulerConfig config;
-    config.lease_timeout_ms = timeout_ms;
-    scheduler_ = std::make_unique<Scheduler>(*store_, clock_, config);
+    scheduler_ = std::make_unique<Scheduler>(*store_, clock_, config_);
   }
   // What a coordinator restart does: everything in memory is lost.
   void reopen() {
@@ -131,6 +129,12 @@ class SchedulerTest : public ::testing::Test {
   }
 
   std::filesystem::path dir_;
+  // Tests that need other settings change it and reopen().
+  SchedulerConfig config_ = [] {
+    SchedulerConfig config;
+    config.lease_timeout_ms = timeout_ms;
+    return config;
+  }();
   ManualClock clock_;
   std::unique_ptr<Store> store_;
   std::unique_ptr<Scheduler> scheduler_;

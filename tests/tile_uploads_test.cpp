@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -40,10 +41,23 @@ struct Recorder {
   }
 };
 
+bool eventually_sent(std::mutex& mutex,
+                     const std::vector<std::pair<std::size_t, std::size_t>>& groups,
+                     std::size_t count) {
+  for (int i = 0; i < 2000; ++i) {
+    {
+      std::lock_guard lock(mutex);
+      if (groups.size() >= count) return true;
+    }
+    std::this_thread::sleep_for(5ms);
+  }
+  return false;
+}
+
 TEST(TileUploads, TilesReadyTogetherShareOneRequestAndFlushSendsTheRest) {
   Recorder recorder;
   // A gather long enough that the test, not the timer, decides when groups go.
-  TileUploads uploads(recorder.send(), 10s, 1 << 20);
+  TileUploads uploads(recorder.send(), 10s, 256, 1 << 20);
   uploads.push(tile(4));
   uploads.push(tile(1));
   uploads.push(tile(3));
@@ -55,7 +69,7 @@ TEST(TileUploads, TilesReadyTogetherShareOneRequestAndFlushSendsTheRest) {
 
 TEST(TileUploads, AGroupGoesWhenItsGatherTimeIsUpWithoutAFlush) {
   Recorder recorder;
-  TileUploads uploads(recorder.send(), 20ms, 1 << 20);
+  TileUploads uploads(recorder.send(), 20ms, 256, 1 << 20);
   uploads.push(tile(7));
   for (int i = 0; i < 500 && recorder.sent().empty(); ++i) std::this_thread::sleep_for(10ms);
   EXPECT_EQ(recorder.sent(), (std::vector<std::vector<int>>{{7}}));
@@ -64,7 +78,7 @@ TEST(TileUploads, AGroupGoesWhenItsGatherTimeIsUpWithoutAFlush) {
 TEST(TileUploads, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
   Recorder recorder;
   // Each tile is 12 floats = 48 bytes; 100 bytes hold two.
-  TileUploads uploads(recorder.send(), 10s, 100);
+  TileUploads uploads(recorder.send(), 10s, 256, 100);
   for (int i = 0; i < 5; ++i) uploads.push(tile(i, 12));
   uploads.push(tile(9, 1000));  // larger than the limit alone
   EXPECT_TRUE(uploads.flush());
@@ -81,10 +95,67 @@ TEST(TileUploads, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
   EXPECT_EQ(order, (std::vector<int>{0, 1, 2, 3, 4, 9}));
 }
 
+// The stall of issue 29: small tiles pile up while a group is on its way, and the next
+// group took them all, past the coordinator's tile limit, which refused it.
+TEST(TileUploads, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
+  std::mutex mutex;
+  std::condition_variable released;
+  bool open = false;
+  std::vector<std::pair<std::size_t, std::size_t>> groups;  // tiles, bytes
+  TileUploads uploads(
+      [&](const std::vector<FinishedTile>& group) {
+        std::unique_lock lock(mutex);
+        std::size_t bytes = 0;
+        for (const FinishedTile& t : group) bytes += t.pixels.size() * sizeof(float);
+        groups.emplace_back(group.size(), bytes);
+        released.wait(lock, [&] { return open; });  // the first upload is slow
+        return true;
+      },
+      1ms, 256, 16u << 20);
+  // 8x8 tiles: 768 bytes each, so bytes alone would allow 21,845 of them in one group.
+  uploads.push(tile(0, 8 * 8 * 3));
+  ASSERT_TRUE(eventually_sent(mutex, groups, 1));
+  for (int i = 1; i <= 1365; ++i) uploads.push(tile(i, 8 * 8 * 3));
+  {
+    std::lock_guard lock(mutex);
+    open = true;
+  }
+  released.notify_all();
+  EXPECT_TRUE(uploads.flush());
+  std::size_t total = 0;
+  for (const auto& [count, bytes] : groups) {
+    EXPECT_LE(count, 256u);
+    EXPECT_LE(bytes, std::size_t{16} << 20);
+    total += count;
+  }
+  EXPECT_EQ(total, 1366u);
+  EXPECT_GE(groups.size(), 1u + (1365 + 255) / 256);
+}
+
+TEST(TileUploads, GroupsKeepToBothLimitsWhicheverComesFirst) {
+  Recorder recorder;
+  // 10 floats = 40 bytes a tile: 4 tiles by count, or 2 by bytes (100).
+  TileUploads uploads(recorder.send(), 10s, 4, 1 << 20);
+  for (int i = 0; i < 10; ++i) uploads.push(tile(i, 10));
+  EXPECT_TRUE(uploads.flush());
+  for (const auto& group : recorder.sent()) EXPECT_LE(group.size(), 4u);
+  uploads.set_limits(256, 100);
+  for (int i = 10; i < 20; ++i) uploads.push(tile(i, 10));
+  EXPECT_TRUE(uploads.flush());
+  const auto sent = recorder.sent();
+  std::size_t after = 0;
+  for (const auto& group : sent)
+    if (group.front() >= 10) {
+      EXPECT_LE(group.size(), 2u);
+      after += group.size();
+    }
+  EXPECT_EQ(after, 10u);
+}
+
 TEST(TileUploads, AfterSendPromptlyTilesGoWithoutWaitingForTheGatherUntilTheFlush) {
   Recorder recorder;
   // A gather far longer than the waits below: only send_promptly() can make these go.
-  TileUploads uploads(recorder.send(), 60s, 1 << 20);
+  TileUploads uploads(recorder.send(), 60s, 256, 1 << 20);
   const auto wait_for_groups = [&](std::size_t count) {
     for (int i = 0; i < 500 && recorder.sent().size() < count; ++i)
       std::this_thread::sleep_for(10ms);
@@ -111,7 +182,7 @@ TEST(TileUploads, ARefusalDropsTheLeasesLaterTilesUntilTheFlush) {
   Recorder recorder;
   recorder.refuse = true;
   // A group per tile (one tile fills the byte limit), so each goes as soon as it is pushed.
-  TileUploads uploads(recorder.send(), 10s, 3 * sizeof(float));
+  TileUploads uploads(recorder.send(), 10s, 256, 3 * sizeof(float));
   uploads.push(tile(1));
   for (int i = 0; i < 500 && !uploads.refused(); ++i) std::this_thread::sleep_for(10ms);
   ASSERT_TRUE(uploads.refused());

@@ -4,9 +4,11 @@
 
 namespace tessera {
 
-TileUploads::TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_bytes)
+TileUploads::TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_tiles,
+                         std::size_t max_group_bytes)
     : send_(std::move(send)),
       gather_(gather),
+      max_group_tiles_(std::max<std::size_t>(max_group_tiles, 1)),
       max_group_bytes_(max_group_bytes),
       thread_([this] { run(); }) {}
 
@@ -17,6 +19,19 @@ TileUploads::~TileUploads() {
   }
   changed_.notify_all();
   thread_.join();
+}
+
+void TileUploads::set_limits(std::size_t max_group_tiles, std::size_t max_group_bytes) {
+  {
+    std::lock_guard lock(mutex_);
+    max_group_tiles_ = std::max<std::size_t>(max_group_tiles, 1);
+    max_group_bytes_ = max_group_bytes;
+  }
+  changed_.notify_all();
+}
+
+bool TileUploads::group_full() const {
+  return ready_.size() >= max_group_tiles_ || ready_bytes_ >= max_group_bytes_;
 }
 
 void TileUploads::push(FinishedTile tile) {
@@ -47,10 +62,11 @@ void TileUploads::send_promptly() {
 }
 
 std::vector<FinishedTile> TileUploads::take_group() {
-  // Whole tiles up to the byte limit, and always at least one.
+  // Whole tiles up to both limits, and always at least one. What is left over waits for
+  // the next group: tiles pile up while a group is on its way, or when they are small.
   std::size_t count = 0;
   std::size_t bytes = 0;
-  while (count < ready_.size() &&
+  while (count < ready_.size() && count < max_group_tiles_ &&
          (count == 0 || bytes + ready_[count].pixels.size() * sizeof(float) <= max_group_bytes_))
     bytes += ready_[count++].pixels.size() * sizeof(float);
   std::vector<FinishedTile> group(std::make_move_iterator(ready_.begin()),
@@ -65,9 +81,8 @@ void TileUploads::run() {
   while (true) {
     changed_.wait(lock, [&] { return stopping_ || !ready_.empty(); });
     if (ready_.empty()) return;  // stopping with nothing left to send
-    changed_.wait_for(lock, gather_, [&] {
-      return stopping_ || flushing_ || prompt_ || ready_bytes_ >= max_group_bytes_;
-    });
+    changed_.wait_for(lock, gather_,
+                      [&] { return stopping_ || flushing_ || prompt_ || group_full(); });
     std::vector<FinishedTile> group = take_group();
     sending_ = true;
     const bool dropped = refused_;

@@ -27,11 +27,17 @@ class TileUploads {
   using Send = std::function<bool(const std::vector<FinishedTile>&)>;
 
   // A group is sent once `gather` has passed since its first tile was ready, when it
-  // reaches `max_group_bytes` of pixels, or on flush().
-  TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_bytes);
+  // reaches `max_group_tiles` tiles or `max_group_bytes` of pixels, or on flush(). A group
+  // never holds more than either, except that a tile larger than `max_group_bytes` goes
+  // alone (the coordinator takes any one tile: ProtocolLimits::max_result_bytes).
+  TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_tiles,
+              std::size_t max_group_bytes);
   ~TileUploads();
   TileUploads(const TileUploads&) = delete;
   TileUploads& operator=(const TileUploads&) = delete;
+
+  // New limits for the groups from now on, as a coordinator stated at registration.
+  void set_limits(std::size_t max_group_tiles, std::size_t max_group_bytes);
 
   void push(FinishedTile tile);
   // Sends what is left and waits until every pushed tile has been sent or dropped. Returns
@@ -48,9 +54,11 @@ class TileUploads {
  private:
   void run();
   std::vector<FinishedTile> take_group();
+  bool group_full() const;  // with mutex_ held
 
   Send send_;
   std::chrono::milliseconds gather_;
+  std::size_t max_group_tiles_;
   std::size_t max_group_bytes_;
   std::mutex mutex_;
   std::condition_variable changed_;

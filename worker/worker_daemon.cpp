@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "common/protocol_limits.hpp"
 #include "common/scene_parser.hpp"
 
 namespace tessera {
@@ -32,10 +33,11 @@ constexpr std::size_t kMaxCachedScenes = 2;
 // A batch lasts about this long: long enough that the round trips between batches cost
 // well under 1%, short enough that a higher-priority job waits little for a worker.
 constexpr double kBatchSeconds = 0.5;
-constexpr int kMaxBatchTiles = 256;  // the coordinator's limit
 // Finished tiles wait this long for others to share their upload with.
 constexpr auto kUploadGather = std::chrono::milliseconds(50);
-constexpr std::size_t kMaxUploadBytes = 16u << 20;  // under the coordinator's 64 MiB
+// Groups stay this small even where the coordinator would take more (its
+// max_result_bytes): a larger body only holds a tile's pixels longer in both processes.
+constexpr std::size_t kPreferredUploadBytes = 16u << 20;
 // The last tiles of a lease, this many per thread, go up without waiting to be gathered:
 // the next claim waits on their upload, and with nothing left to render no later tile
 // would share their group.
@@ -68,7 +70,8 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
   extend_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
       [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
-      kUploadGather, kMaxUploadBytes);
+      kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles),
+      std::min(kPreferredUploadBytes, limits_.max_result_bytes));
 }
 
 WorkerDaemon::~WorkerDaemon() = default;
@@ -105,29 +108,68 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
 }
 
 bool WorkerDaemon::register_self() {
-  const json body = {{"name", options_.name}, {"host", host_name()}, {"threads", options_.threads}};
+  const json body = {{"name", options_.name},
+                     {"host", host_name()},
+                     {"threads", options_.threads},
+                     {"protocol", kWorkerProtocolVersion}};
   const auto result =
       with_retry("register", [&] { return client_.request("POST", "/v1/workers", body.dump()); });
   if (!result) return false;
   if (result->status != 201) {
     spdlog::error("registration refused ({}): {}", result->status, result->body);
+    incompatible_ = true;
     return false;
   }
-  const json reply = json::parse(result->body);
+  json reply;
+  try {
+    reply = json::parse(result->body);
+  } catch (const json::exception&) {
+    spdlog::error("registration answered with something other than JSON: {}",
+                  result->body.substr(0, 200));
+    incompatible_ = true;
+    return false;
+  }
+  // A coordinator of another protocol (or one from before version 2, which states no
+  // limits) would refuse this worker's results, or misread them: stop here, saying why.
+  const auto version = reply.find("protocol");
+  if (version == reply.end() || !version->is_number_integer() ||
+      version->get<std::int64_t>() != kWorkerProtocolVersion) {
+    spdlog::error(
+        "the coordinator at {} speaks worker protocol {}, this worker {}: run the same Tessera "
+        "release on both",
+        options_.server_url, version == reply.end() ? "1 (it states none)" : version->dump(),
+        kWorkerProtocolVersion);
+    incompatible_ = true;
+    return false;
+  }
+  const ParsedLimits limits = limits_from_json(reply.value("limits", json()));
+  if (!limits.limits) {
+    spdlog::error("the coordinator at {} stated no usable limits at registration ({})",
+                  options_.server_url, limits.error);
+    incompatible_ = true;
+    return false;
+  }
+  limits_ = *limits.limits;
+  uploads_->set_limits(static_cast<std::size_t>(limits_.max_result_tiles),
+                       std::min(kPreferredUploadBytes, limits_.max_result_bytes));
   worker_id_ = reply.at("id").get<std::string>();
   const double interval_s = reply.value("heartbeat_interval_s", 5.0);
   heartbeat_ = std::make_unique<LeaseHeartbeat>(
       options_.server_url, options_.token,
       std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
-  spdlog::info("registered as {} ({}, {} threads)", worker_id_, options_.name, options_.threads);
+  spdlog::info("registered as {} ({}, {} threads; results of at most {} tiles and {} bytes)",
+               worker_id_, options_.name, options_.threads, limits_.max_result_tiles,
+               std::min(kPreferredUploadBytes, limits_.max_result_bytes));
   return true;
 }
 
 int WorkerDaemon::batch_tiles(double tile_thread_seconds) const {
-  if (tile_thread_seconds <= 0) return options_.threads;  // nothing measured yet
+  if (tile_thread_seconds <= 0)
+    return std::min(options_.threads, limits_.max_batch_tiles);  // nothing measured yet
   const double tiles = kBatchSeconds * options_.threads / tile_thread_seconds;
-  return static_cast<int>(std::clamp(tiles, static_cast<double>(options_.threads),
-                                     static_cast<double>(kMaxBatchTiles)));
+  const int most = limits_.max_batch_tiles;
+  return static_cast<int>(std::clamp(tiles, static_cast<double>(std::min(options_.threads, most)),
+                                     static_cast<double>(most)));
 }
 
 std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
@@ -242,6 +284,14 @@ void WorkerDaemon::render(const Claimed& lease) {
     tile_thread_seconds_ =
         tile_thread_seconds_ > 0 ? 0.5 * (tile_thread_seconds_ + per_tile) : per_tile;
   }
+  if (const auto refusal = take_refusal()) {
+    // Not a lost lease: the coordinator refused what this worker sent. Rendering the tiles
+    // again would be refused again, so the tile is reported as failed, which the
+    // coordinator counts and shows on the job (and fails the job at its limit), and the
+    // rest of the lease goes back.
+    report_failure(lease.lease_id, refusal->first, refusal->second);
+    return;
+  }
   if (!delivered || !kept) {
     spdlog::info("lease {} was withdrawn; dropping the rest of its tiles of job {}", lease.lease_id,
                  lease.job_id);
@@ -275,8 +325,32 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
   });
   if (!result) return true;  // stopping while unreachable: the lease will expire
   if (result->status == 200) return true;
-  spdlog::info("result for lease {} refused ({}): {}", lease_id, result->status, result->body);
+  if (result->status == 409 || result->status == 410 || result->status >= 500) {
+    // The lease is no longer ours, or the coordinator could not take it (a full disk fails
+    // the job, which says so): nothing this worker sent was wrong.
+    spdlog::info("result for lease {} refused ({}): {}", lease_id, result->status, result->body);
+    return false;
+  }
+  // Anything else is a bug, or a coordinator of another build: said loudly, and reported.
+  std::string message = result->body;
+  try {
+    message = json::parse(result->body).at("error").at("message").get<std::string>();
+  } catch (const std::exception&) {
+  }
+  const std::string error = "the coordinator refused a result of " + std::to_string(tiles.size()) +
+                            " tiles (" + std::to_string(bytes) + " bytes) with " +
+                            std::to_string(result->status) + ": " + message;
+  spdlog::error("lease {}: {}", lease_id, error);
+  {
+    std::lock_guard lock(refusal_mutex_);
+    if (!refusal_) refusal_.emplace(tiles.front().index, error);
+  }
   return false;
+}
+
+std::optional<std::pair<int, std::string>> WorkerDaemon::take_refusal() {
+  std::lock_guard lock(refusal_mutex_);
+  return std::exchange(refusal_, std::nullopt);
 }
 
 void WorkerDaemon::interrupt() {
@@ -321,7 +395,7 @@ void WorkerDaemon::release(const std::string& lease_id) {
 
 int WorkerDaemon::run() {
   if (!register_self()) return stop_ ? 0 : 1;
-  while (!stop_) {
+  while (!stop_ && !incompatible_) {
     const auto tile = claim();
     if (!tile) continue;
     if (stop_) {  // asked to stop while waiting: give the tiles straight back
@@ -346,7 +420,7 @@ int WorkerDaemon::run() {
   } catch (const HttpError&) {
   }
   spdlog::info("worker {} stopped after rendering {} tiles", worker_id_, tiles_rendered_.load());
-  return 0;
+  return incompatible_ ? 1 : 0;
 }
 
 }  // namespace tessera

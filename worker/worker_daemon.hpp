@@ -7,6 +7,7 @@
 #include <atomic>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -14,10 +15,11 @@
 #include <tbb/task_arena.h>
 
 #include "client/http_client.hpp"
+#include "common/protocol_limits.hpp"
 #include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
-#include "worker/tile_uploads.hpp"
 #include "worker/renderer.hpp"
+#include "worker/tile_uploads.hpp"
 
 namespace tessera {
 
@@ -69,7 +71,10 @@ class WorkerDaemon {
   // batch's worth at `tile_thread_seconds` a tile on one thread.
   std::optional<std::vector<ClaimedTile>> extend(const std::string& lease_id,
                                                  double tile_thread_seconds);
+  // Sends one group; false when refused. A refusal other than a lost lease is kept for
+  // take_refusal(): the first tile of the group and what the coordinator said.
   bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
+  std::optional<std::pair<int, std::string>> take_refusal();
   void report_failure(const std::string& lease_id, int tile_index, const std::string& error);
   // Applies options_.fault to a tile about to be rendered.
   void inject_fault(int tile_index) const;
@@ -82,6 +87,13 @@ class WorkerDaemon {
   const std::atomic<bool>& stop_;
   HttpClient client_;
   std::string worker_id_;
+  // What the coordinator stated at registration; until then the protocol's defaults.
+  ProtocolLimits limits_;
+  // The coordinator refused this worker at registration, or speaks another protocol: the
+  // worker exits rather than retry what cannot work.
+  bool incompatible_ = false;
+  std::mutex refusal_mutex_;
+  std::optional<std::pair<int, std::string>> refusal_;  // set by the upload thread
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
   HttpClient upload_client_;                   // used by uploads_' thread only
   HttpClient extend_client_;                   // used by a lease's BatchTiles only

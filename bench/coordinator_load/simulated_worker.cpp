@@ -1,5 +1,7 @@
 #include "bench/coordinator_load/simulated_worker.hpp"
 
+#include "common/protocol_limits.hpp"
+
 #include <nlohmann/json.hpp>
 
 namespace tessera::load {
@@ -41,7 +43,10 @@ void SimulatedWorker::start() {
 void SimulatedWorker::do_register() {
   static const std::string json_header = "Content-Type: application/json\r\n";
   // Kept in a member: the body must outlive the request.
-  register_body_ = nlohmann::json{{"name", name_}, {"host", "load"}, {"threads", 1}}.dump();
+  register_body_ =
+      nlohmann::json{
+          {"name", name_}, {"host", "load"}, {"threads", 1}, {"protocol", kWorkerProtocolVersion}}
+          .dump();
   http_.request("POST", "/v1/workers", json_header, register_body_,
                 [this](const error_code& ec, int status, std::string_view body) {
     if (ec || status != 201)
