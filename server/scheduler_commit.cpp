@@ -35,7 +35,7 @@ void Scheduler::write(const StagedChange& change) {
       const auto& [job, index] = key;
       const TileRow row = tile_row(job->status.id, index, tile);
       if (const auto pixels = change.pixels.find({job, index}); pixels != change.pixels.end())
-        store_.store_tile_result(row, pixels->second);
+        store_.store_tile_result(tx, row, pixels->second);
       else
         store_.update_tile(row);
     }
@@ -132,6 +132,17 @@ void Scheduler::index_lease_tile(const std::string& lease_id, const std::string&
     if (live && tiles.empty()) expiries_.erase({it->second.expires_ms, lease_id});
   }
   if (it->second.live.empty() && it->second.delivered.empty()) leases_.erase(it);
+}
+
+void Scheduler::renew_lease(const std::string& lease_id, std::int64_t expires_ms) {
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end() || it->second.live.empty()) return;
+  JobEntry& job = *jobs_.at(it->second.job_id);
+  for (const int index : it->second.live) job.tiles[index].lease_expires_ms = expires_ms;
+  if (it->second.expires_ms == expires_ms) return;
+  expiries_.erase({it->second.expires_ms, lease_id});
+  it->second.expires_ms = expires_ms;
+  expiries_.emplace(expires_ms, lease_id);
 }
 
 void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {

@@ -159,7 +159,7 @@ std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tile
       StagedChange change;
       // Every live tile shares one expiry: the old ones are renewed with the new.
       const std::int64_t expires = now + config_.lease_timeout_ms;
-      for (const int index : live) change.tile(job, index).lease_expires_ms = expires;
+      renew_lease(lease_id, expires);
       std::vector<int> added;
       // Only while the lease's job is the one a claim would choose for this worker: a
       // job of higher priority gets the worker at the end of this lease, as it would
@@ -199,9 +199,8 @@ std::optional<Lease> Scheduler::heartbeat(const std::string& lease_id) {
       commit(change);
       notify = callbacks_;
     } else {
-      for (const int index : live) change.tile(job, index).lease_expires_ms = now + config_.lease_timeout_ms;
+      renew_lease(lease_id, now + config_.lease_timeout_ms);
       if (WorkerEntry* worker = find_worker(first.worker_id)) note_seen(*worker, now);
-      commit(change);
       result = lease_of(lease_id);
     }
   }

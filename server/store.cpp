@@ -326,6 +326,11 @@ void Store::update_tile(const TileRow& tile) {
 void Store::store_tile_result(const TileRow& tile, std::span<const float> pixels) {
   // One transaction, so the pixels and the state that says they are there land together.
   Transaction tx(db_);
+  store_tile_result(tx, tile, pixels);
+  tx.commit();
+}
+
+void Store::store_tile_result(const Transaction&, const TileRow& tile, std::span<const float> pixels) {
   db_.statement("INSERT INTO tile_pixels (pixels) VALUES (?)")->bind_blob(1, std::as_bytes(pixels)).run();
   auto s = db_.statement(
       "UPDATE tiles SET state = ?, lease_id = ?, worker_id = ?, lease_expires_ms = ?, "
@@ -333,7 +338,6 @@ void Store::store_tile_result(const TileRow& tile, std::span<const float> pixels
       "WHERE job_id = ? AND tile_index = ?");
   bind_tile_state(*s, tile, 1);
   s->bind(9, tile.job_id).bind(10, tile.tile_index).run();
-  tx.commit();
 }
 
 void Store::for_each_tile_pixels(

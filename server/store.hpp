@@ -94,6 +94,10 @@ class Store {
   void update_tile(const TileRow& tile);
   // The tile's new state together with its pixels (RGB float32, row-major), atomically.
   void store_tile_result(const TileRow& tile, std::span<const float> pixels);
+  // The same, inside a transaction the caller holds (`open` says there is one), which
+  // keeps it atomic: a savepoint of its own per tile would double the statements of every
+  // upload, which the coordinator pays per tile.
+  void store_tile_result(const Transaction& open, const TileRow& tile, std::span<const float> pixels);
   // Calls `visit` for each tile of the job that has pixels; the span is valid during the call.
   void for_each_tile_pixels(
       const std::string& job_id,
