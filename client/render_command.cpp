@@ -56,8 +56,9 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
   // For an EXR, TIFF or JPEG, OpenImageIO's libraries load beside the tracing rather than
   // after it. Not earlier: building the Renderer starts TBB, which opens libtbbmalloc with
   // dlopen() and would wait for the dynamic loader's lock that this load holds until it is
-  // done. A PNG is written with libpng and loads none of it: loading it anyway took a
-  // third of the CPU of a 1080p render (docs/performance.md, "PNG with libpng").
+  // done. A PNG is written with libpng and loads none of it: loading it anyway took half
+  // the CPU and half the wall time of a 1080p render (docs/performance.md, "PNG with
+  // libpng").
   if (image_file_needs_module(output))
     while_loading_image_files(render);
   else

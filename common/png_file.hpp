@@ -1,7 +1,7 @@
 // PNG files written with libpng itself rather than through OpenImageIO
 // (image_file_module.hpp): PNG is what `tessera render` writes by default and what the
 // coordinator serves unless asked for another format, and opening OpenImageIO's ~260
-// libraries for it took a third of the CPU of a 1080p render (docs/performance.md, "PNG
+// libraries for it took half the wall time of a 1080p render (docs/performance.md, "PNG
 // with libpng"). libpng and zlib are two small libraries, loaded at start.
 #pragma once
 
