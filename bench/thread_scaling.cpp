@@ -1,9 +1,10 @@
 // The tracer's scaling from 1 to 2 threads: render_local(), the path `tessera render`
 // takes from its "tracing" clock, run on one Renderer with 1 and with 2 threads
-// alternately, in one process that does nothing else meanwhile. (`tessera render` loads
-// OpenImageIO on its main thread while other threads trace, which shares the cores with
-// the 2-thread render but not with the 1-thread one, so its own "tracing" figure measures
-// that too.) Prints the median of each and their ratio.
+// alternately, in one process that does nothing else meanwhile. (`tessera render -o X.exr`
+// loads OpenImageIO on its main thread while other threads trace, which shares the cores
+// with the 2-thread render but not with the 1-thread one, so its own "tracing" figure
+// measures that too; a PNG, written with libpng, loads nothing.) Prints the median of each
+// and their ratio.
 //
 // Usage: tessera_thread_scaling SCENE.json SPP RUNS
 #include <chrono>

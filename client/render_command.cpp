@@ -44,18 +44,25 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
   const auto start = std::chrono::steady_clock::now();
   const Renderer renderer(scene);
   const auto built = std::chrono::steady_clock::now();
-  // OpenImageIO's libraries load beside the tracing rather than after it. Not earlier:
-  // building the Renderer starts TBB, which opens libtbbmalloc with dlopen() and would
-  // wait for the dynamic loader's lock that this load holds until it is done.
   LocalRenderResult result;
   std::optional<EncodedImage> encoded;
   auto rendered = start;
-  while_loading_image_files([&] {
+  const auto render = [&] {
     result = render_local(renderer, options.threads);
     rendered = std::chrono::steady_clock::now();
     // Encoding needs none of OpenImageIO either.
     encoded.emplace(result.image, output, scene.render.output_transfer);
-  });
+  };
+  // For an EXR, TIFF or JPEG, OpenImageIO's libraries load beside the tracing rather than
+  // after it. Not earlier: building the Renderer starts TBB, which opens libtbbmalloc with
+  // dlopen() and would wait for the dynamic loader's lock that this load holds until it is
+  // done. A PNG is written with libpng and loads none of it: loading it anyway took half
+  // the CPU and half the wall time of a 1080p render (docs/performance.md, "PNG with
+  // libpng").
+  if (image_file_needs_module(output))
+    while_loading_image_files(render);
+  else
+    render();
   write_image(*encoded);
 
   const double build_s = std::chrono::duration<double>(built - start).count();

@@ -65,6 +65,7 @@ void ImageFileLoader::open() {
     throw std::runtime_error("cannot load image file support: " + path.string() +
                              " has no tessera_image_file_module");
   module_ = entry();
+  opened_flag_.store(true, std::memory_order_release);
 }
 
 const ImageFileModule& image_files() { return ImageFileLoader::instance().module(); }

@@ -1,6 +1,7 @@
 // Opens the image-file module (image_file_module.hpp says why there is one) once per process.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <mutex>
 
@@ -29,12 +30,16 @@ class ImageFileLoader {
   // std::runtime_error naming the file it looked for and the dynamic loader's reason.
   const ImageFileModule& module();
 
+  // Whether module() has succeeded, in any thread.
+  bool opened() const { return opened_flag_.load(std::memory_order_acquire); }
+
  private:
   ImageFileLoader() = default;
   void open();
 
   std::once_flag opened_;
   const ImageFileModule* module_ = nullptr;
+  std::atomic<bool> opened_flag_{false};
 };
 
 // ImageFileLoader::instance().module().

@@ -17,14 +17,6 @@ void write(const std::string& path, const ImageFileContent& content) {
   if (content.kind == ImageFileKind::exr) spec.attribute("compression", "zip");
   spec.attribute("oiio:ColorSpace", content.srgb ? "sRGB" : "Linear");
   if (content.kind == ImageFileKind::jpg) spec.attribute("Compression", "jpeg:95");
-  if (content.kind == ImageFileKind::png) {
-    // zlib level 4 with every row filtered by "sub" (libpng's PNG_FILTER_SUB): measured on
-    // the benchmark's renders, 1.8 to 3.6 times as fast to write as the default (level 6,
-    // each row's filter chosen by trial) for files about 8% larger. docs/performance.md has
-    // the figures.
-    spec.attribute("png:compressionLevel", 4);
-    spec.attribute("png:filter", 0x10);
-  }
   auto out = OIIO::ImageOutput::create(path);
   if (!out) throw std::runtime_error(OIIO::geterror());
   bool ok = out->open(path, spec) && out->write_image(type, content.pixels);

@@ -4,9 +4,10 @@
 // Why a module: Debian's OpenImageIO brings about 260 shared libraries, and loading them
 // takes about 0.13 s at every start of every program linked against it, including each
 // `tessera status` that never touches an image. Opened with dlopen() when an image is first
-// read or written (or earlier, while other work runs, by a program that knows it will write
-// one), they cost only the programs that use them. Both sides are built from this tree
-// by one compiler, so C++ types cross the boundary unchanged; errors cross as exceptions.
+// read, or written in a format other than PNG (or earlier, while other work runs, by a
+// program that knows it will write one), they cost only the programs that use them. Both
+// sides are built from this tree by one compiler, so C++ types cross the boundary
+// unchanged; errors cross as exceptions.
 #pragma once
 
 #include <cstdint>
@@ -29,8 +30,9 @@ struct ImageFileContent {
 };
 
 struct ImageFileModule {
-  // Writes `content` to `path` (whose extension names the format). Throws std::runtime_error
-  // saying what failed; may leave a partial file, which the caller removes.
+  // Writes `content` to `path` (whose extension names the format): EXR, TIFF and JPEG, PNGs
+  // being written without the module (png_file.hpp). Throws std::runtime_error saying what
+  // failed; may leave a partial file, which the caller removes.
   void (*write)(const std::string& path, const ImageFileContent& content);
   // Reads any file OpenImageIO knows as float RGB; a channel the file lacks repeats its
   // last one (grey for one channel). Throws std::runtime_error saying what failed.

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "common/image_file_loader.hpp"
+#include "common/png_file.hpp"
 
 namespace tessera {
 namespace {
@@ -129,8 +130,14 @@ bool is_supported_image_path(const std::filesystem::path& path) {
   return kind_of(path) != ImageFileKind::unknown;
 }
 
-EncodedImage::EncodedImage(const Image& image, std::filesystem::path path,
-                           OutputTransfer transfer)
+bool image_file_needs_module(const std::filesystem::path& path) {
+  const ImageFileKind kind = kind_of(path);
+  return kind != ImageFileKind::png && kind != ImageFileKind::unknown;
+}
+
+bool image_file_module_loaded() { return ImageFileLoader::instance().opened(); }
+
+EncodedImage::EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer)
     : path_(std::move(path)) {
   const ImageFileKind kind = kind_of(path_);
   if (kind == ImageFileKind::unknown)
@@ -153,12 +160,17 @@ EncodedImage::EncodedImage(const Image& image, std::filesystem::path path,
 
 void write_image(const EncodedImage& encoded) {
   const std::filesystem::path& path = encoded.path();
+  const ImageFileContent& content = encoded.content();
   // Same directory and extension, so the rename is atomic and OIIO picks the right format.
   std::filesystem::path temp = path;
   temp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(::getpid()) +
                         path.extension().string());
   try {
-    image_files().write(temp.string(), encoded.content());
+    if (content.kind == ImageFileKind::png)
+      write_png(temp, PngPixels{content.width, content.height,
+                                static_cast<const std::uint8_t*>(content.pixels), content.srgb});
+    else
+      image_files().write(temp.string(), content);
   } catch (const std::exception& e) {
     std::error_code ignored;
     std::filesystem::remove(temp, ignored);

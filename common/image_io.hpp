@@ -1,5 +1,6 @@
-// Image files through OpenImageIO (loaded on first use: image_file_module.hpp); the format
-// follows the file extension.
+// Image files; the format follows the file extension. PNGs are written with libpng
+// (png_file.hpp); everything else, and all reading, goes through OpenImageIO, in a module
+// opened on first use (image_file_module.hpp).
 #pragma once
 
 #include <cstdint>
@@ -22,7 +23,8 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
 // The first half of write_image(): an image turned into what the file at `path` will hold
 // (codes for .png, .jpg and .tif; for .exr the image's own floats, so that the image must
 // outlive it). It needs none of OpenImageIO, so a program can make it while the libraries
-// load (while_loading_image_files). Throws std::runtime_error for an unknown extension.
+// load (while_loading_image_files) when the format needs them. Throws std::runtime_error
+// for an unknown extension.
 class EncodedImage {
  public:
   EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer);
@@ -50,16 +52,25 @@ Image read_image(const std::filesystem::path& path);
 void encode_images_on_calling_thread();
 
 // Runs `work` on a thread of its own while the calling thread loads what reads and writes
-// image files, for a program that will write one after that work (otherwise it loads when
-// first used: 0.25 to 0.5 s here, docs/performance.md). Returns when both are done and
-// rethrows what `work` threw; throws at once, starting nothing, if the image module is
-// missing. Call it on the main thread: the libraries' constructors allocate tens of
-// megabytes, and glibc's malloc backs only the main thread's heap with huge pages
-// (huge_page_malloc.hpp), which took a quarter off the load.
+// image files, for a program that will write one that needs it (image_file_needs_module)
+// after that work (otherwise it loads when first used: 0.25 to 0.5 s here,
+// docs/performance.md). Returns when both are done and rethrows what `work` threw; throws
+// at once, starting nothing, if the image module is missing. Call it on the main thread:
+// the libraries' constructors allocate tens of megabytes, and glibc's malloc backs only
+// the main thread's heap with huge pages (huge_page_malloc.hpp), which took a quarter off
+// the load.
 void while_loading_image_files(const std::function<void()>& work);
 
 // True for the extensions write_image accepts.
 bool is_supported_image_path(const std::filesystem::path& path);
+
+// True where write_image opens the image-file module (OpenImageIO) to write `path`: .exr,
+// .jpg and .tif. A PNG needs none of it (png_file.hpp), so a program that will write one has
+// no reason to load it (while_loading_image_files).
+bool image_file_needs_module(const std::filesystem::path& path);
+
+// Whether this process has opened the image-file module, which it never closes.
+bool image_file_module_loaded();
 
 // The sRGB transfer function (IEC 61966-2-1) of a linear value in [0,1].
 float linear_to_srgb(float linear);

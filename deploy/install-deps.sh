@@ -7,6 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libboost-dev libboost-system-dev
   nlohmann-json3-dev libsimdjson-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
+  libpng-dev  # PNGs are written with libpng itself, not OpenImageIO (common/png_file.hpp)
   libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev
   clang libclang-rt-14-dev  # the scene parser's libFuzzer test (tests/fuzz/run.sh)

@@ -145,6 +145,12 @@ TEST(FarmCli, JobCommandsEndToEnd) {
   const Image png_image = read_image(png);
   EXPECT_EQ(png_image.width(), 64);
   EXPECT_EQ(png_image.height(), 48);
+  // Byte for byte the PNG that `tessera render` writes: the same pixels, the same encoder.
+  const fs::path local_png = farm.dir() / "local.png";
+  const CliRun rendered =
+      test::run_cli(farm.dir(), {"render", scene_file.string(), "-o", local_png.string()});
+  ASSERT_EQ(rendered.exit_code, 0) << rendered.output;
+  EXPECT_TRUE(test::read_text(local_png) == test::read_text(png)) << "the PNGs differ";
   EXPECT_EQ(tessera_cli(farm, {"get", id, "-o", (farm.dir() / "out.bmp").string()}).exit_code, 2);
   EXPECT_FALSE(fs::exists(farm.dir() / "out.bmp"));
 
