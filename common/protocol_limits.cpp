@@ -38,16 +38,21 @@ ParsedLimits limits_from_json(const nlohmann::json& json) {
   // Each limit must be there, and a whole number of at least 1: a coordinator that states
   // 0 or nothing is not one this worker can keep to.
   const auto read = [&](const char* key, auto& field) {
+    using Field = std::remove_reference_t<decltype(field)>;
     if (!error.empty()) return;
     const auto it = json.find(key);
-    if (it == json.end() || !it->is_number_unsigned() || it->template get<std::uint64_t>() < 1 ||
+    // Signed or unsigned as JSON goes: a number parsed from text is unsigned, one built
+    // in memory may be either.
+    const bool whole = it != json.end() && it->is_number_integer();
+    const bool positive =
+        whole && (it->is_number_unsigned() || it->template get<std::int64_t>() >= 1);
+    if (!positive || it->template get<std::uint64_t>() < 1 ||
         it->template get<std::uint64_t>() >
-            static_cast<std::uint64_t>(
-                std::numeric_limits<std::remove_reference_t<decltype(field)>>::max())) {
+            static_cast<std::uint64_t>(std::numeric_limits<Field>::max())) {
       error = std::string("limits/") + key + ": expected a positive integer";
       return;
     }
-    field = it->template get<std::remove_reference_t<decltype(field)>>();
+    field = static_cast<Field>(it->template get<std::uint64_t>());
   };
   read(kMaxResultTiles, limits.max_result_tiles);
   read(kMaxResultBytes, limits.max_result_bytes);
