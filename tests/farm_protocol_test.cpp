@@ -646,6 +646,14 @@ TEST(FarmProtocol, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJ
   EXPECT_NE(job["health"]["last_problem"].get<std::string>().find("this one has 1,365"),
             std::string::npos)
       << job.dump();
+  // And in `tessera status`, for people.
+  const test::CliRun status = test::run_cli(farm.dir(), {"--server", farm.url(), "status", job_id});
+  EXPECT_EQ(status.exit_code, 0) << status.output;
+  EXPECT_NE(status.output.find("trouble: 1 result refused"), std::string::npos) << status.output;
+  EXPECT_NE(status.output.find(
+                "last problem: a result was refused: 413: a result carries at most 256 tiles"),
+            std::string::npos)
+      << status.output;
   const int first = lease["tiles"][0]["index"];
   const HttpResult good =
       worker.upload_tiles(lease_id, std::to_string(first), tile_body(8, 8, 1.0f), "5");

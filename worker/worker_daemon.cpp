@@ -117,7 +117,9 @@ bool WorkerDaemon::register_self() {
   if (!result) return false;
   if (result->status != 201) {
     spdlog::error("registration refused ({}): {}", result->status, result->body);
-    incompatible_ = true;
+    // A refusal (another protocol, a wrong token) stands; a coordinator that could not
+    // answer (5xx) may next time.
+    if (result->status < 500) incompatible_ = true;
     return false;
   }
   json reply;
