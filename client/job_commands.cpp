@@ -67,20 +67,19 @@ void print_health(const json& job) {
   if (it == job.end() || !it->is_object()) return;  // a coordinator from before they were shown
   const json& health = *it;
   std::string trouble;
-  const auto add = [&](int count, const char* one, const char* many) {
-    if (count <= 0) return;
-    trouble +=
-        (trouble.empty() ? "" : ", ") + std::to_string(count) + " " + (count == 1 ? one : many);
+  const auto add = [&](const std::string& sign) {
+    trouble += (trouble.empty() ? "" : ", ") + sign;
   };
-  add(health.value("tile_failures", 0), "tile failure", "tile failures");
-  add(health.value("refused_results", 0), "result refused", "results refused");
-  add(health.value("repeated_handouts", 0), "tile sent out again", "tiles sent out again");
+  const auto count = [&](const char* key, const char* one, const char* many) {
+    const int n = health.value(key, 0);
+    if (n > 0) add(std::to_string(n) + " " + (n == 1 ? one : many));
+  };
+  count("tile_failures", "tile failure", "tile failures");
+  count("refused_results", "result refused", "results refused");
+  count("repeated_handouts", "tile sent out again", "tiles sent out again");
   // Half a minute without a tile while rendering is long for any tile size people use.
   const double stalled_s = health.value("no_progress_s", 0.0);
-  if (stalled_s >= 30) {
-    trouble += (trouble.empty() ? "" : ", ") + std::string("no tile delivered for ") +
-               format_duration(stalled_s);
-  }
+  if (stalled_s >= 30) add("no tile delivered for " + format_duration(stalled_s));
   if (trouble.empty()) return;
   std::printf("  trouble: %s\n", trouble.c_str());
   if (health.contains("last_problem") && health["last_problem"].is_string())

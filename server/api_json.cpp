@@ -47,10 +47,6 @@ nlohmann::json timestamp_or_null(std::int64_t ms) {
   return ms > 0 ? nlohmann::json(format_timestamp(ms)) : nlohmann::json(nullptr);
 }
 
-}  // namespace
-
-namespace {
-
 nlohmann::json to_json(const JobHealth& health, const JobStatus& job, std::int64_t now_ms) {
   // How long its tiles have rendered with none delivered; 0 unless some are under lease.
   const bool rendering = job.state == JobState::running && job.tiles_rendering > 0;

@@ -280,9 +280,9 @@ class Scheduler {
   // Stages one failure of a tile by a worker; at the limit, the job fails with `error`.
   void stage_tile_failure(StagedChange& change, JobEntry& job, int index, const WorkerEntry* worker,
                           const std::string& error);
-  // Counts one more hand-out of a staged tile (claim(), extend(), a lease given back on a
-  // reconnect); a tile that goes out again is shown on its job.
-  void count_handout(JobEntry& job, TileSlot& staged);
+  // Counts one more hand-out of a tile, staged (claim(), extend()) or in place (a lease
+  // given back on a reconnect); a tile that goes out again is shown on its job.
+  void count_handout(JobEntry& job, TileSlot& tile);
   // Stages the job's failure with `error`, withdrawing its other tiles from their workers;
   // nothing when it has finished already.
   void stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error);

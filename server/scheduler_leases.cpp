@@ -61,22 +61,23 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
       // a hand-out, so that a worker that keeps dropping its lease and claiming it back
       // (its results refused, say) ends at the limit instead of looping.
       note_seen(*worker, now);
+      // The count is kept in memory only, so nothing is written unless it ends the job.
       const std::string lease_id = worker->lease_id;
       const LeaseTiles& entry = leases_.at(lease_id);
       JobEntry& job = *jobs_.at(entry.job_id);
-      StagedChange change;
       bool over = false;
       for (const int index : entry.live) {
-        TileSlot& tile = change.tile(job, index);
-        count_handout(job, tile);
-        over = over || tile.handouts > config_.max_tile_handouts;
+        count_handout(job, job.tiles[index]);
+        over = over || job.tiles[index].handouts > config_.max_tile_handouts;
       }
       if (over) {
+        StagedChange change;
         stage_job_failure(change, job, handouts_error(job, entry.live, config_.max_tile_handouts));
+        commit(change);
         notify = callbacks_;
+      } else {
+        result = lease_of(lease_id);
       }
-      commit(change);
-      if (!over) result = lease_of(lease_id);
     } else {
       JobEntry* chosen = next_job_for(*worker);
       if (!chosen && worker->info.state == worker_idle) {
@@ -444,9 +445,9 @@ void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std
     if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
 }
 
-void Scheduler::count_handout(JobEntry& job, TileSlot& staged) {
-  staged.handouts += 1;
-  if (staged.handouts > 1) job.status.health.repeated_handouts += 1;
+void Scheduler::count_handout(JobEntry& job, TileSlot& tile) {
+  tile.handouts += 1;
+  if (tile.handouts > 1) job.status.health.repeated_handouts += 1;
 }
 
 void Scheduler::note_refused_result(const std::string& lease_id, const std::string& why) {
@@ -480,12 +481,7 @@ void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {
   spdlog::error("job {}: {}", job.status.id, error);
   if (is_finished(job.status.state)) return;
   StagedChange change;
-  JobStatus& status = change.job(job);
-  status.state = JobState::failed;
-  status.finished_at_ms = clock_.now_ms();
-  status.error = error;
-  for (const auto& [lease_id, entry] : leases_)
-    if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+  stage_job_failure(change, job, error);
   try {
     write(change);
   } catch (const std::exception& e) {

@@ -94,7 +94,7 @@ void Scheduler::load_and_reconcile() {
       if (!tile.last_error.empty())
         health.last_problem = "tile " + std::to_string(index) + ": " + tile.last_error;
     }
-    health.progress_at_ms = clock_.now_ms();  // the stall clock starts again with the process
+    health.progress_at_ms = now;  // the stall clock starts again with the process
   }
 
   StagedChange change;

@@ -70,8 +70,7 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
   extend_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
       [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
-      kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles),
-      std::min(kPreferredUploadBytes, limits_.max_result_bytes));
+      kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles), group_bytes());
 }
 
 WorkerDaemon::~WorkerDaemon() = default;
@@ -152,8 +151,7 @@ bool WorkerDaemon::register_self() {
     return false;
   }
   limits_ = *limits.limits;
-  uploads_->set_limits(static_cast<std::size_t>(limits_.max_result_tiles),
-                       std::min(kPreferredUploadBytes, limits_.max_result_bytes));
+  uploads_->set_limits(static_cast<std::size_t>(limits_.max_result_tiles), group_bytes());
   worker_id_ = reply.at("id").get<std::string>();
   const double interval_s = reply.value("heartbeat_interval_s", 5.0);
   heartbeat_ = std::make_unique<LeaseHeartbeat>(
@@ -161,8 +159,12 @@ bool WorkerDaemon::register_self() {
       std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
   spdlog::info("registered as {} ({}, {} threads; results of at most {} tiles and {} bytes)",
                worker_id_, options_.name, options_.threads, limits_.max_result_tiles,
-               std::min(kPreferredUploadBytes, limits_.max_result_bytes));
+               group_bytes());
   return true;
+}
+
+std::size_t WorkerDaemon::group_bytes() const {
+  return std::min(kPreferredUploadBytes, limits_.max_result_bytes);
 }
 
 int WorkerDaemon::batch_tiles(double tile_thread_seconds) const {

@@ -82,6 +82,8 @@ class WorkerDaemon {
   // How many tiles to ask for: about batch_seconds of work at `tile_thread_seconds` a
   // tile (0: nothing measured yet).
   int batch_tiles(double tile_thread_seconds) const;
+  // The most bytes of pixels one upload carries: ours, within the coordinator's limit.
+  std::size_t group_bytes() const;
 
   WorkerOptions options_;
   const std::atomic<bool>& stop_;
