@@ -74,12 +74,7 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
 
     job->tiles.resize(rects.size());
     for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
-    // In hand-out order: a lease's tiles are then neighbours in the database too.
-    const JobEntry& made = *job;
-    store_.insert_job(job_row(s), scene_json, order.size(), [&](std::size_t position, TileRow& row) {
-      const int index = order[position];
-      row = tile_row(made.status.id, index, made.tiles[index]);
-    });
+    store_.insert_job(job_row(s), scene_json);
 
     JobEntry& entry = *jobs_.emplace(s.id, std::move(job)).first->second;
     index_tiles(entry, std::move(order));
@@ -198,10 +193,13 @@ Image Scheduler::assemble_locked(const JobEntry& job) const {
 }
 
 void Scheduler::paste_stored(Image& image, const JobEntry& job) const {
-  store_.for_each_tile_pixels(job.status.id, [&](int index, std::span<const float> pixels) {
+  const auto floats_of = [&](int index) -> std::size_t {
     if (index < 0 || index >= static_cast<int>(job.tiles.size()))
       throw std::runtime_error("job " + job.status.id + ": stored pixels for unknown tile " +
                                std::to_string(index));
+    return job.tiles[index].rect.pixel_count() * 3;
+  };
+  store_.for_each_tile_pixels(job.status.id, floats_of, [&](int index, std::span<const float> pixels) {
     // Only a done tile's pixels are the accepted result.
     if (job.tiles[index].state == TileState::done) image.paste(job.tiles[index].rect, pixels);
   });

@@ -226,8 +226,10 @@ class Scheduler {
   // The tiles bound to one lease id: live (still owed) and delivered (pixels stored).
   struct LeaseTiles {
     std::string job_id;
-    std::vector<int> live;  // in no particular order
-    std::vector<int> delivered;
+    std::vector<int> live;  // in no particular order; at most max_lease_tiles
+    // A count, not a list: a lease that is extended for a whole job delivers all its tiles,
+    // and whether a tile came under this lease is its own result_lease_id.
+    int delivered = 0;
     // When the live tiles expire; they all share one expiry (claim(), heartbeat() and
     // load_and_reconcile() set it for every live tile at once). Indexed in expiries_.
     std::int64_t expires_ms = 0;
@@ -261,10 +263,10 @@ class Scheduler {
   // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and
   // leases_.
   void track_tile(JobEntry& job, int index, int sign);
-  // Adds (+1) or removes (-1) one tile from a lease's `live` or `delivered` list; a live
-  // tile also moves the lease in expiries_ to `expires_ms`.
+  // Adds (+1) or removes (-1) one tile from a lease's `live` list, or (`live` false) from
+  // its delivered count; a live tile also moves the lease in expiries_ to `expires_ms`.
   void index_lease_tile(const std::string& lease_id, const std::string& job_id, int index, int sign,
-                        std::vector<int> LeaseTiles::*list, std::int64_t expires_ms = 0);
+                        bool live, std::int64_t expires_ms = 0);
   // Moves a live lease's expiry, in memory only: the store's copy is never read back as
   // such, since a restart gives every lease a fresh timeout (load_and_reconcile()), and
   // writing every tile of every lease at every heartbeat and extension cost the coordinator

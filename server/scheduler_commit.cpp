@@ -2,7 +2,9 @@
 // the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
 // every tile and job change.
 #include <algorithm>
+#include <map>
 #include <set>
+#include <stdexcept>
 
 #include <spdlog/spdlog.h>
 
@@ -28,20 +30,75 @@ void Scheduler::commit(StagedChange& change) {
 }
 
 void Scheduler::write(const StagedChange& change) {
-  {
-    Transaction tx = store_.transaction();
-    for (const auto& [job, status] : change.jobs) store_.update_job(job_row(status));
-    for (const auto& [key, tile] : change.tiles) {
-      const auto& [job, index] = key;
-      const TileRow row = tile_row(job->status.id, index, tile);
-      if (const auto pixels = change.pixels.find({job, index}); pixels != change.pixels.end())
-        store_.store_tile_result(tx, row, pixels->second);
-      else
-        store_.update_tile(row);
+  // What the store keeps of tiles is their leases, results and failures (see StoredState):
+  // the staged tiles are told apart by what changed in them, so that an operation writes
+  // one row per lease and per upload it touches, however many tiles those hold.
+  struct LeaseMoves {
+    const JobEntry* job = nullptr;
+    std::string worker_id;  // of the tiles that join it
+    std::vector<int> joined;
+    std::vector<int> left;
+  };
+  struct Upload {
+    ResultRow row;
+    std::vector<std::span<const float>> pixels;
+  };
+  std::map<std::string, LeaseMoves> leases;
+  std::map<std::pair<const JobEntry*, std::string>, Upload> uploads;  // by job and lease
+  Transaction tx = store_.transaction();
+  for (const auto& [job, status] : change.jobs) store_.update_job(job_row(status));
+  for (const auto& [key, tile] : change.tiles) {
+    const auto& [job, index] = key;
+    const TileSlot& was = job->tiles[index];
+    if (tile.attempts != was.attempts || tile.last_error != was.last_error)
+      store_.put_tile_failure({job->status.id, index, tile.attempts, tile.last_error});
+    if (tile.lease_id != was.lease_id) {
+      if (!was.lease_id.empty()) {
+        LeaseMoves& moves = leases[was.lease_id];
+        moves.job = job;
+        moves.left.push_back(index);
+      }
+      if (!tile.lease_id.empty()) {
+        LeaseMoves& moves = leases[tile.lease_id];
+        moves.job = job;
+        moves.worker_id = tile.worker_id;
+        moves.joined.push_back(index);
+      }
     }
-    for (const auto& [worker, staged] : change.workers) store_.upsert_worker(worker_row(staged));
-    tx.commit();
+    if (tile.state == TileState::done && was.state != TileState::done) {
+      const auto pixels = change.pixels.find(key);
+      if (pixels == change.pixels.end())
+        throw std::logic_error("tile " + std::to_string(index) + " done without pixels");
+      Upload& upload = uploads[{job, tile.result_lease_id}];
+      upload.row.tiles.push_back(index);
+      upload.row.rays.push_back(tile.rays);
+      upload.row.worker_id = tile.worker_id;
+      upload.pixels.push_back(pixels->second);
+    }
   }
+  for (auto& [lease_id, moves] : leases) {
+    LeaseRow row{lease_id, moves.job->status.id, moves.worker_id, {}};
+    if (const auto it = leases_.find(lease_id); it != leases_.end()) {
+      for (const int index : it->second.live) {
+        if (std::find(moves.left.begin(), moves.left.end(), index) != moves.left.end()) continue;
+        row.tiles.push_back(index);
+        if (row.worker_id.empty()) row.worker_id = moves.job->tiles[index].worker_id;
+      }
+    }
+    row.tiles.insert(row.tiles.end(), moves.joined.begin(), moves.joined.end());
+    if (row.tiles.empty())
+      store_.delete_lease(lease_id);
+    else
+      store_.put_lease(row);
+  }
+  for (auto& [key, upload] : uploads) {
+    upload.row.job_id = key.first->status.id;
+    upload.row.lease_id = key.second;
+    store_.insert_result(upload.row, upload.pixels);
+  }
+  for (const std::int64_t id : change.forgotten_results) store_.delete_result(id);
+  for (const auto& [worker, staged] : change.workers) store_.upsert_worker(worker_row(staged));
+  tx.commit();
 }
 
 void Scheduler::apply(StagedChange& change) {
@@ -102,36 +159,41 @@ void Scheduler::track_tile(JobEntry& job, int index, int sign) {
   if (tile.state == TileState::done) job.status.tiles_done += sign;
   if (!tile.lease_id.empty()) {
     job.status.tiles_rendering += sign;
-    index_lease_tile(tile.lease_id, job.status.id, index, sign, &LeaseTiles::live,
-                     tile.lease_expires_ms);
+    index_lease_tile(tile.lease_id, job.status.id, index, sign, true, tile.lease_expires_ms);
   }
   if (!tile.result_lease_id.empty())
-    index_lease_tile(tile.result_lease_id, job.status.id, index, sign, &LeaseTiles::delivered);
+    index_lease_tile(tile.result_lease_id, job.status.id, index, sign, false);
 }
 
 void Scheduler::index_lease_tile(const std::string& lease_id, const std::string& job_id, int index,
-                                 int sign, std::vector<int> LeaseTiles::*list,
-                                 std::int64_t expires_ms) {
-  const bool live = list == &LeaseTiles::live;
+                                 int sign, bool live, std::int64_t expires_ms) {
   if (sign > 0) {
     LeaseTiles& entry = leases_[lease_id];
     entry.job_id = job_id;
-    if (live && (entry.live.empty() || entry.expires_ms != expires_ms)) {
+    if (!live) {
+      entry.delivered += 1;
+      return;
+    }
+    if (entry.live.empty() || entry.expires_ms != expires_ms) {
       if (!entry.live.empty()) expiries_.erase({entry.expires_ms, lease_id});
       entry.expires_ms = expires_ms;
       expiries_.emplace(expires_ms, lease_id);
     }
-    (entry.*list).push_back(index);
+    entry.live.push_back(index);
     return;
   }
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return;
-  std::vector<int>& tiles = it->second.*list;
-  if (const auto found = std::find(tiles.begin(), tiles.end(), index); found != tiles.end()) {
-    tiles.erase(found);
-    if (live && tiles.empty()) expiries_.erase({it->second.expires_ms, lease_id});
+  LeaseTiles& entry = it->second;
+  if (!live) {
+    entry.delivered -= 1;
+  } else if (const auto found = std::find(entry.live.begin(), entry.live.end(), index);
+             found != entry.live.end()) {
+    *found = entry.live.back();  // the order is no matter
+    entry.live.pop_back();
+    if (entry.live.empty()) expiries_.erase({entry.expires_ms, lease_id});
   }
-  if (it->second.live.empty() && it->second.delivered.empty()) leases_.erase(it);
+  if (entry.live.empty() && entry.delivered <= 0) leases_.erase(it);
 }
 
 void Scheduler::renew_lease(const std::string& lease_id, std::int64_t expires_ms) {

@@ -51,22 +51,6 @@ JobRow job_row(const JobStatus& s) {
       s.rays};
 }
 
-TileRow tile_row(const std::string& job_id, int index, const TileSlot& t) {
-  TileRow row;
-  row.job_id = job_id;
-  row.tile_index = index;
-  row.rect = t.rect;
-  row.state = to_string(t.state);
-  row.lease_id = t.lease_id;
-  row.worker_id = t.worker_id;
-  row.lease_expires_ms = t.lease_expires_ms;
-  row.attempts = t.attempts;
-  row.rays = t.rays;
-  row.result_lease_id = t.result_lease_id;
-  row.last_error = t.last_error;
-  return row;
-}
-
 WorkerRow worker_row(const WorkerEntry& w) {
   return {w.info.id,    w.info.name,           w.info.host,        w.info.threads,
           w.info.state, w.info.tiles_rendered, w.info.last_seen_ms};

@@ -72,17 +72,20 @@ struct StagedChange {
   TileSlot& tile(JobEntry& job, int index);
   JobStatus& job(JobEntry& job);
   WorkerEntry& worker(WorkerEntry& worker);
-  bool empty() const { return tiles.empty() && jobs.empty() && workers.empty(); }
+  bool empty() const {
+    return tiles.empty() && jobs.empty() && workers.empty() && forgotten_results.empty();
+  }
 
   std::map<std::pair<JobEntry*, int>, TileSlot> tiles;
   std::map<JobEntry*, JobStatus> jobs;
   std::map<WorkerEntry*, WorkerEntry> workers;
   // Results, stored with the tile they belong to.
   std::map<std::pair<const JobEntry*, int>, std::span<const float>> pixels;
+  // Stored results to delete (load_and_reconcile() found them unusable).
+  std::vector<std::int64_t> forgotten_results;
 };
 
 JobRow job_row(const JobStatus& status);
-TileRow tile_row(const std::string& job_id, int index, const TileSlot& tile);
 WorkerRow worker_row(const WorkerEntry& worker);
 
 }  // namespace tessera

@@ -217,7 +217,7 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const f
     const auto it = leases_.find(lease_id);
     if (it == leases_.end()) return ResultOutcome::stale;
     if (it->second.live.empty())
-      return it->second.delivered.empty() ? ResultOutcome::stale : ResultOutcome::duplicate;
+      return it->second.delivered == 0 ? ResultOutcome::stale : ResultOutcome::duplicate;
     std::size_t offset = 0;
     for (const LeaseTile& tile : lease_of(lease_id).tiles) {
       const std::size_t floats = tile.rect.pixel_count() * 3;
@@ -235,23 +235,21 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
   std::unique_lock lock(mutex_);
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return ResultOutcome::stale;
-  const LeaseTiles entry = it->second;  // commit() rewrites the index
-  JobEntry& job = *jobs_.at(entry.job_id);
-  const auto holds = [](const std::vector<int>& tiles, int index) {
-    return std::find(tiles.begin(), tiles.end(), index) != tiles.end();
-  };
+  const std::vector<int> live = it->second.live;  // commit() rewrites the index
+  JobEntry& job = *jobs_.at(it->second.job_id);
 
   std::vector<const TileResult*> fresh;
   std::set<int> named;
   for (const TileResult& result : results) {
     if (!named.insert(result.tile_index).second) return ResultOutcome::wrong_tile;
-    if (holds(entry.delivered, result.tile_index)) continue;  // a repeat: ignored
+    if (result.tile_index < 0 || result.tile_index >= static_cast<int>(job.tiles.size()))
+      return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    const TileSlot& tile = job.tiles[result.tile_index];
+    if (tile.result_lease_id == lease_id) continue;  // a repeat: ignored
     // A live lease gives up tiles only by delivering them, so a tile it neither holds nor
     // delivered was never its own; a lease with no live tile left has ended.
-    if (!holds(entry.live, result.tile_index))
-      return entry.live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
-    if (result.pixels.size() != job.tiles[result.tile_index].rect.pixel_count() * 3)
-      return ResultOutcome::wrong_size;
+    if (tile.lease_id != lease_id) return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    if (result.pixels.size() != tile.rect.pixel_count() * 3) return ResultOutcome::wrong_size;
     fresh.push_back(&result);
   }
   if (fresh.empty()) return results.empty() ? ResultOutcome::wrong_size : ResultOutcome::duplicate;
@@ -283,7 +281,7 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
     if (staged.lease_id == lease_id) {
       // The lease's next tile in hand-out order, if any is left.
       int next = -1;
-      for (const int index : entry.live)
+      for (const int index : live)
         if (!named.contains(index) && (next < 0 || job.rank[index] < job.rank[next])) next = index;
       staged.info.current_tile = next;
       if (next < 0) {

@@ -61,28 +61,64 @@ void Scheduler::load_and_reconcile() {
     jobs_.emplace(row.id, std::move(job));
   }
 
-  // Done tiles whose pixels are missing or cut short cannot be assembled: render again.
-  std::set<std::pair<JobEntry*, int>> bad_pixels;
-  for (TileRow& row : stored.tiles) {
+  // A job's tiles follow from its size; each is pending unless the store says otherwise.
+  for (auto& [id, job] : jobs_) {
+    const JobStatus& s = job->status;
+    if (s.width <= 0 || s.height <= 0 || s.tile_size <= 0) continue;  // fails below: no tiles
+    for (const TileRect& rect : split_into_tiles(s.width, s.height, s.tile_size))
+      job->tiles.emplace_back().rect = rect;
+  }
+  const auto tile_of = [&](const std::string& job_id, int index) -> TileSlot* {
+    JobEntry* job = find_job(job_id);  // the foreign keys rule out a row of no job
+    if (!job || index < 0 || index >= static_cast<int>(job->tiles.size())) return nullptr;
+    return &job->tiles[index];
+  };
+  for (TileFailureRow& row : stored.failures) {
+    if (TileSlot* tile = tile_of(row.job_id, row.tile_index)) {
+      tile->attempts = row.attempts;
+      tile->last_error = std::move(row.last_error);
+    }
+  }
+  // A result whose pixels are cut short, or that names a tile the job lacks or another
+  // result delivered, cannot be assembled: it is forgotten, and its tiles render again.
+  std::set<JobEntry*> rays_changed;
+  std::vector<std::int64_t> forgotten_results;
+  for (const ResultRow& row : stored.results) {
     JobEntry* job = find_job(row.job_id);
-    if (!job) continue;  // the foreign key rules this out
-    if (row.tile_index != static_cast<int>(job->tiles.size()))
-      throw std::runtime_error("store: job " + row.job_id + " lacks tile " +
-                               std::to_string(job->tiles.size()));
-    TileSlot& tile = job->tiles.emplace_back();
-    tile.rect = row.rect;
-    tile.state = tile_state_from_string(row.state).value_or(TileState::pending);
-    tile.lease_id = std::move(row.lease_id);
-    tile.worker_id = std::move(row.worker_id);
-    tile.lease_expires_ms = row.lease_expires_ms;
-    tile.attempts = row.attempts;
-    tile.rays = row.rays;
-    tile.result_lease_id = std::move(row.result_lease_id);
-    tile.last_error = std::move(row.last_error);
-    const auto expected_bytes =
-        static_cast<std::int64_t>(row.rect.pixel_count() * 3 * sizeof(float));
-    if (tile.state == TileState::done && row.pixel_bytes != expected_bytes)
-      bad_pixels.insert({job, row.tile_index});
+    std::int64_t bytes = 0;
+    bool usable = job && !row.tiles.empty() && row.tiles.size() == row.rays.size();
+    std::set<int> named;
+    for (std::size_t i = 0; usable && i < row.tiles.size(); ++i) {
+      const TileSlot* tile = tile_of(row.job_id, row.tiles[i]);
+      usable = tile && tile->state != TileState::done && named.insert(row.tiles[i]).second;
+      if (usable) bytes += static_cast<std::int64_t>(tile->rect.pixel_count() * 3 * sizeof(float));
+    }
+    if (!usable || bytes != row.pixel_bytes) {
+      forgotten_results.push_back(row.id);
+      if (job) {
+        std::uint64_t rays = 0;
+        for (const std::uint64_t r : row.rays) rays += r;
+        job->status.rays -= std::min(job->status.rays, rays);
+        rays_changed.insert(job);
+      }
+      continue;
+    }
+    for (std::size_t i = 0; i < row.tiles.size(); ++i) {
+      TileSlot& tile = job->tiles[row.tiles[i]];
+      tile.state = TileState::done;
+      tile.worker_id = row.worker_id;
+      tile.rays = row.rays[i];
+      tile.result_lease_id = row.lease_id;
+    }
+  }
+  for (const LeaseRow& row : stored.leases) {
+    for (const int index : row.tiles) {
+      TileSlot* tile = tile_of(row.job_id, index);
+      if (!tile || tile->state == TileState::done) continue;  // delivered after all
+      tile->state = TileState::leased;
+      tile->lease_id = row.id;
+      tile->worker_id = row.worker_id;
+    }
   }
   for (auto& [id, job] : jobs_) {
     index_tiles(*job);
@@ -98,21 +134,15 @@ void Scheduler::load_and_reconcile() {
   }
 
   StagedChange change;
+  // Forgotten together with the rays they counted, in the one transaction of what follows.
+  change.forgotten_results = std::move(forgotten_results);
+  for (JobEntry* job : rays_changed) change.job(*job);
   std::map<WorkerEntry*, std::string> holders;  // worker -> the one lease it keeps
   for (auto& [id, job_ptr] : jobs_) {
     JobEntry& job = *job_ptr;
     if (unknown_state.contains(id)) change.job(job).error = "unknown state in the database";
     for (int index = 0; index < job.status.tiles_total; ++index) {
       const TileSlot& tile = job.tiles[index];
-      if (bad_pixels.contains({&job, index})) {
-        TileSlot& reset = change.tile(job, index);
-        reset.state = TileState::pending;
-        clear_lease(reset);
-        change.job(job).rays -= std::min(change.job(job).rays, reset.rays);
-        reset.rays = 0;
-        reset.result_lease_id.clear();
-        continue;
-      }
       if (tile.state != TileState::leased) {
         if (!tile.lease_id.empty()) clear_lease(change.tile(job, index));
         continue;
@@ -191,6 +221,7 @@ void Scheduler::load_and_reconcile() {
   // Written by the image thread, once it starts.
   for (JobEntry* job : needs_image)
     if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
+  store_.prune_pixels([this](const std::string& job_id) { return find_job(job_id) != nullptr; });
   store_.prune_images([this](const std::string& job_id) {
     const JobEntry* job = find_job(job_id);
     return job && job->status.state == JobState::completed;

@@ -33,19 +33,35 @@ struct JobRow {
   std::uint64_t rays = 0;
 };
 
-struct TileRow {
+// A live lease: the tiles it still owes. Its expiry is not stored: a restart gives every
+// lease a fresh timeout, since no heartbeat could reach a coordinator that was down.
+struct LeaseRow {
+  std::string id;
+  std::string job_id;
+  std::string worker_id;
+  std::vector<int> tiles;  // in no particular order
+};
+
+// One accepted upload: the tiles it delivered and the rays each took. Its pixels lie in
+// the job's pixel file (RGB float32, row-major, each tile's after the one before, in the
+// order of `tiles`).
+struct ResultRow {
+  std::int64_t id = 0;  // given by the store
+  std::string job_id;
+  std::string lease_id;
+  std::string worker_id;  // who rendered them
+  std::vector<int> tiles;
+  std::vector<std::uint64_t> rays;  // one per tile
+  // The bytes of its pixels that the job's pixel file holds; read by load() only.
+  std::int64_t pixel_bytes = 0;
+};
+
+// A tile that failed: how often, and why the last time.
+struct TileFailureRow {
   std::string job_id;
   int tile_index = 0;
-  TileRect rect;
-  std::string state;
-  std::string lease_id;   // the live lease; "" when none
-  std::string worker_id;  // the lease holder, or who rendered a done tile
-  std::int64_t lease_expires_ms = 0;
-  int attempts = 0;  // times it failed: its lease expired, or its worker reported an error
-  std::uint64_t rays = 0;
-  std::string result_lease_id;   // the lease whose pixels are stored; "" when none
-  std::string last_error;        // why it failed last; "" when it never did
-  std::int64_t pixel_bytes = 0;  // size of the stored pixels; read by load() only
+  int attempts = 0;
+  std::string last_error;
 };
 
 struct WorkerRow {
@@ -58,9 +74,15 @@ struct WorkerRow {
   std::int64_t last_seen_ms = 0;
 };
 
+// A tile is pending unless a lease owes it or a result delivered it; what the store keeps
+// of tiles is only those leases, results and failures, so that the coordinator writes a
+// row per lease and per upload, not one per tile (a 1080p frame of 8-pixel tiles has
+// 32,400 of them).
 struct StoredState {
   std::vector<JobRow> jobs;
-  std::vector<TileRow> tiles;  // by job, then tile index; without pixels
+  std::vector<LeaseRow> leases;
+  std::vector<ResultRow> results;  // by id, the order they were stored in; without pixels
+  std::vector<TileFailureRow> failures;
   std::vector<WorkerRow> workers;
 };
 
@@ -71,6 +93,10 @@ class Store {
 
   const std::filesystem::path& data_dir() const { return data_dir_; }
   std::filesystem::path image_path(const std::string& job_id) const;
+  // data_dir/pixels/<job_id>.f32: the pixels of the job's results, each appended as it
+  // is accepted, float32 RGB little-endian, tile after tile. Append-only, so that a backup
+  // of the database taken before a copy of these files finds every pixel it points to.
+  std::filesystem::path pixel_path(const std::string& job_id) const;
 
   // Everything but pixels and scene texts, for the Scheduler to start from.
   StoredState load();
@@ -78,30 +104,33 @@ class Store {
   // Groups several operations into one atomic change.
   Transaction transaction() { return Transaction(db_); }
 
-  // The job, its tiles and (unless already stored under the digest) its scene, atomically.
-  // Tiles are stored in the order given: the Scheduler gives them in hand-out order, so
-  // that the rows a lease changes together lie together.
-  void insert_job(const JobRow& job, const std::string& scene_json, std::span<const TileRow> tiles);
-  // The same, with the tiles made one at a time by `tile_at` (i from 0 to tile_count - 1).
-  void insert_job(const JobRow& job, const std::string& scene_json, std::size_t tile_count,
-                  const std::function<void(std::size_t i, TileRow& row)>& tile_at);
+  // The job and (unless already stored under the digest) its scene, atomically. Its tiles
+  // follow from its size and tile size; they have no rows until something happens to them.
+  void insert_job(const JobRow& job, const std::string& scene_json);
   void update_job(const JobRow& job);
-  // Deletes the job, its tiles, its scene when no other job uses it, and its image.
+  // Deletes the job, its leases, results and failures, its scene when no other job uses
+  // it, and its image.
   void delete_job(const std::string& job_id);
   std::optional<std::string> scene_json(const std::string& digest);
 
-  // Everything but the pixels.
-  void update_tile(const TileRow& tile);
-  // The tile's new state together with its pixels (RGB float32, row-major), atomically.
-  void store_tile_result(const TileRow& tile, std::span<const float> pixels);
-  // The same, inside a transaction the caller holds (`open` says there is one), which
-  // keeps it atomic: a savepoint of its own per tile would double the statements of every
-  // upload, which the coordinator pays per tile.
-  void store_tile_result(const Transaction& open, const TileRow& tile, std::span<const float> pixels);
-  // Calls `visit` for each tile of the job that has pixels; the span is valid during the call.
-  void for_each_tile_pixels(
-      const std::string& job_id,
-      const std::function<void(int tile_index, std::span<const float>)>& visit);
+  // Stores the lease with the tiles it now owes, replacing what was stored of it.
+  void put_lease(const LeaseRow& lease);
+  void delete_lease(const std::string& lease_id);
+  // Stores an accepted upload, `pixels` holding one span per tile of `result.tiles`:
+  // appends them to the job's pixel file, then inserts the row that points to them (in the
+  // caller's transaction, if any; a rollback leaves bytes in the file that nothing points
+  // to). Returns the result's id.
+  std::int64_t insert_result(const ResultRow& result, std::span<const std::span<const float>> pixels);
+  // Forgets a result whose pixels cannot be used (load() found them cut short).
+  void delete_result(std::int64_t result_id);
+  // Stores how often the tile failed and why, replacing what was stored of it.
+  void put_tile_failure(const TileFailureRow& failure);
+  // Calls `visit` for each tile of the job's results, in the order they were stored;
+  // `floats_of(tile_index)` says how many floats each tile has (load() has checked that
+  // they add up). The span is valid during the call.
+  void for_each_tile_pixels(const std::string& job_id,
+                            const std::function<std::size_t(int tile_index)>& floats_of,
+                            const std::function<void(int tile_index, std::span<const float>)>& visit);
 
   void upsert_worker(const WorkerRow& worker);
   void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);
@@ -113,9 +142,18 @@ class Store {
   bool has_image(const std::string& job_id) const;
   // Deletes image files (and leftovers of interrupted writes) whose job is not kept.
   void prune_images(const std::function<bool(const std::string& job_id)>& keep);
+  // Deletes pixel files whose job is not kept (left by a removal that stopped half-way).
+  void prune_pixels(const std::function<bool(const std::string& job_id)>& keep);
 
  private:
   void create_schema();
+  // Version 3 kept a row per tile; version 4 keeps leases, results and failures.
+  void migrate_tile_rows();
+  // Appends the parts to the job's pixel file; returns where the first starts.
+  std::int64_t append_pixels(const std::string& job_id,
+                             std::span<const std::span<const std::byte>> parts);
+  std::int64_t insert_result_at(const ResultRow& result, std::int64_t pixels_at,
+                                std::size_t pixel_bytes);
 
   std::filesystem::path data_dir_;
   SqliteDb db_;

@@ -2,6 +2,7 @@
 // more asked for before they run out, and the end of the lease once an answer adds none.
 #include "worker/batch_tiles.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -88,6 +89,29 @@ TEST(BatchTiles, MoreTilesAreAskedForBeforeTheyRunOutAndFollowInOrder) {
   EXPECT_FALSE(batch.growing());
   EXPECT_EQ(batch.count(), 10);
   EXPECT_EQ(coordinator.calls_made(), 2);
+}
+
+// least_left() is what the worker says the threads take in an extension's round trip:
+// read anew before each ask, so that fast tiles are asked for sooner than a quarter batch.
+TEST(BatchTiles, MoreAreAskedForSoonerWhenLeastLeftSaysSo) {
+  FakeCoordinator coordinator;
+  std::atomic<int> least_left{1};
+  BatchTiles batch(
+      tiles(0, 40), [&] { return least_left.load(); }, 1, coordinator.extend());
+  EXPECT_EQ(take_indexes(batch, 20).size(), 20u);
+  EXPECT_EQ(coordinator.calls_made(), 0);  // 20 left: more than a quarter of 40, and than 1
+  least_left = 19;
+  EXPECT_EQ(take_indexes(batch, 1).size(), 1u);  // 19 left
+  ASSERT_TRUE(coordinator.wait_for_calls(1));
+  coordinator.answer(tiles(40, 40));
+  for (int i = 0; i < 2000 && batch.count() < 80; ++i) std::this_thread::sleep_for(5ms);
+  ASSERT_EQ(batch.count(), 80);
+  least_left = 0;  // now a quarter of the answer's 40: 10, and no sooner
+  EXPECT_EQ(take_indexes(batch, 49).size(), 49u);  // 11 left
+  EXPECT_EQ(coordinator.calls_made(), 1);
+  EXPECT_EQ(take_indexes(batch, 1).size(), 1u);  // 10 left
+  ASSERT_TRUE(coordinator.wait_for_calls(2));
+  coordinator.answer(std::vector<ClaimedTile>{});
 }
 
 TEST(BatchTiles, NoAnswerEndsTheLeaseWithTheTilesItHas) {

@@ -45,13 +45,12 @@ inline std::optional<std::string> find_in_source(const std::string& relative, co
 }
 
 // How long a tessera-worker may take to exit after SIGTERM, from worker/worker_daemon.cpp:
-// each thread finishes its tile, then the worker makes one upload attempt (upload_client_'s
-// timeout) and releases the rest of its lease (client_'s timeout: claim_wait_s plus a
-// margin). Every grace period in deploy/ must cover this, plus some time for the tile.
+// each thread finishes its tile, then the worker's upload senders make one attempt each, side
+// by side (kUploadTimeout), and it releases the rest of its lease (client_'s timeout: claim_wait_s
+// plus a margin). Every grace period in deploy/ must cover this, plus some time for the tile.
 inline int worker_shutdown_bound_s() {
-  const auto upload = find_in_source(
-      "worker/worker_daemon.cpp",
-      R"(upload_client_\(\s*options_\.server_url\s*,\s*std::chrono::seconds\((\d+)\)\))");
+  const auto upload = find_in_source("worker/worker_daemon.cpp",
+                                     R"(kUploadTimeout\s*=\s*std::chrono::seconds\((\d+)\))");
   const auto margin = find_in_source("worker/worker_daemon.cpp",
                                      R"(\(options_\.claim_wait_s\s*\+\s*(\d+)\)\s*\*\s*1000)");
   const auto claim_wait = find_in_source("worker/worker_daemon.hpp", R"(double claim_wait_s\s*=\s*(\d+))");

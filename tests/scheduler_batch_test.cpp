@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "common/image_io.hpp"
+#include "server/sqlite_db.hpp"
 #include "tests/scheduler_fixture.hpp"
 
 namespace tessera {
@@ -255,6 +256,84 @@ TEST_F(SchedulerBatchTest, AJobWhoseImageCannotBeWrittenFails) {
   EXPECT_EQ(failed.state, JobState::failed);
   EXPECT_NE(failed.error.find("cannot write the image"), std::string::npos) << failed.error;
   EXPECT_EQ(failed.tiles_done, 1);  // the tiles are kept all the same
+}
+
+// What the store writes per operation: a row per lease and per upload, whatever the tiles.
+TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
+  const std::string job = submit(96, 96, 8).id;  // 144 tiles
+  const std::string w = worker();
+  const Lease lease = *s().claim(w, 16);
+  ASSERT_EQ(lease.tiles.size(), 16u);
+  const Lease added = *s().extend(lease.id, 16);
+  ASSERT_EQ(added.tiles.size(), 16u);
+  const auto count = [&](const char* table) {
+    return SqliteDb(store_->data_dir() / "tessera.db").query_text(std::string("SELECT count(*) FROM ") + table);
+  };
+  EXPECT_EQ(count("leases"), "1");
+  EXPECT_EQ(count("results"), "0");
+  ASSERT_EQ(s().complete(lease.id, std::span<const float>(), 0), ResultOutcome::wrong_size);
+
+  // The first 16 in one upload.
+  std::vector<std::vector<float>> pixels;
+  std::vector<TileResult> group;
+  for (const LeaseTile& tile : lease.tiles) pixels.push_back(tile_pixels(tile.rect, 1.0f));
+  for (std::size_t i = 0; i < lease.tiles.size(); ++i) group.push_back({lease.tiles[i].index, pixels[i], 10});
+  ASSERT_EQ(s().complete(lease.id, group), ResultOutcome::accepted);
+  EXPECT_EQ(count("results"), "1");
+  EXPECT_EQ(count("leases"), "1");
+
+  // A restart finds the 16 done and the lease owing the other 16.
+  reopen();
+  EXPECT_EQ(s().job(job)->tiles_done, 16);
+  EXPECT_EQ(s().job(job)->rays, 160u);
+  const Lease back = *s().claim(w, 16);
+  EXPECT_EQ(back.id, lease.id);
+  EXPECT_EQ(indexes_of(back), indexes_of(added));
+  ASSERT_EQ(deliver(back), ResultOutcome::accepted);
+  EXPECT_EQ(count("results"), "2");
+  EXPECT_EQ(count("leases"), "0");  // it owes nothing more
+  EXPECT_EQ(count("tile_failures"), "0");
+
+  finish(job, w);
+  s().wait_for_images();
+  Image expected(96, 96);
+  for (const TileRect& rect : split_into_tiles(96, 96, 8)) expected.paste(rect, tile_pixels(rect, 0.0f));
+  for (std::size_t i = 0; i < lease.tiles.size(); ++i) expected.paste(lease.tiles[i].rect, pixels[i]);
+  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
+  EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
+}
+
+TEST_F(SchedulerBatchTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRendersItsTilesAgain) {
+  const std::string job = submit(96, 96, 32).id;
+  const std::string w = worker();
+  const Lease first = *s().claim(w, 100);  // 4 1 3 5
+  ASSERT_EQ(deliver(first, 0.0f, 40), ResultOutcome::accepted);
+  const Lease second = *s().claim(w, 2);  // 7 0
+  ASSERT_EQ(deliver(second, 0.0f, 20), ResultOutcome::accepted);
+  ASSERT_EQ(s().job(job)->rays, 60u);
+  scheduler_.reset();
+  // What a power loss may leave: the rows of both uploads, the pixels of the first only
+  // and of the second in part.
+  const std::filesystem::path pixels = store_->pixel_path(job);
+  store_.reset();
+  ASSERT_EQ(std::filesystem::file_size(pixels), 6u * 32 * 32 * 12);
+  std::filesystem::resize_file(pixels, 5u * 32 * 32 * 12 + 100);
+  open();
+  const JobStatus after = *s().job(job);
+  EXPECT_EQ(after.tiles_done, 4);
+  EXPECT_EQ(after.rays, 40u);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("SELECT count(*) FROM results"), "1");
+  reopen();  // what the first start decided was stored
+  EXPECT_EQ(s().job(job)->rays, 40u);
+  EXPECT_EQ(s().job(job)->tiles_done, 4);
+  const Lease again = *s().claim(w, 100);
+  EXPECT_EQ(indexes_of(again), (std::vector<int>{7, 0}));  // 5 pending, cut to 5 / 2
+  finish(job, w);
+  s().wait_for_images();
+  Image expected(96, 96);
+  for (const TileRect& rect : split_into_tiles(96, 96, 32))
+    expected.paste(rect, tile_pixels(rect, 0.0f));
+  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
 }
 
 }  // namespace

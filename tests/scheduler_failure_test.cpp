@@ -14,10 +14,10 @@ using namespace test;
 
 class SchedulerFailureTest : public SchedulerTest {
  protected:
-  // Attempts of each tile, as the store has them.
+  // Attempts of each tile of the one job of 9 tiles, as the store has them.
   std::vector<int> attempts() {
-    std::vector<int> result;
-    for (const TileRow& row : store_->load().tiles) result.push_back(row.attempts);
+    std::vector<int> result(9, 0);
+    for (const TileFailureRow& row : store_->load().failures) result.at(row.tile_index) = row.attempts;
     return result;
   }
 };

@@ -29,26 +29,86 @@ JobRow job_row(const std::string& id, const std::string& digest) {
   return job;
 }
 
-std::vector<TileRow> tile_rows(const std::string& job_id) {
-  std::vector<TileRow> tiles(2);
-  for (int i = 0; i < 2; ++i) {
-    tiles[i].job_id = job_id;
-    tiles[i].tile_index = i;
-    tiles[i].rect = {i * 20, 0, 20, 20};
-    tiles[i].state = "pending";
-  }
-  return tiles;
+// Turns a new database into what version 3 wrote: jobs with a row per tile, done tiles'
+// pixels in a table of their own. Tile 0 failed once, tile 1 is done (its pixels given),
+// tiles 2 and 3 are leased to worker w-1 under lease l-1.
+void make_version_3(SqliteDb& db, const std::string& job_id, std::span<const float> pixels) {
+  db.exec("DROP TABLE leases; DROP TABLE results; DROP TABLE tile_failures");
+  db.exec(R"sql(
+CREATE TABLE tiles (
+  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+  tile_index INTEGER NOT NULL,
+  x INTEGER NOT NULL, y INTEGER NOT NULL, w INTEGER NOT NULL, h INTEGER NOT NULL,
+  state TEXT NOT NULL,
+  lease_id TEXT NOT NULL DEFAULT '',
+  worker_id TEXT NOT NULL DEFAULT '',
+  lease_expires_ms INTEGER NOT NULL DEFAULT 0,
+  attempts INTEGER NOT NULL DEFAULT 0,
+  rays INTEGER NOT NULL DEFAULT 0,
+  result_lease_id TEXT NOT NULL DEFAULT '',
+  last_error TEXT NOT NULL DEFAULT '',
+  pixels_id INTEGER,
+  PRIMARY KEY (job_id, tile_index)
+);
+CREATE TABLE tile_pixels (id INTEGER PRIMARY KEY, pixels BLOB NOT NULL);
+CREATE TRIGGER tile_pixels_replaced AFTER UPDATE OF pixels_id ON tiles
+  WHEN old.pixels_id IS NOT NULL AND old.pixels_id IS NOT new.pixels_id
+  BEGIN DELETE FROM tile_pixels WHERE id = old.pixels_id; END;
+CREATE TRIGGER tile_pixels_deleted AFTER DELETE ON tiles
+  WHEN old.pixels_id IS NOT NULL
+  BEGIN DELETE FROM tile_pixels WHERE id = old.pixels_id; END;
+)sql");
+  for (int i = 0; i < 4; ++i)
+    db.statement("INSERT INTO tiles (job_id, tile_index, x, y, w, h, state) VALUES (?, ?, ?, ?, 20, 20, 'pending')")
+        ->bind(1, job_id)
+        .bind(2, i)
+        .bind(3, (i % 2) * 20)
+        .bind(4, (i / 2) * 20)
+        .run();
+  db.exec("UPDATE tiles SET attempts = 1, last_error = 'it broke' WHERE tile_index = 0");
+  db.statement("INSERT INTO tile_pixels (id, pixels) VALUES (7, ?)")->bind_blob(1, std::as_bytes(pixels)).run();
+  db.exec(
+      "UPDATE tiles SET state = 'done', worker_id = 'w-2', rays = 77, result_lease_id = 'l-0', "
+      "pixels_id = 7 WHERE tile_index = 1");
+  db.exec(
+      "UPDATE tiles SET state = 'leased', lease_id = 'l-1', worker_id = 'w-1', lease_expires_ms = 5 "
+      "WHERE tile_index >= 2");
+  db.exec("PRAGMA user_version=3");
 }
 
-// Turns a database of this version back into the schema of version 2, which kept a done
-// tile's pixels in its row.
+// Version 2 kept a done tile's pixels in its row.
 void make_version_2(SqliteDb& db) {
+  db.exec("ALTER TABLE tiles ADD COLUMN pixels BLOB");
+  db.exec("UPDATE tiles SET pixels = (SELECT p.pixels FROM tile_pixels p WHERE p.id = tiles.pixels_id)");
   db.exec("DROP TRIGGER tile_pixels_replaced");
   db.exec("DROP TRIGGER tile_pixels_deleted");
   db.exec("DROP TABLE tile_pixels");
   db.exec("ALTER TABLE tiles DROP COLUMN pixels_id");
-  db.exec("ALTER TABLE tiles ADD COLUMN pixels BLOB");
   db.exec("PRAGMA user_version=2");
+}
+
+JobRow square_job(const std::string& id, const std::string& digest) {  // 2 x 2 tiles
+  JobRow job = job_row(id, digest);
+  job.width = 40;
+  job.height = 40;
+  return job;
+}
+
+std::vector<float> numbered_pixels(std::size_t count, float start) {
+  std::vector<float> pixels(count);
+  for (std::size_t i = 0; i < count; ++i)
+    pixels[i] = start + static_cast<float>(i) * -0.1f + 1e-40f;  // includes denormals
+  return pixels;
+}
+
+ResultRow result_row(const std::string& job_id, std::vector<int> tiles) {
+  ResultRow result;
+  result.job_id = job_id;
+  result.lease_id = "l-9";
+  result.worker_id = "w-9";
+  for (std::size_t i = 0; i < tiles.size(); ++i) result.rays.push_back(100 + i);
+  result.tiles = std::move(tiles);
+  return result;
 }
 
 class StoreTest : public ::testing::Test {
@@ -73,16 +133,19 @@ class StoreTest : public ::testing::Test {
   std::unique_ptr<Store> store_;
 };
 
-// The store holds pixels for tile 1 of job "j-1" and for no other tile of it.
-void expect_only_pixels_of_tile_1(Store& store, const std::vector<float>& pixels) {
-  int visits = 0;
-  store.for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
-    ++visits;
-    EXPECT_EQ(index, 1);
-    ASSERT_EQ(stored.size(), pixels.size());
-    EXPECT_EQ(std::memcmp(stored.data(), pixels.data(), stored.size_bytes()), 0);
-  });
-  EXPECT_EQ(visits, 1);
+// The pixels the store has for each tile of job "j-1", 20 x 20 tiles, in stored order.
+std::vector<std::pair<int, std::vector<float>>> stored_pixels(Store& store) {
+  std::vector<std::pair<int, std::vector<float>>> tiles;
+  store.for_each_tile_pixels(
+      "j-1", [](int) -> std::size_t { return 20 * 20 * 3; },
+      [&](int index, std::span<const float> pixels) {
+        tiles.emplace_back(index, std::vector<float>(pixels.begin(), pixels.end()));
+      });
+  return tiles;
+}
+
+bool same_bits(const std::vector<float>& a, std::span<const float> b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), b.size_bytes()) == 0;
 }
 
 TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
@@ -91,7 +154,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "images"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "3");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "4");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -105,117 +168,238 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
   }
 }
 
-TEST_F(StoreTest, UpgradesAVersion1DatabaseKeepingItsRows) {
-  store_->insert_job(job_row("j-1", "d1"), R"({"scene":1})", tile_rows("j-1"));
+// What version 3's tile rows become: the failure, the done tile as a result of its own, the
+// leased tiles as their lease; no row per tile is left.
+void expect_upgraded(Store& store, const std::filesystem::path& db_file,
+                     const std::vector<float>& pixels, bool with_failure) {
+  SqliteDb db(db_file);
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "4");
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"), "0");
+  const StoredState state = store.load();
+  ASSERT_EQ(state.jobs.size(), 1u);
+  if (with_failure) {
+    ASSERT_EQ(state.failures.size(), 1u);
+    EXPECT_EQ(state.failures[0].tile_index, 0);
+    EXPECT_EQ(state.failures[0].attempts, 1);
+    EXPECT_EQ(state.failures[0].last_error, "it broke");
+  }
+  ASSERT_EQ(state.results.size(), 1u);
+  EXPECT_EQ(state.results[0].tiles, std::vector<int>{1});
+  EXPECT_EQ(state.results[0].rays, std::vector<std::uint64_t>{77});
+  EXPECT_EQ(state.results[0].lease_id, "l-0");
+  EXPECT_EQ(state.results[0].worker_id, "w-2");
+  EXPECT_EQ(state.results[0].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
+  ASSERT_EQ(state.leases.size(), 1u);
+  EXPECT_EQ(state.leases[0].id, "l-1");
+  EXPECT_EQ(state.leases[0].worker_id, "w-1");
+  EXPECT_EQ(state.leases[0].tiles, (std::vector<int>{2, 3}));
+  const auto tiles = stored_pixels(store);
+  ASSERT_EQ(tiles.size(), 1u);
+  EXPECT_EQ(tiles[0].first, 1);
+  EXPECT_TRUE(same_bits(tiles[0].second, pixels));
+}
+
+TEST_F(StoreTest, UpgradesAVersion3DatabaseIntoLeasesResultsAndFailures) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
   store_.reset();
-  {  // what version 1 wrote: tiles without last_error, with their pixels in the row
+  const std::vector<float> pixels = numbered_pixels(20 * 20 * 3, 1.0f);
+  {
     SqliteDb db(dir_ / "tessera.db");
+    make_version_3(db, "j-1", pixels);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  expect_upgraded(*store_, dir_ / "tessera.db", pixels, true);
+}
+
+TEST_F(StoreTest, UpgradesAVersion2DatabaseWithThePixelsInTheTileRows) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  store_.reset();
+  const std::vector<float> pixels = numbered_pixels(20 * 20 * 3, 2.0f);
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_3(db, "j-1", pixels);
+    make_version_2(db);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  expect_upgraded(*store_, dir_ / "tessera.db", pixels, true);
+}
+
+TEST_F(StoreTest, UpgradesAVersion1DatabaseWhoseTilesHadNoErrors) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  store_.reset();
+  const std::vector<float> pixels = numbered_pixels(20 * 20 * 3, 3.0f);
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_3(db, "j-1", pixels);
     make_version_2(db);
     db.exec("ALTER TABLE tiles DROP COLUMN last_error");
     db.exec("PRAGMA user_version=1");
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "3");
-  TileRow failed = tile_rows("j-1")[0];
-  failed.attempts = 1;
-  failed.last_error = "it broke";
-  store_->update_tile(failed);
+  expect_upgraded(*store_, dir_ / "tessera.db", pixels, false);
   const StoredState state = store_->load();
-  ASSERT_EQ(state.jobs.size(), 1u);
-  ASSERT_EQ(state.tiles.size(), tile_rows("j-1").size());
-  EXPECT_EQ(state.tiles[0].last_error, "it broke");
-  EXPECT_EQ(state.tiles[1].last_error, "");
+  ASSERT_EQ(state.failures.size(), 1u);  // attempts were kept, with no error to say
+  EXPECT_EQ(state.failures[0].last_error, "");
 }
 
-TEST_F(StoreTest, UpgradesAVersion2DatabaseMovingThePixelsOutOfTheTileRows) {
-  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
-  store_.reset();
-  const std::vector<float> pixels(20 * 20 * 3, 0.25f);
-  {  // what version 2 wrote: tile 1 done, its pixels in its row
-    SqliteDb db(dir_ / "tessera.db");
-    make_version_2(db);
-    db.statement("UPDATE tiles SET state = 'done', pixels = ? WHERE tile_index = 1")
-        ->bind_blob(1, std::as_bytes(std::span(pixels)))
-        .run();
+TEST_F(StoreTest, AnUploadIsOneRowHoweverManyTilesItHolds) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  // Tile 3's pixels in a buffer of their own, tiles 0 and 2 one after the other: both kinds
+  // of upload are stored alike.
+  const std::vector<float> adjacent = numbered_pixels(2 * 20 * 20 * 3, 5.0f);
+  const std::vector<float> apart = numbered_pixels(20 * 20 * 3, 9.0f);
+  const std::span<const float> all(adjacent);
+  const std::vector<std::span<const float>> first{all.first(1200), all.subspan(1200)};
+  const std::vector<std::span<const float>> second{apart};
+  const std::vector<std::span<const float>> mixed{all.subspan(1200), apart};
+  const std::int64_t a = store_->insert_result(result_row("j-1", {0, 2}), first);
+  const std::int64_t b = store_->insert_result(result_row("j-1", {3}), second);
+  SqliteDb db(dir_ / "tessera.db");
+  EXPECT_EQ(db.query_text("SELECT count(*) FROM results"), "2");
+  EXPECT_LT(a, b);
+
+  reopen();
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.results.size(), 2u);
+  EXPECT_EQ(state.results[0].tiles, (std::vector<int>{0, 2}));
+  EXPECT_EQ(state.results[0].rays, (std::vector<std::uint64_t>{100, 101}));
+  EXPECT_EQ(state.results[0].lease_id, "l-9");
+  EXPECT_EQ(state.results[0].worker_id, "w-9");
+  EXPECT_EQ(state.results[0].pixel_bytes, 2 * 20 * 20 * 3 * 4);
+  const auto tiles = stored_pixels(*store_);
+  ASSERT_EQ(tiles.size(), 3u);
+  EXPECT_EQ(tiles[0].first, 0);
+  EXPECT_TRUE(same_bits(tiles[0].second, all.first(1200)));
+  EXPECT_EQ(tiles[1].first, 2);
+  EXPECT_TRUE(same_bits(tiles[1].second, all.subspan(1200)));
+  EXPECT_EQ(tiles[2].first, 3);
+  EXPECT_TRUE(same_bits(tiles[2].second, apart));
+
+  // Tiles gathered from separate buffers read back the same.
+  store_->delete_result(a);
+  store_->delete_result(b);
+  store_->insert_result(result_row("j-1", {2, 3}), mixed);
+  const auto again = stored_pixels(*store_);
+  ASSERT_EQ(again.size(), 2u);
+  EXPECT_TRUE(same_bits(again[0].second, all.subspan(1200)));
+  EXPECT_TRUE(same_bits(again[1].second, apart));
+}
+
+TEST_F(StoreTest, PixelsThatEndEarlyAreAnErrorNamingTheJobAndTile) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  const std::vector<float> short_pixels(20 * 20 * 3 + 5, 1.0f);
+  const std::vector<std::span<const float>> tiles{short_pixels};
+  store_->insert_result(result_row("j-1", {0, 1}), tiles);
+  EXPECT_EQ(store_->load().results[0].pixel_bytes, static_cast<std::int64_t>(short_pixels.size() * 4));
+  try {
+    stored_pixels(*store_);
+    FAIL() << "read past the stored pixels";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("job j-1 end before tile 1"), std::string::npos) << e.what();
   }
-  store_ = std::make_unique<Store>(dir_);
-  SqliteDb db(dir_ / "tessera.db");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "3");
-  EXPECT_EQ(db.query_text("SELECT count(*) FROM pragma_table_info('tiles') WHERE name = 'pixels'"), "0");
-  const StoredState state = store_->load();
-  ASSERT_EQ(state.tiles.size(), 2u);
-  EXPECT_EQ(state.tiles[0].pixel_bytes, 0);
-  EXPECT_EQ(state.tiles[1].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
-  expect_only_pixels_of_tile_1(*store_, pixels);
 }
 
-TEST_F(StoreTest, PixelsStoredAgainReplaceTheOldAndGoWithTheirJob) {
-  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
-  store_->insert_job(job_row("j-2", "d1"), "{}", tile_rows("j-2"));
-  TileRow done = tile_rows("j-1")[0];
-  done.state = "done";
-  store_->store_tile_result(done, std::vector<float>(20 * 20 * 3, 1.0f));
-  store_->store_tile_result(done, std::vector<float>(20 * 20 * 3, 2.0f));  // rendered again
-  TileRow other = tile_rows("j-2")[1];
-  other.state = "done";
-  store_->store_tile_result(other, std::vector<float>(20 * 20 * 3, 3.0f));
-  SqliteDb db(dir_ / "tessera.db");
-  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "2");
-  store_->for_each_tile_pixels("j-1", [&](int index, std::span<const float> stored) {
-    EXPECT_EQ(index, 0);
-    EXPECT_EQ(stored[0], 2.0f);
-  });
-  // A state change without pixels keeps them.
-  done.state = "pending";
-  store_->update_tile(done);
-  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "2");
-  store_->delete_job("j-1");
-  EXPECT_EQ(db.query_text("SELECT count(*) FROM tile_pixels"), "1");
-}
-
-TEST_F(StoreTest, TilesAreStoredInTheOrderGivenAndLoadedByIndex) {
-  // The Scheduler gives them in hand-out order, so that a lease's rows lie together.
-  std::vector<TileRow> tiles = tile_rows("j-1");
-  std::swap(tiles[0], tiles[1]);
-  store_->insert_job(job_row("j-1", "d1"), "{}", tiles);
-  SqliteDb db(dir_ / "tessera.db");
-  EXPECT_EQ(db.query_text("SELECT tile_index FROM tiles ORDER BY rowid LIMIT 1"), "1");
+TEST_F(StoreTest, ALeaseIsReplacedWholeAndDeleted) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  store_->put_lease({"l-1", "j-1", "w-1", {3, 1}});
+  store_->put_lease({"l-2", "j-1", "w-2", {0}});
+  store_->put_lease({"l-1", "j-1", "w-1", {3, 1, 2}});  // extended
+  store_->delete_lease("l-2");                           // delivered or given back
+  reopen();
   const StoredState state = store_->load();
-  ASSERT_EQ(state.tiles.size(), 2u);
-  EXPECT_EQ(state.tiles[0].tile_index, 0);
-  EXPECT_EQ(state.tiles[1].tile_index, 1);
+  ASSERT_EQ(state.leases.size(), 1u);
+  EXPECT_EQ(state.leases[0].id, "l-1");
+  EXPECT_EQ(state.leases[0].job_id, "j-1");
+  EXPECT_EQ(state.leases[0].worker_id, "w-1");
+  EXPECT_EQ(state.leases[0].tiles, (std::vector<int>{3, 1, 2}));
 }
 
 TEST_F(StoreTest, TheWalIsCheckpointedWhileTheStoreWrites) {
-  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
-  // More than a thousand pages of pixels: the store's own commits do not checkpoint (its
-  // automatic checkpoint is off), its checkpointer thread does, so the database file
-  // grows before the store is closed.
-  const std::vector<float> pixels(20 * 20 * 3, 0.5f);
-  for (int round = 0; round < 400; ++round) {
-    TileRow done = tile_rows("j-1")[round % 2];
-    done.state = "done";
-    done.rays = static_cast<std::uint64_t>(round);
-    store_->store_tile_result(done, pixels);
-  }
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  // More than a thousand pages of results (each lists 1,000 tiles: 12 KB of indexes and
+  // rays): the store's own commits do not checkpoint (its automatic checkpoint is off), its
+  // checkpointer thread does, so the database file grows before the store is closed.
+  std::vector<int> tiles(1000);
+  for (int i = 0; i < 1000; ++i) tiles[i] = i;
+  for (int round = 0; round < 400; ++round) store_->insert_result(result_row("j-1", tiles), {});
   const auto db_size = [&] { return std::filesystem::file_size(dir_ / "tessera.db"); };
   const auto start = std::chrono::steady_clock::now();
   while (db_size() < 4096 * 4 && std::chrono::steady_clock::now() - start < std::chrono::seconds(10))
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_GE(db_size(), 4096u * 4) << "nothing was checkpointed into the database file";
   reopen();
-  EXPECT_EQ(store_->load().tiles[1].rays, 399u);
+  EXPECT_EQ(store_->load().results.size(), 400u);
 }
 
-TEST_F(StoreTest, JobsTilesScenesAndWorkersSurviveAReopen) {
-  store_->insert_job(job_row("j-1", "d1"), R"({"scene":1})", tile_rows("j-1"));
-  TileRow leased = tile_rows("j-1")[1];
-  leased.state = "leased";
-  leased.lease_id = "l-1";
-  leased.worker_id = "w-1";
-  leased.lease_expires_ms = 99;
-  leased.attempts = 2;
-  store_->update_tile(leased);
+TEST_F(StoreTest, PixelsGoToTheJobsOwnFileAndLoadSaysHowMuchOfThemItHolds) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  const std::vector<float> a = numbered_pixels(20 * 20 * 3, 1.0f);
+  const std::vector<float> b = numbered_pixels(20 * 20 * 3, 2.0f);
+  store_->insert_result(result_row("j-1", {0}), std::vector<std::span<const float>>{a});
+  store_->insert_result(result_row("j-1", {1}), std::vector<std::span<const float>>{b});
+  const std::filesystem::path file = store_->pixel_path("j-1");
+  EXPECT_EQ(file, dir_ / "pixels" / "j-1.f32");
+  ASSERT_EQ(std::filesystem::file_size(file), 2u * 1200 * 4);
+  // Power lost before the second upload's pixels were all on disk.
+  store_.reset();
+  std::filesystem::resize_file(file, 1200 * 4 + 10);
+  store_ = std::make_unique<Store>(dir_);
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.results.size(), 2u);
+  EXPECT_EQ(state.results[0].pixel_bytes, 1200 * 4);
+  EXPECT_EQ(state.results[1].pixel_bytes, 10);
+  // The next upload goes after what is there, wherever the last one ended.
+  store_->delete_result(state.results[1].id);
+  store_->insert_result(result_row("j-1", {1}), std::vector<std::span<const float>>{b});
+  const auto tiles = stored_pixels(*store_);
+  ASSERT_EQ(tiles.size(), 2u);
+  EXPECT_TRUE(same_bits(tiles[0].second, a));
+  EXPECT_TRUE(same_bits(tiles[1].second, b));
+  EXPECT_EQ(store_->load().results[1].pixel_bytes, 1200 * 4);
+
+  store_->delete_job("j-1");
+  EXPECT_FALSE(std::filesystem::exists(file));
+}
+
+TEST_F(StoreTest, ARowThatPointsOutsideItsFileIsReportedAsHoldingNothing) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  const std::vector<float> a = numbered_pixels(20 * 20 * 3, 1.0f);
+  store_->insert_result(result_row("j-1", {0}), std::vector<std::span<const float>>{a});
+  store_->insert_result(result_row("j-1", {1}), std::vector<std::span<const float>>{a});
+  store_.reset();
+  {  // a damaged database: one row starts before the file, another has a negative size
+    SqliteDb db(dir_ / "tessera.db");
+    db.exec("UPDATE results SET pixels_at = -4 WHERE id = (SELECT min(id) FROM results)");
+    db.exec("UPDATE results SET pixel_bytes = -1 WHERE id = (SELECT max(id) FROM results)");
+  }
+  store_ = std::make_unique<Store>(dir_);
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.results.size(), 2u);
+  EXPECT_EQ(state.results[0].pixel_bytes, 0);
+  EXPECT_EQ(state.results[1].pixel_bytes, 0);
+}
+
+TEST_F(StoreTest, AFullDiskIsNamedAsSuch) {
+  // /dev/full answers every write with ENOSPC.
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  std::filesystem::create_symlink("/dev/full", store_->pixel_path("j-1"));
+  const std::vector<float> pixels(1200, 1.0f);
+  try {
+    store_->insert_result(result_row("j-1", {0}), std::vector<std::span<const float>>{pixels});
+    FAIL() << "stored pixels on a full disk";
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("the disk is full"), std::string::npos) << message;
+    EXPECT_NE(message.find("j-1.f32"), std::string::npos) << message;
+  }
+  EXPECT_TRUE(store_->load().results.empty());
+}
+
+TEST_F(StoreTest, JobsFailuresScenesAndWorkersSurviveAReopen) {
+  store_->insert_job(job_row("j-1", "d1"), R"({"scene":1})");
+  store_->put_tile_failure({"j-1", 1, 1, "first"});
+  store_->put_tile_failure({"j-1", 1, 2, "second"});
   JobRow running = job_row("j-1", "d1");
   running.state = "running";
   running.started_at_ms = 1300;
@@ -234,16 +418,17 @@ TEST_F(StoreTest, JobsTilesScenesAndWorkersSurviveAReopen) {
   EXPECT_EQ(state.jobs[0].name, "name of j-1");
   EXPECT_EQ(state.jobs[0].state, "running");
   EXPECT_EQ(state.jobs[0].priority, 70);
+  EXPECT_EQ(state.jobs[0].width, 40);
+  EXPECT_EQ(state.jobs[0].tile_size, 20);
   EXPECT_EQ(state.jobs[0].started_at_ms, 1300);
   EXPECT_EQ(state.jobs[0].rays, (std::uint64_t{1} << 40) + 3);
-  ASSERT_EQ(state.tiles.size(), 2u);
-  EXPECT_EQ(state.tiles[0].state, "pending");
-  EXPECT_EQ(state.tiles[0].pixel_bytes, 0);
-  EXPECT_EQ(state.tiles[1].rect, (TileRect{20, 0, 20, 20}));
-  EXPECT_EQ(state.tiles[1].lease_id, "l-1");
-  EXPECT_EQ(state.tiles[1].worker_id, "w-1");
-  EXPECT_EQ(state.tiles[1].lease_expires_ms, 99);
-  EXPECT_EQ(state.tiles[1].attempts, 2);
+  ASSERT_EQ(state.failures.size(), 1u);
+  EXPECT_EQ(state.failures[0].job_id, "j-1");
+  EXPECT_EQ(state.failures[0].tile_index, 1);
+  EXPECT_EQ(state.failures[0].attempts, 2);
+  EXPECT_EQ(state.failures[0].last_error, "second");
+  EXPECT_TRUE(state.leases.empty());
+  EXPECT_TRUE(state.results.empty());
   ASSERT_EQ(state.workers.size(), 1u);
   EXPECT_EQ(state.workers[0].host, "10.0.0.2");
   EXPECT_EQ(state.workers[0].threads, 16);
@@ -254,30 +439,16 @@ TEST_F(StoreTest, JobsTilesScenesAndWorkersSurviveAReopen) {
   EXPECT_FALSE(store_->scene_json("d2"));
 }
 
-TEST_F(StoreTest, TilePixelsAreStoredExactlyWithTheirState) {
-  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
-  std::vector<float> pixels(20 * 20 * 3);
-  for (std::size_t i = 0; i < pixels.size(); ++i)
-    pixels[i] = static_cast<float>(i) * -0.1f + 1e-40f;  // includes a denormal
-  TileRow done = tile_rows("j-1")[1];
-  done.state = "done";
-  done.rays = 77;
-  done.result_lease_id = "l-9";
-  store_->store_tile_result(done, pixels);
-
-  reopen();
-  const StoredState state = store_->load();
-  EXPECT_EQ(state.tiles[1].state, "done");
-  EXPECT_EQ(state.tiles[1].rays, 77u);
-  EXPECT_EQ(state.tiles[1].result_lease_id, "l-9");
-  EXPECT_EQ(state.tiles[1].pixel_bytes, static_cast<std::int64_t>(pixels.size() * 4));
-  expect_only_pixels_of_tile_1(*store_, pixels);
-}
-
-TEST_F(StoreTest, DeleteJobTakesTilesImageAndOrphanedSceneOnly) {
-  store_->insert_job(job_row("j-1", "shared"), "{}", tile_rows("j-1"));
-  store_->insert_job(job_row("j-2", "shared"), "{}", tile_rows("j-2"));
-  store_->insert_job(job_row("j-3", "own"), "{}", tile_rows("j-3"));
+TEST_F(StoreTest, DeleteJobTakesItsRowsImageAndOrphanedSceneOnly) {
+  const std::vector<float> pixels(20 * 20 * 3, 1.0f);
+  const std::vector<std::span<const float>> tiles{pixels};
+  for (const char* id : {"j-1", "j-2"}) {
+    store_->insert_job(square_job(id, "shared"), "{}");
+    store_->put_lease({std::string("l-") + id, id, "w-1", {0}});
+    store_->insert_result(result_row(id, {1}), tiles);
+    store_->put_tile_failure({id, 2, 1, "broke"});
+  }
+  store_->insert_job(square_job("j-3", "own"), "{}");
   store_->write_image("j-1", Image(4, 4));
   EXPECT_TRUE(store_->has_image("j-1"));
 
@@ -289,28 +460,33 @@ TEST_F(StoreTest, DeleteJobTakesTilesImageAndOrphanedSceneOnly) {
   const StoredState state = store_->load();
   ASSERT_EQ(state.jobs.size(), 1u);
   EXPECT_EQ(state.jobs[0].id, "j-2");
-  EXPECT_EQ(state.tiles.size(), 2u);
+  ASSERT_EQ(state.leases.size(), 1u);
+  EXPECT_EQ(state.leases[0].job_id, "j-2");
+  ASSERT_EQ(state.results.size(), 1u);
+  EXPECT_EQ(state.results[0].job_id, "j-2");
+  ASSERT_EQ(state.failures.size(), 1u);
+  EXPECT_EQ(state.failures[0].job_id, "j-2");
 }
 
 TEST_F(StoreTest, TransactionsRollBackUnlessCommitted) {
   {
     Transaction tx = store_->transaction();
-    store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));  // nested
+    store_->insert_job(job_row("j-1", "d1"), "{}");  // nested
   }
   EXPECT_TRUE(store_->load().jobs.empty());
   EXPECT_FALSE(store_->scene_json("d1"));
   {
     Transaction tx = store_->transaction();
-    store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+    store_->insert_job(job_row("j-1", "d1"), "{}");
     tx.commit();
   }
   EXPECT_EQ(store_->load().jobs.size(), 1u);
 }
 
 TEST_F(StoreTest, FailuresNameTheOperationAndSqlitesMessage) {
-  store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+  store_->insert_job(job_row("j-1", "d1"), "{}");
   try {
-    store_->insert_job(job_row("j-1", "d1"), "{}", tile_rows("j-1"));
+    store_->insert_job(job_row("j-1", "d1"), "{}");
     FAIL() << "inserted a job twice";
   } catch (const std::runtime_error& e) {
     const std::string message = e.what();
@@ -318,10 +494,9 @@ TEST_F(StoreTest, FailuresNameTheOperationAndSqlitesMessage) {
     EXPECT_NE(message.find("INSERT INTO jobs"), std::string::npos) << message;
   }
   // The failed insert left nothing behind, and the store still works.
-  EXPECT_EQ(store_->load().tiles.size(), 2u);
+  EXPECT_EQ(store_->load().jobs.size(), 1u);
   store_->update_job(job_row("j-1", "d1"));
 }
-
 TEST_F(StoreTest, PruneImagesDeletesUnkeptImagesAndLeftovers) {
   store_->write_image("j-keep", Image(2, 2));
   store_->write_image("j-drop", Image(2, 2));

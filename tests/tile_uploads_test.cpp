@@ -2,6 +2,7 @@
 // threads, flushed before the next claim, and dropped once the coordinator refuses them.
 #include "worker/tile_uploads.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -27,7 +28,7 @@ struct Recorder {
   std::atomic<bool> refuse{false};
 
   TileUploads::Send send() {
-    return [this](const std::vector<FinishedTile>& group) {
+    return [this](int, const std::vector<FinishedTile>& group) {
       std::lock_guard lock(mutex);
       std::vector<int> indexes;
       for (const FinishedTile& t : group) indexes.push_back(t.index);
@@ -103,7 +104,7 @@ TEST(TileUploads, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
   bool open = false;
   std::vector<std::pair<std::size_t, std::size_t>> groups;  // tiles, bytes
   TileUploads uploads(
-      [&](const std::vector<FinishedTile>& group) {
+      [&](int, const std::vector<FinishedTile>& group) {
         std::unique_lock lock(mutex);
         std::size_t bytes = 0;
         for (const FinishedTile& t : group) bytes += t.pixels.size() * sizeof(float);
@@ -130,6 +131,40 @@ TEST(TileUploads, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
   }
   EXPECT_EQ(total, 1366u);
   EXPECT_GE(groups.size(), 1u + (1365 + 255) / 256);
+}
+
+TEST(TileUploads, WithTwoSendersTheNextGroupGoesWhileOneWaitsForItsAnswer) {
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool open = false;
+  std::vector<int> in_flight_by_sender(2, 0);
+  int in_flight = 0;
+  int most_in_flight = 0;
+  std::vector<int> sent;
+  TileUploads uploads(
+      [&](int sender, const std::vector<FinishedTile>& group) {
+        std::unique_lock lock(mutex);
+        EXPECT_EQ(in_flight_by_sender.at(sender)++, 0)
+            << "sender " << sender << " used twice at once";
+        most_in_flight = std::max(most_in_flight, ++in_flight);
+        for (const FinishedTile& t : group) sent.push_back(t.index);
+        changed.notify_all();
+        // The first answer is slow: it comes once the second group is on its way too (or,
+        // should that never happen, after a while, so that the test still ends).
+        changed.wait_for(lock, 5s, [&] { return open || in_flight == 2; });
+        open = true;
+        --in_flight;
+        --in_flight_by_sender[sender];
+        changed.notify_all();
+        return true;
+      },
+      1ms, 2, 1 << 20, 2);
+  for (int i = 0; i < 6; ++i) uploads.push(tile(i));
+  EXPECT_TRUE(uploads.flush());
+  std::lock_guard lock(mutex);
+  EXPECT_EQ(most_in_flight, 2);
+  std::sort(sent.begin(), sent.end());
+  EXPECT_EQ(sent, (std::vector<int>{0, 1, 2, 3, 4, 5}));  // each once
 }
 
 TEST(TileUploads, GroupsKeepToBothLimitsWhicheverComesFirst) {

@@ -4,10 +4,10 @@
 
 namespace tessera {
 
-BatchTiles::BatchTiles(std::vector<ClaimedTile> tiles, int least_left, int last_count,
+BatchTiles::BatchTiles(std::vector<ClaimedTile> tiles, LeastLeft least_left, int last_count,
                        Extend extend)
-    : least_left_(least_left),
-      ask_when_left_(std::max<std::size_t>(least_left, tiles.size() / 4)),
+    : least_left_(std::move(least_left)),
+      last_batch_(tiles.size()),
       last_count_(last_count),
       extend_(std::move(extend)),
       tiles_(std::move(tiles)) {
@@ -24,7 +24,9 @@ void BatchTiles::finish() {
 }
 
 void BatchTiles::consider_asking() {
-  if (asking_ || final_ || closed_ || tiles_.size() - next_ > ask_when_left_) return;
+  if (asking_ || final_ || closed_) return;
+  const std::size_t when_left = std::max<std::size_t>(last_batch_ / 4, std::max(least_left_(), 0));
+  if (tiles_.size() - next_ > when_left) return;
   // The last answer's thread has nothing left to do once it has cleared asking_.
   if (asker_.joinable()) asker_.join();
   asking_ = true;
@@ -42,7 +44,7 @@ void BatchTiles::ask() {
     tiles_.insert(tiles_.end(), added->begin(), added->end());
     final_ = true;
   } else {
-    ask_when_left_ = std::max<std::size_t>(least_left_, added->size() / 4);
+    last_batch_ = added->size();
     tiles_.insert(tiles_.end(), added->begin(), added->end());
   }
   answered_.notify_all();

@@ -26,11 +26,17 @@ class BatchTiles {
   // nothing when it could not say (the lease was lost, the coordinator is unreachable).
   using Extend = std::function<std::optional<std::vector<ClaimedTile>>()>;
 
+  // How many tiles left to take are few enough to ask for more: read before each ask.
+  using LeastLeft = std::function<int()>;
+
   // Asks `extend` once the tiles left to take fall to a quarter of the last batch (the
-  // lease's own tiles, then each answer's), or to `least_left` if more, and again after
+  // lease's own tiles, then each answer's), or to `least_left()` if more, and again after
   // each answer that added some, until one adds none. The last `last_count` tiles, once
   // none will be added, are taken with `among_last` set.
-  BatchTiles(std::vector<ClaimedTile> tiles, int least_left, int last_count, Extend extend);
+  BatchTiles(std::vector<ClaimedTile> tiles, LeastLeft least_left, int last_count, Extend extend);
+  BatchTiles(std::vector<ClaimedTile> tiles, int least_left, int last_count, Extend extend)
+      : BatchTiles(
+            std::move(tiles), [least_left] { return least_left; }, last_count, std::move(extend)) {}
   // finish()es.
   ~BatchTiles();
   BatchTiles(const BatchTiles&) = delete;
@@ -59,8 +65,8 @@ class BatchTiles {
   void consider_asking();
   void ask();  // on asker_
 
-  const int least_left_;
-  std::size_t ask_when_left_;
+  const LeastLeft least_left_;
+  std::size_t last_batch_;  // tiles in the lease, then in the last answer
   const int last_count_;
   Extend extend_;
   mutable std::mutex mutex_;

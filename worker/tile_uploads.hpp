@@ -1,6 +1,9 @@
-// Finished tiles travel to the coordinator from a thread of their own, so that rendering
+// Finished tiles travel to the coordinator from threads of their own, so that rendering
 // goes on while they are on the way. Tiles that finish close together share one request:
 // the coordinator then pays for one request and one transaction per group, not per tile.
+// Several groups may be on their way at once, one per sender, each sender with a
+// connection of its own: one group waits for its answer while the next is sent, so that
+// a worker of many threads and small tiles is not held to one round trip per group.
 #pragma once
 
 #include <atomic>
@@ -22,16 +25,17 @@ struct FinishedTile {
 
 class TileUploads {
  public:
-  // Sends one group of the current lease's tiles; returns false when the coordinator
-  // refused it (the lease is lost), after which the lease's later tiles are dropped.
-  using Send = std::function<bool(const std::vector<FinishedTile>&)>;
+  // Sends one group of the current lease's tiles, as sender `sender` (0 to senders - 1; no
+  // two calls share one at a time); returns false when the coordinator refused it (the
+  // lease is lost), after which the lease's later tiles are dropped.
+  using Send = std::function<bool(int sender, const std::vector<FinishedTile>&)>;
 
   // A group is sent once `gather` has passed since its first tile was ready, when it
   // reaches `max_group_tiles` tiles or `max_group_bytes` of pixels, or on flush(). A group
   // never holds more than either, except that a tile larger than `max_group_bytes` goes
   // alone (the coordinator takes any one tile: ProtocolLimits::max_result_bytes).
   TileUploads(Send send, std::chrono::milliseconds gather, std::size_t max_group_tiles,
-              std::size_t max_group_bytes);
+              std::size_t max_group_bytes, int senders = 1);
   ~TileUploads();
   TileUploads(const TileUploads&) = delete;
   TileUploads& operator=(const TileUploads&) = delete;
@@ -52,7 +56,7 @@ class TileUploads {
   bool refused() const { return refused_; }
 
  private:
-  void run();
+  void run(int sender);
   std::vector<FinishedTile> take_group();
   bool group_full() const;  // with mutex_ held
 
@@ -66,10 +70,10 @@ class TileUploads {
   std::size_t ready_bytes_ = 0;
   bool flushing_ = false;
   bool prompt_ = false;
-  bool sending_ = false;
+  int sending_ = 0;  // groups on their way
   bool stopping_ = false;
   std::atomic<bool> refused_{false};
-  std::thread thread_;
+  std::vector<std::thread> threads_;
 };
 
 }  // namespace tessera

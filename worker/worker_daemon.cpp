@@ -35,6 +35,13 @@ constexpr std::size_t kMaxCachedScenes = 2;
 constexpr double kBatchSeconds = 0.5;
 // Finished tiles wait this long for others to share their upload with.
 constexpr auto kUploadGather = std::chrono::milliseconds(50);
+// Groups on their way at once, each on a connection of its own: the next is sent while
+// one waits for its answer. One at a time held a worker of 16 threads to the round trips
+// of its uploads at small tiles (bench/scaling, 1 x 16).
+constexpr int kUploadSenders = 2;
+// How long one upload may take; the senders' uploads run side by side, so a stopping worker
+// waits this long for them at most (tests/deploy_support.hpp reads it).
+constexpr auto kUploadTimeout = std::chrono::seconds(60);
 // Groups stay this small even where the coordinator would take more (its
 // max_result_bytes): a larger body only holds a tile's pixels longer in both processes.
 constexpr std::size_t kPreferredUploadBytes = 16u << 20;
@@ -42,8 +49,12 @@ constexpr std::size_t kPreferredUploadBytes = 16u << 20;
 // the next claim waits on their upload, and with nothing left to render no later tile
 // would share their group.
 constexpr int kPromptTilesPerThread = 4;
-// More tiles are asked for no later than when this many per thread are left to take.
+// More tiles are asked for no later than when this many per thread are left to take,
 constexpr int kExtendTilesLeftPerThread = 2;
+// or, sooner, while those left would keep every thread busy for this long: a few round
+// trips of an extension. Small tiles go fast: at 8 pixels, 16 threads take the 64 tiles a
+// quarter batch leaves in well under a millisecond, less than the answer takes to come.
+constexpr double kAskAheadSeconds = 0.02;
 
 std::vector<ClaimedTile> tiles_of(const json& lease) {
   std::vector<ClaimedTile> tiles;
@@ -60,17 +71,22 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
       stop_(stop),
       client_(options_.server_url,
               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
-      upload_client_(options_.server_url, std::chrono::seconds(60)),
       extend_client_(options_.server_url, std::chrono::seconds(15)) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
   client_.set_bearer_token(options_.token);
-  upload_client_.set_bearer_token(options_.token);
+  for (int sender = 0; sender < kUploadSenders; ++sender) {
+    upload_clients_.push_back(std::make_unique<HttpClient>(options_.server_url, kUploadTimeout));
+    upload_clients_.back()->set_bearer_token(options_.token);
+  }
   extend_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
-      [this](const std::vector<FinishedTile>& tiles) { return upload(uploading_lease_, tiles); },
-      kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles), group_bytes());
+      [this](int sender, const std::vector<FinishedTile>& tiles) {
+        return upload(*upload_clients_[sender], uploading_lease_, tiles);
+      },
+      kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles), group_bytes(),
+      kUploadSenders);
 }
 
 WorkerDaemon::~WorkerDaemon() = default;
@@ -229,12 +245,20 @@ void WorkerDaemon::render(const Claimed& lease) {
   std::atomic<int> rendered{0};
   // Thread time spent on this lease's tiles so far, for the size of its extensions.
   std::atomic<std::int64_t> busy_ns{0};
-  BatchTiles tiles(lease.tiles, kExtendTilesLeftPerThread * options_.threads,
-                   kPromptTilesPerThread * options_.threads, [&] {
-                     const int done = rendered.load();
-                     return extend(lease.lease_id,
-                                   done > 0 ? busy_ns.load() * 1e-9 / done : tile_thread_seconds_);
-                   });
+  const int fewest_left = kExtendTilesLeftPerThread * options_.threads;
+  const auto least_left = [&] {
+    const int done = rendered.load();
+    const double per_tile = done > 0 ? busy_ns.load() * 1e-9 / done : tile_thread_seconds_;
+    if (per_tile <= 0) return fewest_left;
+    const double ahead = kAskAheadSeconds * options_.threads / per_tile;
+    // At most half of what a lease may owe, so that the answer has room to add.
+    return std::clamp(static_cast<int>(ahead), fewest_left,
+                      std::max(fewest_left, limits_.max_lease_tiles / 2));
+  };
+  BatchTiles tiles(lease.tiles, least_left, kPromptTilesPerThread * options_.threads, [&] {
+    const int done = rendered.load();
+    return extend(lease.lease_id, done > 0 ? busy_ns.load() * 1e-9 / done : tile_thread_seconds_);
+  });
   std::mutex failure_mutex;
   std::optional<std::pair<int, std::string>> failure;  // the first tile that could not be rendered
   // Each thread takes the next tile in the lease's (centre-first) order until none is
@@ -309,7 +333,8 @@ void WorkerDaemon::render(const Claimed& lease) {
   if (rendered < count) release(lease.lease_id);  // stopping: give back what was not rendered
 }
 
-bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles) {
+bool WorkerDaemon::upload(HttpClient& client, const std::string& lease_id,
+                          const std::vector<FinishedTile>& tiles) {
   std::string body;
   std::string indexes;
   std::string rays;
@@ -323,9 +348,9 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
     rays += (rays.empty() ? "" : ",") + std::to_string(tile.rays);
   }
   const auto result = with_retry("upload", [&] {
-    return upload_client_.request("PUT", "/v1/leases/" + lease_id + "/result", body,
-                                  "application/octet-stream",
-                                  {{"X-Tessera-Tiles", indexes}, {"X-Tessera-Rays", rays}});
+    return client.request("PUT", "/v1/leases/" + lease_id + "/result", body,
+                          "application/octet-stream",
+                          {{"X-Tessera-Tiles", indexes}, {"X-Tessera-Rays", rays}});
   });
   if (!result) return true;  // stopping while unreachable: the lease will expire
   if (result->status == 200) return true;

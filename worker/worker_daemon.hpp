@@ -73,7 +73,8 @@ class WorkerDaemon {
                                                  double tile_thread_seconds);
   // Sends one group; false when refused. A refusal other than a lost lease is kept for
   // take_refusal(): the first tile of the group and what the coordinator said.
-  bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
+  bool upload(HttpClient& client, const std::string& lease_id,
+              const std::vector<FinishedTile>& tiles);
   std::optional<std::pair<int, std::string>> take_refusal();
   void report_failure(const std::string& lease_id, int tile_index, const std::string& error);
   // Applies options_.fault to a tile about to be rendered.
@@ -95,9 +96,10 @@ class WorkerDaemon {
   // worker exits rather than retry what cannot work.
   bool incompatible_ = false;
   std::mutex refusal_mutex_;
-  std::optional<std::pair<int, std::string>> refusal_;  // set by the upload thread
+  std::optional<std::pair<int, std::string>> refusal_;  // set by the upload threads
   std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
-  HttpClient upload_client_;                   // used by uploads_' thread only
+  // One per sender of uploads_, each used by that sender's thread only.
+  std::vector<std::unique_ptr<HttpClient>> upload_clients_;
   HttpClient extend_client_;                   // used by a lease's BatchTiles only
   std::string uploading_lease_;                // the lease uploads_ sends for
   std::unique_ptr<TileUploads> uploads_;
