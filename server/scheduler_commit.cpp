@@ -78,9 +78,12 @@ void Scheduler::write(const StagedChange& change) {
   }
   for (auto& [lease_id, moves] : leases) {
     LeaseRow row{lease_id, moves.job->status.id, moves.worker_id, {}};
+    // Sorted, so that the lease's live tiles (up to max_lease_tiles) are each looked up in
+    // it, not scanned against it, on every upload.
+    std::sort(moves.left.begin(), moves.left.end());
     if (const auto it = leases_.find(lease_id); it != leases_.end()) {
       for (const int index : it->second.live) {
-        if (std::find(moves.left.begin(), moves.left.end(), index) != moves.left.end()) continue;
+        if (std::binary_search(moves.left.begin(), moves.left.end(), index)) continue;
         row.tiles.push_back(index);
         if (row.worker_id.empty()) row.worker_id = moves.job->tiles[index].worker_id;
       }

@@ -116,6 +116,22 @@ std::filesystem::path prepare_data_dir(const std::filesystem::path& data_dir) {
   return data_dir / "tessera.db";
 }
 
+// Deletes the files of `dir` named JOB`extension` whose job is not kept, and those whose
+// name starts with a dot: write_image's temporary files, one left over being a crashed write.
+void prune_files(const std::filesystem::path& dir, const char* extension,
+                 const std::function<bool(const std::string& job_id)>& keep) {
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    const std::filesystem::path& path = entry.path();
+    if (path.extension() != extension) continue;
+    const std::string stem = path.stem().string();
+    if (stem.starts_with(".") || !keep(stem)) {
+      std::error_code ignored;
+      std::filesystem::remove(path, ignored);
+    }
+  }
+}
+
 template <typename T>
 std::span<const std::byte> bytes_of(const std::vector<T>& values) {
   return std::as_bytes(std::span(values));
@@ -228,7 +244,7 @@ std::filesystem::path Store::image_path(const std::string& job_id) const {
 
 StoredState Store::load() {
   StoredState state;
-  Transaction tx(db_);  // one snapshot for all three tables
+  Transaction tx(db_);  // one snapshot for every table
   {
     auto s = db_.statement(
         "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
@@ -588,27 +604,11 @@ bool Store::has_image(const std::string& job_id) const {
 }
 
 void Store::prune_images(const std::function<bool(const std::string& job_id)>& keep) {
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(data_dir_ / "images", error)) {
-    const std::filesystem::path& path = entry.path();
-    if (path.extension() != ".exr") continue;
-    const std::string stem = path.stem().string();
-    // write_image's temporary files start with a dot; one left over is a crashed write.
-    if (stem.starts_with(".") || !keep(stem)) {
-      std::error_code ignored;
-      std::filesystem::remove(path, ignored);
-    }
-  }
+  prune_files(data_dir_ / "images", ".exr", keep);
 }
 
 void Store::prune_pixels(const std::function<bool(const std::string& job_id)>& keep) {
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(data_dir_ / "pixels", error)) {
-    const std::filesystem::path& path = entry.path();
-    if (path.extension() != ".f32" || keep(path.stem().string())) continue;
-    std::error_code ignored;
-    std::filesystem::remove(path, ignored);
-  }
+  prune_files(data_dir_ / "pixels", ".f32", keep);
 }
 
 }  // namespace tessera
