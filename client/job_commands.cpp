@@ -8,14 +8,13 @@
 #include <memory>
 #include <unistd.h>
 
-#include "client/api_client.hpp"
+#include "common/image_format.hpp"
+#include "common/net/coordinator_client.hpp"
 #include "common/scene_parser.hpp"
 #include "common/secret.hpp"
 
 namespace tessera {
 namespace {
-
-using nlohmann::json;
 
 struct Options {
   std::string server;
@@ -62,78 +61,64 @@ std::string format_duration(double seconds) {
 
 // Signs of trouble the coordinator saw on a job, when there are any: a farm that renders
 // the same tiles again, or delivers nothing, must not look like a slow one.
-void print_health(const json& job) {
-  const auto it = job.find("health");
-  if (it == job.end() || !it->is_object()) return;  // a coordinator from before they were shown
-  const json& health = *it;
+void print_health(const protocol::JobHealth& health) {
   std::string trouble;
   const auto add = [&](const std::string& sign) {
     trouble += (trouble.empty() ? "" : ", ") + sign;
   };
-  const auto count = [&](const char* key, const char* one, const char* many) {
-    const int n = health.value(key, 0);
+  const auto count = [&](int n, const char* one, const char* many) {
     if (n > 0) add(std::to_string(n) + " " + (n == 1 ? one : many));
   };
-  count("tile_failures", "tile failure", "tile failures");
-  count("refused_results", "result refused", "results refused");
-  count("repeated_handouts", "tile sent out again", "tiles sent out again");
+  count(health.tile_failures, "tile failure", "tile failures");
+  count(health.refused_results, "result refused", "results refused");
+  count(health.repeated_handouts, "tile sent out again", "tiles sent out again");
   // Half a minute without a tile while rendering is long for any tile size people use.
-  const double stalled_s = health.value("no_progress_s", 0.0);
-  if (stalled_s >= 30) add("no tile delivered for " + format_duration(stalled_s));
+  if (health.no_progress_s >= 30)
+    add("no tile delivered for " + format_duration(health.no_progress_s));
   if (trouble.empty()) return;
   std::printf("  trouble: %s\n", trouble.c_str());
-  if (health.contains("last_problem") && health["last_problem"].is_string())
-    std::printf("  last problem: %s\n", health["last_problem"].get<std::string>().c_str());
+  if (health.last_problem) std::printf("  last problem: %s\n", health.last_problem->c_str());
 }
 
-void print_status(const json& job) {
-  std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
-              job["id"].get<std::string>().c_str(), job["state"].get<std::string>().c_str(),
-              job["name"].get<std::string>().c_str(),
-              static_cast<int>(job["progress"].get<double>() * 100), job["tiles"]["done"].get<int>(),
-              job["tiles"]["total"].get<int>(), job["priority"].get<int>(), job["width"].get<int>(),
-              job["height"].get<int>());
-  if (!job["error"].is_null()) std::printf("  error: %s\n", job["error"].get<std::string>().c_str());
-  print_health(job);
+void print_status(const protocol::JobStatus& job) {
+  std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n", job.id.c_str(),
+              to_string(job.state), job.name.c_str(), static_cast<int>(job.progress * 100),
+              job.tiles.done, job.tiles.total, job.priority, job.width, job.height);
+  if (job.error) std::printf("  error: %s\n", job.error->c_str());
+  print_health(job.health);
 }
 
-bool finished(const json& job) {
-  const std::string state = job["state"];
-  return state == "completed" || state == "failed" || state == "canceled";
-}
-
-std::string progress_line(const json& job, bool bar) {
-  const double progress = job["progress"];
-  const double rays_per_s = job["stats"]["rays_per_s"];
-  std::string eta = job["eta_s"].is_null() ? "--:--" : format_duration(job["eta_s"].get<double>());
+std::string progress_line(const protocol::JobStatus& job, bool bar) {
+  const std::string eta = job.eta_s ? format_duration(*job.eta_s) : "--:--";
   char text[256];
   std::string drawn;
   if (bar) {
     constexpr int kWidth = 30;
-    const int filled = static_cast<int>(progress * kWidth);
+    const int filled = static_cast<int>(job.progress * kWidth);
     drawn = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] ";
   }
   std::snprintf(text, sizeof text, "%s%s %d/%d tiles %5.1f%%  elapsed %s  eta %s  %.2f Mrays/s",
-                drawn.c_str(), job["state"].get<std::string>().c_str(),
-                job["tiles"]["done"].get<int>(), job["tiles"]["total"].get<int>(), progress * 100,
-                format_duration(job["elapsed_s"].get<double>()).c_str(), eta.c_str(),
-                rays_per_s / 1e6);
+                drawn.c_str(), to_string(job.state), job.tiles.done, job.tiles.total,
+                job.progress * 100, format_duration(job.elapsed_s).c_str(), eta.c_str(),
+                job.stats.rays_per_s / 1e6);
   return text;
 }
+
+void print_json(const nlohmann::json& body) { std::printf("%s\n", body.dump(2).c_str()); }
 
 // Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise (at
 // most one a second). Each poll waits on the server for the job to finish, so the end is
 // seen at once, and returns anyway after a moment with the progress so far.
-json watch(ApiClient& api, const std::string& id) {
+protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
   using clock = std::chrono::steady_clock;
   const bool tty = ::isatty(STDOUT_FILENO);
   std::string last;
   clock::time_point last_printed{};
   const double wait_s = tty ? 0.1 : 0.5;
   while (true) {
-    const json job = api.job(id, wait_s);
+    const protocol::JobStatus job = api.job(id, wait_s);
     const std::string line = progress_line(job, tty);
-    const bool done = finished(job);
+    const bool done = is_finished(job.state);
     if (tty) {
       std::printf("\r%s\033[K%s", line.c_str(), done ? "\n" : "");
     } else if (line != last && (done || clock::now() - last_printed >= std::chrono::seconds(1))) {
@@ -146,25 +131,22 @@ json watch(ApiClient& api, const std::string& id) {
   }
 }
 
-int job_exit_code(const json& job) {
-  if (job["state"] == "completed") return kExitOk;
-  if (!job["error"].is_null())
-    std::fprintf(stderr, "job %s %s: %s\n", job["id"].get<std::string>().c_str(),
-                 job["state"].get<std::string>().c_str(), job["error"].get<std::string>().c_str());
+int job_exit_code(const protocol::JobStatus& job) {
+  if (job.state == JobState::completed) return kExitOk;
+  if (job.error)
+    std::fprintf(stderr, "job %s %s: %s\n", job.id.c_str(), to_string(job.state),
+                 job.error->c_str());
   else
-    std::fprintf(stderr, "job %s %s\n", job["id"].get<std::string>().c_str(),
-                 job["state"].get<std::string>().c_str());
+    std::fprintf(stderr, "job %s %s\n", job.id.c_str(), to_string(job.state));
   return kExitJobFailed;
 }
 
-void save_image(ApiClient& api, const std::string& id, const std::string& output, bool partial) {
-  std::string format = std::filesystem::path(output).extension().string();
-  if (!format.empty()) format.erase(0, 1);
-  if (format == "jpeg") format = "jpg";
-  if (format == "tiff") format = "tif";
-  if (format != "png" && format != "exr" && format != "jpg" && format != "tif")
-    fail(kExitUsage, output + ": unknown image extension (use .png, .exr, .jpg or .tif)");
-  const std::string bytes = api.image(id, format, partial);
+void save_image(CoordinatorClient& api, const std::string& id, const std::string& output,
+                bool partial) {
+  const ImageFormat* format = image_format_of_path(output);
+  if (!format)
+    fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
+  const std::string bytes = api.image(id, *format, partial);
   const std::filesystem::path temp = output + ".part";
   {
     std::ofstream out(temp, std::ios::binary);
@@ -175,8 +157,8 @@ void save_image(ApiClient& api, const std::string& id, const std::string& output
   std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
 }
 
-int submit(const Options& options, ApiClient& api) {
-  json scene;
+int submit(const Options& options, CoordinatorClient& api) {
+  nlohmann::json scene;
   try {
     scene = read_json_file(options.scene_path);
     parse_scene(scene);  // report mistakes with their JSON Pointer before sending anything
@@ -187,26 +169,26 @@ int submit(const Options& options, ApiClient& api) {
   }
   const std::string name =
       options.name.empty() ? std::filesystem::path(options.scene_path).stem().string() : options.name;
-  const json job = api.submit(name, options.priority, scene);
-  const std::string id = job["id"];
+  const protocol::JobStatus job = api.submit({name, options.priority, std::move(scene)});
+  const std::string id = job.id;
   if (options.json_output && !options.wait)
-    std::printf("%s\n", job.dump(2).c_str());
+    print_json(protocol::to_json(job));
   else
     std::printf("submitted %s (%s)\n", id.c_str(), name.c_str());
   std::fflush(stdout);  // scripts reading the id need it now, not when --wait ends
   if (!options.wait) return kExitOk;
-  const json final_job = watch(api, id);
-  if (options.json_output) std::printf("%s\n", final_job.dump(2).c_str());
+  const protocol::JobStatus final_job = watch(api, id);
+  if (options.json_output) print_json(protocol::to_json(final_job));
   const int code = job_exit_code(final_job);
   if (code == kExitOk && !options.output.empty()) save_image(api, id, options.output, false);
   return code;
 }
 
 // Runs one command, turning transport and API errors into messages and exit codes.
-int run(const std::function<int(ApiClient&)>& command, const Options& options) {
+int run(const std::function<int(CoordinatorClient&)>& command, const Options& options) {
   try {
-    ApiClient api(server_url(options),
-                  resolve_secret(options.token, options.token_file, "TESSERA_API_TOKEN", "API token"));
+    CoordinatorClient api(server_url(options), resolve_secret(options.token, options.token_file,
+                                                              "TESSERA_API_TOKEN", "API token"));
     return command(api);
   } catch (const CommandFailed& failed) {
     return failed.code;
@@ -220,6 +202,10 @@ int run(const std::function<int(ApiClient&)>& command, const Options& options) {
                      ? ""
                      : (" (at " + e.path() + ")").c_str());
     return e.status() == 400 || e.status() == 422 ? kExitUsage : kExitJobFailed;
+  } catch (const protocol::ProtocolError& e) {
+    std::fprintf(stderr, "error: the server at %s answered in a form this CLI does not know: %s\n",
+                 server_url(options).c_str(), e.what());
+    return kExitJobFailed;
   } catch (const std::runtime_error& e) {  // a token file that cannot be read, say
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUsage;
@@ -239,10 +225,11 @@ void add_job_commands(CLI::App& app) {
   app.add_option("--token-file", options->token_file, "Read the API token from this file");
 
   auto on = [&app, options](const char* name, const char* help,
-                            std::function<int(const Options&, ApiClient&)> command) {
+                            std::function<int(const Options&, CoordinatorClient&)> command) {
     CLI::App* sub = app.add_subcommand(name, help);
     sub->final_callback([options, command] {
-      const int code = run([&](ApiClient& api) { return command(*options, api); }, *options);
+      const int code =
+          run([&](CoordinatorClient& api) { return command(*options, api); }, *options);
       if (code != 0) throw CLI::RuntimeError(code);
     });
     return sub;
@@ -256,70 +243,79 @@ void add_job_commands(CLI::App& app) {
   submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
   submit_cmd->add_option("-o,--output", options->output, "With --wait: save the image here");
 
-  CLI::App* status_cmd = on("status", "Show a job's status", [](const Options& o, ApiClient& api) {
-    const json job = api.job(o.job);
-    if (o.json_output)
-      std::printf("%s\n", job.dump(2).c_str());
-    else
-      print_status(job);
-    return kExitOk;
-  });
+  CLI::App* status_cmd =
+      on("status", "Show a job's status", [](const Options& o, CoordinatorClient& api) {
+        const protocol::JobStatus job = api.job(o.job);
+        if (o.json_output)
+          print_json(protocol::to_json(job));
+        else
+          print_status(job);
+        return kExitOk;
+      });
   status_cmd->add_option("job", options->job, "Job id")->required();
 
-  CLI::App* watch_cmd = on("watch", "Follow a job's progress until it finishes",
-                           [](const Options& o, ApiClient& api) { return job_exit_code(watch(api, o.job)); });
+  CLI::App* watch_cmd =
+      on("watch", "Follow a job's progress until it finishes",
+         [](const Options& o, CoordinatorClient& api) { return job_exit_code(watch(api, o.job)); });
   watch_cmd->add_option("job", options->job, "Job id")->required();
 
-  CLI::App* list_cmd = on("list", "List jobs, newest first", [](const Options& o, ApiClient& api) {
-    const json reply = api.jobs(o.state, o.limit);
-    if (o.json_output) {
-      std::printf("%s\n", reply.dump(2).c_str());
-    } else {
-      for (const json& job : reply["jobs"]) print_status(job);
-    }
-    return kExitOk;
-  });
+  CLI::App* list_cmd =
+      on("list", "List jobs, newest first", [](const Options& o, CoordinatorClient& api) {
+        std::optional<JobState> state;
+        if (!o.state.empty()) {
+          state = job_state_from_string(o.state);
+          if (!state)
+            fail(kExitUsage, "--state must be " + protocol::names_of(protocol::kJobStateNames));
+        }
+        const protocol::JobList reply = api.jobs(state, o.limit);
+        if (o.json_output) {
+          print_json(protocol::to_json(reply));
+        } else {
+          for (const protocol::JobStatus& job : reply.jobs) print_status(job);
+        }
+        return kExitOk;
+      });
   list_cmd->add_option("--state", options->state, "Only jobs in this state");
   list_cmd->add_option("--limit", options->limit, "At most this many")->check(CLI::Range(1, 1000));
 
-  CLI::App* get_cmd = on("get", "Download a job's image", [](const Options& o, ApiClient& api) {
-    save_image(api, o.job, o.output, o.partial);
-    return kExitOk;
-  });
+  CLI::App* get_cmd =
+      on("get", "Download a job's image", [](const Options& o, CoordinatorClient& api) {
+        save_image(api, o.job, o.output, o.partial);
+        return kExitOk;
+      });
   get_cmd->add_option("job", options->job, "Job id")->required();
   get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
   get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
 
-  CLI::App* cancel_cmd = on("cancel", "Cancel a job", [](const Options& o, ApiClient& api) {
-    const json job = api.cancel(o.job);
+  CLI::App* cancel_cmd = on("cancel", "Cancel a job", [](const Options& o, CoordinatorClient& api) {
+    const protocol::JobStatus job = api.cancel(o.job);
     if (o.json_output)
-      std::printf("%s\n", job.dump(2).c_str());
+      print_json(protocol::to_json(job));
     else
       print_status(job);
     return kExitOk;
   });
   cancel_cmd->add_option("job", options->job, "Job id")->required();
 
-  CLI::App* rm_cmd = on("rm", "Remove a finished job and its files", [](const Options& o, ApiClient& api) {
-    api.remove(o.job);
-    if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
-    return kExitOk;
-  });
+  CLI::App* rm_cmd =
+      on("rm", "Remove a finished job and its files", [](const Options& o, CoordinatorClient& api) {
+        api.remove(o.job);
+        if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
+        return kExitOk;
+      });
   rm_cmd->add_option("job", options->job, "Job id")->required();
 
-  on("workers", "List the workers", [](const Options& o, ApiClient& api) {
-    const json reply = api.workers();
+  on("workers", "List the workers", [](const Options& o, CoordinatorClient& api) {
+    const protocol::WorkerList reply = api.workers();
     if (o.json_output) {
-      std::printf("%s\n", reply.dump(2).c_str());
+      print_json(protocol::to_json(reply));
       return kExitOk;
     }
-    for (const json& w : reply["workers"])
-      std::printf("%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n",
-                  w["id"].get<std::string>().c_str(), w["name"].get<std::string>().c_str(),
-                  w["host"].get<std::string>().c_str(), w["state"].get<std::string>().c_str(),
-                  w["threads"].get<int>(),
-                  static_cast<unsigned long long>(w["tiles_rendered"].get<std::uint64_t>()),
-                  w["current_job"].is_null() ? "" : w["current_job"].get<std::string>().c_str());
+    for (const protocol::Worker& w : reply.workers)
+      std::printf(
+          "%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n", w.id.c_str(), w.name.c_str(),
+          w.host.c_str(), protocol::name_in(protocol::kWorkerStateNames, w.state).data(), w.threads,
+          static_cast<unsigned long long>(w.tiles_rendered), w.current_job.value_or("").c_str());
     return kExitOk;
   });
 }

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-namespace tessera {
+#include "common/image_format.hpp"
 
-enum class ImageFileKind { exr, png, jpg, tif, unknown };
+namespace tessera {
 
 // What one written file holds: width × height × 3 channels, rows top to bottom. `pixels`
 // points at float for exr, std::uint16_t for tif and std::uint8_t otherwise, already

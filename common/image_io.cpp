@@ -17,14 +17,8 @@ namespace tessera {
 namespace {
 
 ImageFileKind kind_of(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".exr") return ImageFileKind::exr;
-  if (ext == ".png") return ImageFileKind::png;
-  if (ext == ".jpg" || ext == ".jpeg") return ImageFileKind::jpg;
-  if (ext == ".tif" || ext == ".tiff") return ImageFileKind::tif;
-  return ImageFileKind::unknown;
+  const ImageFormat* format = image_format_of_path(path);
+  return format ? format->kind : ImageFileKind::unknown;
 }
 
 // Quantises in our own code, not OIIO's, so that the bytes never depend on its version.
@@ -141,8 +135,8 @@ EncodedImage::EncodedImage(const Image& image, std::filesystem::path path, Outpu
     : path_(std::move(path)) {
   const ImageFileKind kind = kind_of(path_);
   if (kind == ImageFileKind::unknown)
-    throw std::runtime_error("cannot write " + path_.string() +
-                             ": unknown image extension (use .exr, .png, .jpg or .tif)");
+    throw std::runtime_error("cannot write " + path_.string() + ": unknown image extension (use " +
+                             image_format_names(true) + ")");
   content_.kind = kind;
   content_.width = image.width();
   content_.height = image.height();

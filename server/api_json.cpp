@@ -1,22 +1,14 @@
 #include "server/api_json.hpp"
 
-#include <cstdio>
-#include <ctime>
+#include <algorithm>
 
+#include "common/protocol/paths.hpp"
+#include "common/protocol/timestamp.hpp"
 #include "common/scene_parser.hpp"
 
 namespace tessera {
 
-std::string format_timestamp(std::int64_t ms) {
-  const std::time_t seconds = static_cast<std::time_t>(ms / 1000);
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[80];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900,
-                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
-                static_cast<int>(ms % 1000));
-  return text;
-}
+using protocol::format_timestamp;
 
 std::variant<nlohmann::json, HttpResponse> json_body(const HttpRequest& request) {
   try {
@@ -26,9 +18,14 @@ std::variant<nlohmann::json, HttpResponse> json_body(const HttpRequest& request)
   }
 }
 
+HttpResponse invalid_request(const protocol::ProtocolError& error) {
+  return error_response(400, "invalid_request", error.message(), error.pointer());
+}
+
 std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, double fallback_s) {
   double wait_s = fallback_s;
-  if (auto it = request.query.find("wait_s"); it != request.query.end()) {
+  if (auto it = request.query.find(std::string(protocol::query::wait_s));
+      it != request.query.end()) {
     try {
       std::size_t used = 0;
       wait_s = std::stod(it->second, &used);
@@ -41,88 +38,87 @@ std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, dou
   return std::chrono::milliseconds(static_cast<long>(wait_s * 1000));
 }
 
-namespace {
-
-nlohmann::json timestamp_or_null(std::int64_t ms) {
-  return ms > 0 ? nlohmann::json(format_timestamp(ms)) : nlohmann::json(nullptr);
+HttpResponse bad_wait() {
+  return error_response(400, "invalid_request", "wait_s must be a number from 0 to 60");
 }
 
-nlohmann::json to_json(const JobHealth& health, const JobStatus& job, std::int64_t now_ms) {
+namespace {
+
+std::optional<std::string> timestamp_unless_zero(std::int64_t ms) {
+  if (ms <= 0) return std::nullopt;
+  return format_timestamp(ms);
+}
+
+std::optional<std::string> unless_empty(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  return text;
+}
+
+protocol::JobHealth health_of(const JobHealth& health, const JobStatus& job, std::int64_t now_ms) {
   // How long its tiles have rendered with none delivered; 0 unless some are under lease.
   const bool rendering = job.state == JobState::running && job.tiles_rendering > 0;
   const double no_progress_s = rendering && health.progress_at_ms > 0
                                    ? std::max<std::int64_t>(0, now_ms - health.progress_at_ms) / 1e3
                                    : 0.0;
-  return {{"tile_failures", health.tile_failures},
-          {"refused_results", health.refused_results},
-          {"repeated_handouts", health.repeated_handouts},
-          {"last_problem", health.last_problem.empty() ? nlohmann::json(nullptr)
-                                                       : nlohmann::json(health.last_problem)},
-          {"no_progress_s", no_progress_s}};
+  return {health.tile_failures, health.refused_results, health.repeated_handouts,
+          unless_empty(health.last_problem), no_progress_s};
 }
 
 }  // namespace
 
-nlohmann::json to_json(const JobStatus& job, std::int64_t now_ms) {
-  const double progress =
+protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms) {
+  protocol::JobStatus status;
+  status.id = job.id;
+  status.name = job.name;
+  status.state = job.state;
+  status.priority = job.priority;
+  status.width = job.width;
+  status.height = job.height;
+  status.tiles = {job.tiles_total, job.tiles_done, job.tiles_rendering};
+  status.progress =
       job.tiles_total > 0 ? static_cast<double>(job.tiles_done) / job.tiles_total : 0.0;
-  double elapsed_s = 0.0;
   if (job.started_at_ms > 0)
-    elapsed_s = ((job.finished_at_ms > 0 ? job.finished_at_ms : now_ms) - job.started_at_ms) / 1e3;
+    status.elapsed_s =
+        ((job.finished_at_ms > 0 ? job.finished_at_ms : now_ms) - job.started_at_ms) / 1e3;
   // The remaining tiles at the rate seen so far; unknown before the first tile is done.
-  nlohmann::json eta = nullptr;
-  if (job.state == JobState::completed) {
-    eta = 0.0;
-  } else if (!is_finished(job.state) && job.tiles_done > 0 && elapsed_s > 0) {
-    eta = elapsed_s * (job.tiles_total - job.tiles_done) / job.tiles_done;
-  }
-  return {
-      {"id", job.id},
-      {"name", job.name},
-      {"state", to_string(job.state)},
-      {"priority", job.priority},
-      {"width", job.width},
-      {"height", job.height},
-      {"tiles",
-       {{"total", job.tiles_total}, {"done", job.tiles_done}, {"rendering", job.tiles_rendering}}},
-      {"progress", progress},
-      {"created_at", format_timestamp(job.created_at_ms)},
-      {"started_at", timestamp_or_null(job.started_at_ms)},
-      {"finished_at", timestamp_or_null(job.finished_at_ms)},
-      {"elapsed_s", elapsed_s},
-      {"eta_s", eta},
-      {"error", job.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(job.error)},
-      {"health", to_json(job.health, job, now_ms)},
-      {"stats", {{"rays", job.rays}, {"rays_per_s", elapsed_s > 0 ? job.rays / elapsed_s : 0.0}}}};
+  if (job.state == JobState::completed)
+    status.eta_s = 0.0;
+  else if (!is_finished(job.state) && job.tiles_done > 0 && status.elapsed_s > 0)
+    status.eta_s = status.elapsed_s * (job.tiles_total - job.tiles_done) / job.tiles_done;
+  status.created_at = format_timestamp(job.created_at_ms);
+  status.started_at = timestamp_unless_zero(job.started_at_ms);
+  status.finished_at = timestamp_unless_zero(job.finished_at_ms);
+  status.error = unless_empty(job.error);
+  status.health = health_of(job.health, job, now_ms);
+  status.stats = {job.rays, status.elapsed_s > 0 ? job.rays / status.elapsed_s : 0.0};
+  return status;
 }
 
-nlohmann::json to_json(const WorkerInfo& worker) {
-  return {{"id", worker.id},
-          {"name", worker.name},
-          {"host", worker.host},
-          {"threads", worker.threads},
-          {"state", worker.state},
-          {"current_job", worker.current_job.empty() ? nlohmann::json(nullptr)
-                                                     : nlohmann::json(worker.current_job)},
-          {"current_tile",
-           worker.current_tile >= 0 ? nlohmann::json(worker.current_tile) : nlohmann::json(nullptr)},
-          {"tiles_rendered", worker.tiles_rendered},
-          {"last_seen", format_timestamp(worker.last_seen_ms)}};
+protocol::Worker worker_of(const WorkerInfo& worker) {
+  protocol::Worker w;
+  w.id = worker.id;
+  w.name = worker.name;
+  w.host = worker.host;
+  w.threads = worker.threads;
+  w.state = protocol::value_in(protocol::kWorkerStateNames, worker.state)
+                .value_or(protocol::WorkerState::gone);
+  w.current_job = unless_empty(worker.current_job);
+  if (worker.current_tile >= 0) w.current_tile = worker.current_tile;
+  w.tiles_rendered = worker.tiles_rendered;
+  w.last_seen = format_timestamp(worker.last_seen_ms);
+  return w;
 }
 
-nlohmann::json to_json(const Lease& lease, std::int64_t now_ms) {
-  nlohmann::json tiles = nlohmann::json::array();
+protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms) {
+  protocol::Lease l;
+  l.id = lease.id;
+  l.job_id = lease.job_id;
+  l.scene_digest = lease.scene_digest;
+  l.tiles.reserve(lease.tiles.size());
   for (const LeaseTile& tile : lease.tiles)
-    tiles.push_back({{"index", tile.index},
-                     {"x", tile.rect.x},
-                     {"y", tile.rect.y},
-                     {"width", tile.rect.width},
-                     {"height", tile.rect.height}});
-  return {{"id", lease.id},
-          {"job_id", lease.job_id},
-          {"scene_digest", lease.scene_digest},
-          {"tiles", std::move(tiles)},
-          {"expires_in_s", std::max<std::int64_t>(0, lease.expires_at_ms - now_ms) / 1e3}};
+    l.tiles.push_back({tile.index, tile.rect.x, tile.rect.y, tile.rect.width, tile.rect.height});
+  l.expires_in_s = std::max<std::int64_t>(0, lease.expires_at_ms - now_ms) / 1e3;
+  return l;
 }
 
 }  // namespace tessera

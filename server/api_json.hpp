@@ -1,4 +1,5 @@
-// The JSON shapes of docs/openapi.yaml, built from the scheduler's records.
+// From the scheduler's records to the typed bodies of common/protocol, and from a request's
+// body to a typed one: the coordinator's side of docs/openapi.yaml.
 #pragma once
 
 #include <chrono>
@@ -9,30 +10,46 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/protocol/field_reader.hpp"
+#include "common/protocol/jobs.hpp"
+#include "common/protocol/leases.hpp"
+#include "common/protocol/workers.hpp"
 #include "server/http_types.hpp"
 #include "server/scheduler.hpp"
 
 namespace tessera {
 
-// RFC 3339 UTC with milliseconds, e.g. 2026-11-22T01:02:03.456Z.
-std::string format_timestamp(std::int64_t ms_since_epoch);
-
-// Names (of jobs, workers, hosts) are for people and appear in every listing: a name of
-// megabytes would make each list that large.
-inline constexpr std::size_t max_name_bytes = 256;
-
 // The request's JSON body, or the 400 malformed_json answer naming line and column.
 std::variant<nlohmann::json, HttpResponse> json_body(const HttpRequest& request);
+
+// A body that is not of the protocol's shape: 400 invalid_request at its pointer.
+HttpResponse invalid_request(const protocol::ProtocolError& error);
+
+// The request's body as T (T::read), or the 400 answer saying what is wrong and where.
+template <typename T>
+std::variant<T, HttpResponse> request_body(const HttpRequest& request) {
+  auto parsed = json_body(request);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  try {
+    return T::read(protocol::FieldReader(std::get<nlohmann::json>(parsed)));
+  } catch (const protocol::ProtocolError& e) {
+    return invalid_request(e);
+  }
+}
 
 // A long poll's ?wait_s= (0 to 60 seconds; `fallback` when absent), or nothing when it is
 // not such a number.
 std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, double fallback_s);
-inline HttpResponse bad_wait() {
-  return error_response(400, "invalid_request", "wait_s must be a number from 0 to 60");
-}
+HttpResponse bad_wait();
 
-nlohmann::json to_json(const JobStatus& job, std::int64_t now_ms);
-nlohmann::json to_json(const WorkerInfo& worker);
-nlohmann::json to_json(const Lease& lease, std::int64_t now_ms);
+// The one mapping from each record to what the API shows of it.
+protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms);
+protocol::Worker worker_of(const WorkerInfo& worker);
+protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms);
+
+template <typename T>
+HttpResponse body_response(int status, const T& body) {
+  return json_response(status, protocol::to_json(body));
+}
 
 }  // namespace tessera

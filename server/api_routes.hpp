@@ -25,8 +25,11 @@ struct ApiContext {
   std::atomic<unsigned> temp_counter{0};  // unique temporary names under temp_dir
 };
 
+// One file per resource, each named for it: job_routes.cpp and so on.
 void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
-void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers, scenes, leases
+void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers...
+void add_scene_routes(Router& router, ApiContext& context);   // /v1/scenes/{digest}
+void add_lease_routes(Router& router, ApiContext& context);   // /v1/leases/{id}/...
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
 // that knows start-up is over (server_main) can say so.
 void add_health_routes(Router& router, const Readiness* readiness = nullptr);

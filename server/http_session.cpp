@@ -1,6 +1,6 @@
 #include "server/http_session.hpp"
 
-#include "common/protocol_limits.hpp"
+#include "common/protocol/limits.hpp"
 
 #include <algorithm>
 #include <array>

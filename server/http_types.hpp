@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/protocol/error.hpp"
+
 namespace tessera {
 
 struct HttpRequest {
@@ -57,9 +59,9 @@ inline HttpResponse json_response(int status, const nlohmann::json& body) {
 // Pointer into the request body, for errors about one of its values.
 inline HttpResponse error_response(int status, std::string code, std::string message,
                                    std::string path = "") {
-  nlohmann::json error = {{"code", std::move(code)}, {"message", std::move(message)}};
-  if (!path.empty()) error["path"] = std::move(path);
-  return json_response(status, {{"error", std::move(error)}});
+  protocol::Error error{std::move(code), std::move(message), {}, {}, {}};
+  if (!path.empty()) error.path = std::move(path);
+  return json_response(status, protocol::to_json(error));
 }
 
 }  // namespace tessera

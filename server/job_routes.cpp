@@ -1,7 +1,9 @@
 #include <chrono>
 #include <memory>
 
+#include "common/image_format.hpp"
 #include "common/image_io.hpp"
+#include "common/protocol/paths.hpp"
 #include "common/scene_parser.hpp"
 #include "server/access.hpp"
 #include "server/api_json.hpp"
@@ -16,70 +18,51 @@ HttpResponse not_found(const std::string& id) {
   return error_response(404, "not_found", "no job " + id);
 }
 
-// The submission envelope around the scene: {"name", "priority", "scene"}.
+// The submission envelope around the scene (`JobSubmission`).
 HttpResponse submit(ApiContext& context, const HttpRequest& request) {
   auto parsed = json_body(request);
   if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
-  json& body = std::get<json>(parsed);
-  if (!body.is_object()) return error_response(400, "invalid_request", "the body must be a JSON object");
-  for (const auto& [key, value] : body.items())
-    if (key != "name" && key != "priority" && key != "scene")
-      return error_response(400, "invalid_request",
-                            "unknown key \"" + key + "\" (expected name, priority, scene)", "/" + key);
-  std::string name = "job";
-  if (body.contains("name")) {
-    if (!body["name"].is_string())
-      return error_response(400, "invalid_request", "must be a string", "/name");
-    name = body["name"].get<std::string>();
-    if (name.size() > max_name_bytes)
-      return error_response(400, "invalid_request",
-                            "must be at most " + std::to_string(max_name_bytes) + " bytes, got " +
-                                std::to_string(name.size()),
-                            "/name");
+  protocol::JobSubmission submission;
+  try {
+    submission = protocol::JobSubmission::take(std::get<json>(parsed));
+  } catch (const protocol::ProtocolError& e) {
+    return invalid_request(e);
   }
-  int priority = 50;
-  if (body.contains("priority")) {
-    const json& p = body["priority"];
-    if (!p.is_number_integer() || p.get<std::int64_t>() < 0 || p.get<std::int64_t>() > 100)
-      return error_response(400, "invalid_request", "must be an integer from 0 to 100, got " + p.dump(),
-                            "/priority");
-    priority = p.get<int>();
-  }
-  if (!body.contains("scene")) return error_response(400, "invalid_request", "required", "/scene");
   Scene scene;
   try {
-    scene = parse_scene(body["scene"], context.limits);
+    scene = parse_scene(submission.scene, context.limits);
   } catch (const SceneError& e) {
     const std::string path = "/scene" + e.pointer();
     if (e.limit().empty()) return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
     // Valid, but more than this server takes: say which limit, so the user can ask for it.
-    HttpResponse response = error_response(422, "over_limit", path + ": " + e.detail(), path);
-    nlohmann::json body = nlohmann::json::parse(response.body);
-    body["error"]["limit"] = e.limit();
-    body["error"]["limit_value"] = e.limit_value();
-    return json_response(422, body);
+    return json_response(
+        422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(), path,
+                                               e.limit(), e.limit_value()}));
   }
   JobStatus job;
   try {
-    job = context.scheduler.submit(name, priority, scene, body["scene"].dump());
+    job = context.scheduler.submit(submission.name, submission.priority, scene,
+                                   submission.scene.dump());
   } catch (const std::exception& e) {  // the store refused: a full disk, say
     return error_response(507, "storage_failed", std::string("cannot store the job: ") + e.what());
   }
-  HttpResponse response = json_response(201, to_json(job, context.clock.now_ms()));
-  response.headers.emplace_back("Location", "/v1/jobs/" + job.id);
+  HttpResponse response = body_response(201, status_of(job, context.clock.now_ms()));
+  response.headers.emplace_back("Location", protocol::fill(protocol::route::job, job.id));
   return response;
 }
 
 HttpResponse list(ApiContext& context, const HttpRequest& request) {
   std::optional<JobState> state;
-  if (auto it = request.query.find("state"); it != request.query.end()) {
+  if (auto it = request.query.find(std::string(protocol::query::state));
+      it != request.query.end()) {
     state = job_state_from_string(it->second);
     if (!state)
       return error_response(400, "invalid_request",
-                            "state must be queued, running, completed, failed or canceled");
+                            "state must be " + protocol::names_of(protocol::kJobStateNames));
   }
   std::size_t limit = 100;
-  if (auto it = request.query.find("limit"); it != request.query.end()) {
+  if (auto it = request.query.find(std::string(protocol::query::limit));
+      it != request.query.end()) {
     try {
       std::size_t used = 0;
       const long value = std::stol(it->second, &used);
@@ -89,10 +72,11 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
       return error_response(400, "invalid_request", "limit must be an integer from 1 to 1000");
     }
   }
-  json jobs = json::array();
+  protocol::JobList list;
   const std::int64_t now = context.clock.now_ms();
-  for (const JobStatus& job : context.scheduler.jobs(state, limit)) jobs.push_back(to_json(job, now));
-  return json_response(200, {{"jobs", std::move(jobs)}});
+  for (const JobStatus& job : context.scheduler.jobs(state, limit))
+    list.jobs.push_back(status_of(job, now));
+  return body_response(200, list);
 }
 
 // With ?wait_s=S the answer waits until the job has finished, for at most S seconds, and
@@ -107,23 +91,11 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
   const auto answer = [&context, id, shared_respond](bool only_if_finished) {
     const auto job = context.scheduler.job(id);
     if (job && only_if_finished && !is_finished(job->state)) return false;
-    (*shared_respond)(job ? json_response(200, to_json(*job, context.clock.now_ms())) : not_found(id));
+    (*shared_respond)(job ? body_response(200, status_of(*job, context.clock.now_ms()))
+                          : not_found(id));
     return true;
   };
   context.job_waits.wait(*wait, [answer] { return answer(true); }, [answer] { answer(false); });
-}
-
-struct ImageFormat {
-  std::string extension;
-  std::string content_type;
-};
-
-std::optional<ImageFormat> image_format(const std::string& name) {
-  if (name == "png") return ImageFormat{".png", "image/png"};
-  if (name == "exr") return ImageFormat{".exr", "image/x-exr"};
-  if (name == "jpg") return ImageFormat{".jpg", "image/jpeg"};
-  if (name == "tif") return ImageFormat{".tif", "image/tiff"};
-  return std::nullopt;
 }
 
 // Only "render" is kept while parsing: a mesh scene's vertex arrays need not be built to
@@ -141,13 +113,14 @@ OutputTransfer transfer_of(const std::string& scene_json) {
 
 HttpResponse image(ApiContext& context, const HttpRequest& request) {
   const std::string& id = request.params.at("id");
-  const auto query_value = [&](const char* key, const char* fallback) {
-    auto it = request.query.find(key);
+  const auto query_value = [&](std::string_view key, const char* fallback) {
+    auto it = request.query.find(std::string(key));
     return it == request.query.end() ? std::string(fallback) : it->second;
   };
-  const auto format = image_format(query_value("format", "png"));
-  if (!format) return error_response(400, "invalid_request", "format must be png, exr, jpg or tif");
-  const std::string partial = query_value("partial", "0");
+  const ImageFormat* format = image_format_named(query_value(protocol::query::format, "png"));
+  if (!format)
+    return error_response(400, "invalid_request", "format must be " + image_format_names());
+  const std::string partial = query_value(protocol::query::partial, "0");
   if (partial != "0" && partial != "1")
     return error_response(400, "invalid_request", "partial must be 0 or 1");
   const auto job = context.scheduler.job(id);
@@ -156,10 +129,10 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
     return error_response(409, "not_ready",
                           "job " + id + " is " + to_string(job->state) +
                               "; add ?partial=1 for the tiles rendered so far");
-  HttpResponse response{200, format->content_type, "", {}};
+  HttpResponse response{200, std::string(format->content_type), "", {}};
   // A completed job's EXR is the file the image thread wrote: sent as it is, with no
   // image assembled in memory (3 GiB for a 16384x16384 frame).
-  if (format->extension == ".exr" && job->state == JobState::completed) {
+  if (format->kind == ImageFileKind::exr && job->state == JobState::completed) {
     if (const auto written = context.scheduler.image_file(id)) {
       response.file = written->string();
       return response;
@@ -172,8 +145,8 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
   // OpenImageIO writes files; encode into a private temporary one, which is sent from the
   // disk and removed once opened.
   std::filesystem::create_directories(context.temp_dir);
-  const auto path =
-      context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) + format->extension);
+  const auto path = context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) +
+                                        std::string(format->extension));
   write_image(*assembled, path, transfer_of(*scene_json));
   response.file = path.string();
   response.file_is_temporary = true;
@@ -183,53 +156,55 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
 }  // namespace
 
 void add_job_routes(Router& router, ApiContext& context) {
-  router.add("POST", "/v1/jobs",
-             [&context](HttpRequest&& request, Respond respond) { respond(submit(context, request)); },
-             context.max_job_body_bytes, role_client);
-  router.add("GET", "/v1/jobs",
-             [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); },
-             std::nullopt, role_client);
-  router.add("GET", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
-    status(context, request, std::move(respond));
-  }, std::nullopt, role_client);
-  router.add("DELETE", "/v1/jobs/{id}", [&context](HttpRequest&& request, Respond respond) {
-    const std::string& id = request.params.at("id");
-    switch (context.scheduler.remove(id)) {
-      case RemoveOutcome::removed: return respond(HttpResponse{204, "", "", {}});
-      case RemoveOutcome::not_found: return respond(not_found(id));
-      case RemoveOutcome::not_finished:
-        return respond(error_response(409, "not_finished",
-                                      "job " + id + " is still active; cancel it first"));
-    }
-  }, std::nullopt, role_client);
-  router.add("GET", "/v1/jobs/{id}/image",
-             [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); },
-             std::nullopt, role_client);
-  router.add("POST", "/v1/jobs/{id}/cancel", [&context](HttpRequest&& request, Respond respond) {
-    const std::string& id = request.params.at("id");
-    switch (context.scheduler.cancel(id)) {
-      case CancelOutcome::canceled:
-        return respond(json_response(200, to_json(*context.scheduler.job(id), context.clock.now_ms())));
-      case CancelOutcome::not_found: return respond(not_found(id));
-      case CancelOutcome::already_finished:
-        return respond(error_response(409, "already_finished", "job " + id + " has already finished"));
-    }
-  }, std::nullopt, role_client);
-}
-
-void add_health_routes(Router& router, const Readiness* readiness) {
-  router.add("GET", "/healthz", [](HttpRequest&&, Respond respond) {
-    respond(json_response(200, {{"status", "ok"}}));
-  });
-  // 503 both before start-up is over and once shutdown has begun: either way, requests
-  // should go elsewhere (or wait), though the process is alive.
-  router.add("GET", "/readyz", [readiness](HttpRequest&&, Respond respond) {
-    const Readiness::State state = readiness ? readiness->state() : Readiness::State::starting;
-    if (state == Readiness::State::ready) return respond(json_response(200, {{"status", "ready"}}));
-    if (state == Readiness::State::draining)
-      return respond(error_response(503, "shutting_down", "the coordinator is shutting down"));
-    respond(error_response(503, "starting", "the coordinator is still starting"));
-  });
+  router.add(
+      "POST", std::string(protocol::route::jobs),
+      [&context](HttpRequest&& request, Respond respond) { respond(submit(context, request)); },
+      context.max_job_body_bytes, role_client);
+  router.add(
+      "GET", std::string(protocol::route::jobs),
+      [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(protocol::route::job),
+      [&context](HttpRequest&& request, Respond respond) {
+        status(context, request, std::move(respond));
+      },
+      std::nullopt, role_client);
+  router.add(
+      "DELETE", std::string(protocol::route::job),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        switch (context.scheduler.remove(id)) {
+          case RemoveOutcome::removed:
+            return respond(HttpResponse{204, "", "", {}});
+          case RemoveOutcome::not_found:
+            return respond(not_found(id));
+          case RemoveOutcome::not_finished:
+            return respond(error_response(409, "not_finished",
+                                          "job " + id + " is still active; cancel it first"));
+        }
+      },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(protocol::route::job_image),
+      [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); },
+      std::nullopt, role_client);
+  router.add(
+      "POST", std::string(protocol::route::job_cancel),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        switch (context.scheduler.cancel(id)) {
+          case CancelOutcome::canceled:
+            return respond(
+                body_response(200, status_of(*context.scheduler.job(id), context.clock.now_ms())));
+          case CancelOutcome::not_found:
+            return respond(not_found(id));
+          case CancelOutcome::already_finished:
+            return respond(
+                error_response(409, "already_finished", "job " + id + " has already finished"));
+        }
+      },
+      std::nullopt, role_client);
 }
 
 }  // namespace tessera

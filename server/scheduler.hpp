@@ -22,7 +22,8 @@
 #include <vector>
 
 #include "common/image.hpp"
-#include "common/protocol_limits.hpp"
+#include "common/protocol/job_state.hpp"
+#include "common/protocol/limits.hpp"
 #include "common/scene.hpp"
 #include "server/clock.hpp"
 #include "server/store.hpp"
@@ -48,13 +49,6 @@ struct SchedulerConfig {
   // for this long fails, saying so, instead of stalling unseen; 0: never.
   std::int64_t stall_timeout_ms = 30 * 60 * 1000;
 };
-
-enum class JobState { queued, running, completed, failed, canceled };
-const char* to_string(JobState state);
-std::optional<JobState> job_state_from_string(std::string_view text);
-inline bool is_finished(JobState s) {
-  return s == JobState::completed || s == JobState::failed || s == JobState::canceled;
-}
 
 // Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
 // that renders the same tiles again and again, or delivers nothing, must be seen as such.

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/protocol/workers.hpp"
 #include "server/pending_tiles.hpp"
 #include "server/scheduler.hpp"
 #include "server/store.hpp"
@@ -23,9 +24,13 @@ enum class TileState { pending, leased, done };
 const char* to_string(TileState state);
 std::optional<TileState> tile_state_from_string(std::string_view text);
 
-inline constexpr const char* worker_idle = "idle";
-inline constexpr const char* worker_rendering = "rendering";
-inline constexpr const char* worker_gone = "gone";
+// A worker's state, in the words of the API and of the database.
+inline constexpr std::string_view worker_idle =
+    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::idle);
+inline constexpr std::string_view worker_rendering =
+    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::rendering);
+inline constexpr std::string_view worker_gone =
+    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::gone);
 
 struct TileSlot {
   TileRect rect;

@@ -126,6 +126,8 @@ int run(const ServerOptions& options) {
   add_health_routes(router, &readiness);
   add_job_routes(router, context);
   add_worker_routes(router, context);
+  add_scene_routes(router, context);
+  add_lease_routes(router, context);
 
   HttpServerOptions http;
   http.address = host;

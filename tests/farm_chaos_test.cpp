@@ -58,14 +58,14 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
   const json scene = test::showcase(480, 360, 16, 32);  // 180 tiles a job
   std::vector<std::string> jobs;
   {
-    ApiClient api(url);
+    test::JsonApi api(url);
     for (int i = 0; i < 3; ++i) jobs.push_back(api.submit("chaos-" + std::to_string(i), 40 + 10 * i, scene)["id"]);
   }
   // Whether every job has completed, asked of whichever coordinator is up; false while
   // none answers.
   const auto all_completed = [&] {
     try {
-      ApiClient api(url);
+      test::JsonApi api(url);
       for (const std::string& id : jobs)
         if (api.job(id)["state"] != "completed") return false;
       return true;
@@ -103,7 +103,7 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
 
   ASSERT_TRUE(test::eventually(all_completed, 60s)) << "not every job completed; see " << dir;
   const Image expected = test::render_image(scene, 2);
-  ApiClient api(url);
+  test::JsonApi api(url);
   for (const std::string& id : jobs) {
     const json job = api.job(id);
     EXPECT_EQ(job["tiles"]["done"], job["tiles"]["total"]) << job.dump();

@@ -133,7 +133,7 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
 
   auto [server, port] = start_server("127.0.0.1:0", "first.log");
   const std::string url = "http://127.0.0.1:" + std::to_string(port);
-  ApiClient api(url);
+  test::JsonApi api(url);
   const std::string id = api.submit("resume", 50, scene)["id"];
   const std::string canceled = api.submit("canceled", 10, scene)["id"];
   ASSERT_EQ(api.cancel(canceled)["state"], "canceled");
@@ -147,7 +147,7 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   // Read from the store, as the next coordinator will: every tile acknowledged is there.
   const int acknowledged = [&] {
     auto [probe, probe_port] = start_server("127.0.0.1:0", "probe.log");
-    ApiClient probe_api("http://127.0.0.1:" + std::to_string(probe_port));
+    test::JsonApi probe_api("http://127.0.0.1:" + std::to_string(probe_port));
     const int done = probe_api.job(id)["tiles"]["done"];
     probe->signal(SIGKILL);
     probe->wait_for(10s);
@@ -285,7 +285,7 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   int port = 0;
   std::ifstream(dir / "port") >> port;
   const std::string url = "http://127.0.0.1:" + std::to_string(port);
-  ApiClient api(url);
+  test::JsonApi api(url);
   // 256 tiles of 12 KiB of pixels: 3 MiB, more than the disk holds.
   const std::string id = api.submit("too big for the disk", 50, test::showcase(512, 512, 1, 32))["id"];
   json job;

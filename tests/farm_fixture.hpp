@@ -17,9 +17,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "client/api_client.hpp"
 #include "common/image_io.hpp"
 #include "common/scene_parser.hpp"
+#include "tests/json_api.hpp"
 #include "tests/process.hpp"
 #include "tests/render_helpers.hpp"
 
@@ -60,7 +60,7 @@ class Farm {
     const bool up = eventually([&] { return farm_fs::exists(dir_ / "port"); }, 20s);
     if (!up) throw std::runtime_error("server did not start; see " + (dir_ / "server.log").string());
     std::ifstream(dir_ / "port") >> port_;
-    api_ = std::make_unique<ApiClient>(url());
+    api_ = std::make_unique<JsonApi>(url());
   }
   ~Farm() {
     using namespace std::chrono_literals;
@@ -73,10 +73,10 @@ class Farm {
   Farm& operator=(const Farm&) = delete;
 
   // For a coordinator started with --api-token: api() sends it from now on.
-  void use_api_token(const std::string& token) { api_ = std::make_unique<ApiClient>(url(), token); }
+  void use_api_token(const std::string& token) { api_ = std::make_unique<JsonApi>(url(), token); }
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
   int port() const { return port_; }
-  ApiClient& api() { return *api_; }
+  JsonApi& api() { return *api_; }
   Process& server() { return *server_; }
   const farm_fs::path& dir() const { return dir_; }
 
@@ -114,7 +114,7 @@ class Farm {
   farm_fs::path dir_;
   int port_ = 0;
   std::unique_ptr<Process> server_;
-  std::unique_ptr<ApiClient> api_;
+  std::unique_ptr<JsonApi> api_;
 };
 
 // The pids of a process's children, from /proc.

@@ -69,7 +69,7 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   }
   for (int c = 0; c < submitters; ++c) {
     clients.emplace_back([&, c] {
-      ApiClient api(farm.url());
+      test::JsonApi api(farm.url());
       for (int i = 0; !stop; ++i) {
         try {
           api.submit("load-" + std::to_string(c) + "-" + std::to_string(i), 50, scene);

@@ -16,7 +16,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/protocol_limits.hpp"
+#include "common/protocol/limits.hpp"
+#include "common/protocol/workers.hpp"
 #include "tests/farm_fixture.hpp"
 
 namespace tessera {
@@ -593,13 +594,12 @@ TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol
   RawWorker worker(farm.url(), "current");
   const json& reply = worker.registration();
   EXPECT_EQ(reply["protocol"], kWorkerProtocolVersion);
-  const ParsedLimits limits = limits_from_json(reply["limits"]);
-  ASSERT_TRUE(limits.limits) << limits.error << ": " << reply.dump();
-  EXPECT_EQ(limits.limits->max_result_tiles, 256);
-  EXPECT_EQ(limits.limits->max_batch_tiles, 256);
-  EXPECT_EQ(limits.limits->max_lease_tiles, 1024);
+  const ProtocolLimits limits = protocol::Registration::read(protocol::FieldReader(reply)).limits;
+  EXPECT_EQ(limits.max_result_tiles, 256);
+  EXPECT_EQ(limits.max_batch_tiles, 256);
+  EXPECT_EQ(limits.max_lease_tiles, 1024);
   // Room for the largest tile this coordinator takes: 4096 x 4096 float32 RGB.
-  EXPECT_EQ(limits.limits->max_result_bytes, std::size_t{4096} * 4096 * 12);
+  EXPECT_EQ(limits.max_result_bytes, std::size_t{4096} * 4096 * 12);
 
   // Builds before protocol 2 state no version; a later one states another.
   for (const json& body :

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "client/http_client.hpp"
+#include "common/net/http_client.hpp"
 #include "tests/farm_fixture.hpp"
 
 namespace tessera {

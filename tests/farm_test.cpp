@@ -135,7 +135,7 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   };
 
   auto [server, url] = start_server("first");
-  ApiClient api(url);
+  test::JsonApi api(url);
   const std::string id = api.submit("restart", 50, scene)["id"];
   auto worker = start_worker(url, "before");
   ASSERT_TRUE(test::eventually([&] { return api.job(id)["tiles"]["done"].get<int>() >= 10; }, 60s));
@@ -150,7 +150,7 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
 
   auto [again, url2] = start_server("second");
-  ApiClient api2(url2);
+  test::JsonApi api2(url2);
   const json resumed = api2.job(id);
   EXPECT_EQ(resumed["tiles"]["done"], delivered) << "tiles delivered before the stop were lost";
   auto finisher = start_worker(url2, "after");

@@ -26,7 +26,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "client/http_client.hpp"
+#include "common/net/http_client.hpp"
 #include "server/http_server.hpp"
 #include "server/router.hpp"
 

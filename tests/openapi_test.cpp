@@ -37,6 +37,8 @@ TEST(OpenApi, ServerRoutesAndTheContractAgree) {
     add_health_routes(router);
     add_job_routes(router, context);
     add_worker_routes(router, context);
+    add_scene_routes(router, context);
+    add_lease_routes(router, context);
     const auto served_list = router.routes();
     const std::set<Route> served(served_list.begin(), served_list.end());
     const auto documented = openapi_routes(fs::path(TESSERA_SOURCE_DIR) / "docs" / "openapi.yaml");

@@ -16,7 +16,7 @@
 #include <boost/asio/io_context.hpp>
 #include <nlohmann/json.hpp>
 
-#include "common/protocol_limits.hpp"
+#include "common/protocol/limits.hpp"
 #include "server/http_server.hpp"
 #include "server/router.hpp"
 #include "tests/process.hpp"
@@ -106,7 +106,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorThatStatesNoProtocol) {
 
 TEST(WorkerProtocol, AWorkerStopsAtACoordinatorOfALaterProtocol) {
   json reply = {{"id", "w-1"}, {"protocol", kWorkerProtocolVersion + 1}};
-  reply["limits"] = to_json(ProtocolLimits{});
+  reply["limits"] = protocol::to_json(ProtocolLimits{});
   const Outcome outcome = run_worker_against(reply, "v3");
   stops_with_status_1(outcome);
   EXPECT_NE(
@@ -116,12 +116,16 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorOfALaterProtocol) {
 }
 
 TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
-  json limits = to_json(ProtocolLimits{});
+  json limits = protocol::to_json(ProtocolLimits{});
   limits["max_result_tiles"] = 0;
-  const Outcome outcome = run_worker_against(
-      {{"id", "w-1"}, {"protocol", kWorkerProtocolVersion}, {"limits", limits}}, "zero");
+  const Outcome outcome = run_worker_against({{"id", "w-1"},
+                                              {"heartbeat_interval_s", 5},
+                                              {"lease_timeout_s", 30},
+                                              {"protocol", kWorkerProtocolVersion},
+                                              {"limits", limits}},
+                                             "zero");
   stops_with_status_1(outcome);
-  EXPECT_NE(outcome.log.find("limits/max_result_tiles: expected a positive integer"),
+  EXPECT_NE(outcome.log.find("/limits/max_result_tiles: must be an integer from 1"),
             std::string::npos)
       << outcome.log;
 }
@@ -130,21 +134,22 @@ TEST(ProtocolLimits, TheirJsonRoundTripsAndEveryLimitIsRequired) {
   ProtocolLimits limits = coordinator_limits(4096);
   EXPECT_EQ(limits.max_result_bytes, std::size_t{4096} * 4096 * 12);
   EXPECT_EQ(coordinator_limits(64).max_result_bytes, std::size_t{64} << 20);
-  const ParsedLimits parsed = limits_from_json(to_json(limits));
-  ASSERT_TRUE(parsed.limits) << parsed.error;
-  EXPECT_EQ(*parsed.limits, limits);
+  const auto read = [](const json& body) {
+    return protocol::read_limits(protocol::FieldReader(body));
+  };
+  EXPECT_EQ(read(protocol::to_json(limits)), limits);
   for (const char* key :
        {"max_result_tiles", "max_result_bytes", "max_batch_tiles", "max_lease_tiles"}) {
-    json missing = to_json(limits);
+    json missing = protocol::to_json(limits);
     missing.erase(key);
-    EXPECT_FALSE(limits_from_json(missing).limits) << key;
-    json negative = to_json(limits);
+    EXPECT_THROW(read(missing), protocol::ProtocolError) << key;
+    json negative = protocol::to_json(limits);
     negative[key] = -1;
-    EXPECT_FALSE(limits_from_json(negative).limits) << key;
+    EXPECT_THROW(read(negative), protocol::ProtocolError) << key;
   }
-  json huge = to_json(limits);
+  json huge = protocol::to_json(limits);
   huge["max_result_tiles"] = std::uint64_t{1} << 40;  // past an int
-  EXPECT_FALSE(limits_from_json(huge).limits);
+  EXPECT_THROW(read(huge), protocol::ProtocolError);
   EXPECT_EQ(with_thousands(1365), "1,365");
   EXPECT_EQ(with_thousands(999), "999");
   EXPECT_EQ(with_thousands(68157440), "68,157,440");

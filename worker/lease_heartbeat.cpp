@@ -1,15 +1,9 @@
 #include "worker/lease_heartbeat.hpp"
 
-#include "client/http_client.hpp"
-
 namespace tessera {
 
-LeaseHeartbeat::LeaseHeartbeat(std::string server_url, std::string token,
-                               std::chrono::milliseconds interval)
-    : server_url_(std::move(server_url)),
-      token_(std::move(token)),
-      interval_(interval),
-      thread_([this] { run(); }) {}
+LeaseHeartbeat::LeaseHeartbeat(CoordinatorClient& client, std::chrono::milliseconds interval)
+    : client_(client), interval_(interval), thread_([this] { run(); }) {}
 
 LeaseHeartbeat::~LeaseHeartbeat() {
   {
@@ -37,8 +31,6 @@ bool LeaseHeartbeat::end() {
 }
 
 void LeaseHeartbeat::run() {
-  HttpClient client(server_url_, std::chrono::seconds(10));
-  client.set_bearer_token(token_);
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     if (lease_id_.empty()) {
@@ -52,9 +44,10 @@ void LeaseHeartbeat::run() {
     lock.unlock();
     bool gone = false;
     try {
-      gone = client.request("POST", "/v1/leases/" + lease + "/heartbeat").status == 410;
-    } catch (const HttpError&) {
-      // Unreachable for now: the lease lives until its timeout; keep rendering.
+      gone = !client_.heartbeat(lease);
+    } catch (const std::exception&) {
+      // Unreachable for now, or an answer other than the lease's (a 503 from a proxy): the
+      // lease lives until its timeout; keep rendering.
     }
     lock.lock();
     if (gone && lease_id_ == lease) lost_ = true;

@@ -1,5 +1,6 @@
 // Keeps the lease of the tile being rendered alive: one thread for the worker's life, with
-// its own connection, so heartbeats never wait behind a claim or an upload.
+// a client of its own (the worker's lease concern), so heartbeats never wait behind a
+// claim or an upload.
 #pragma once
 
 #include <atomic>
@@ -9,12 +10,14 @@
 #include <string>
 #include <thread>
 
+#include "common/net/coordinator_client.hpp"
+
 namespace tessera {
 
 class LeaseHeartbeat {
  public:
-  // `token`: the worker token to send, "" for none.
-  LeaseHeartbeat(std::string server_url, std::string token, std::chrono::milliseconds interval);
+  // `client` is used by this heartbeat's thread only, and outlives it.
+  LeaseHeartbeat(CoordinatorClient& client, std::chrono::milliseconds interval);
   ~LeaseHeartbeat();
   LeaseHeartbeat(const LeaseHeartbeat&) = delete;
   LeaseHeartbeat& operator=(const LeaseHeartbeat&) = delete;
@@ -29,8 +32,7 @@ class LeaseHeartbeat {
  private:
   void run();
 
-  std::string server_url_;
-  std::string token_;
+  CoordinatorClient& client_;
   std::chrono::milliseconds interval_;
   std::mutex mutex_;
   std::condition_variable changed_;

@@ -13,13 +13,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "common/protocol_limits.hpp"
+#include "common/protocol/limits.hpp"
 #include "common/scene_parser.hpp"
 
 namespace tessera {
 namespace {
 
-using nlohmann::json;
 using namespace std::chrono_literals;
 
 std::string host_name() {
@@ -56,11 +55,11 @@ constexpr int kExtendTilesLeftPerThread = 2;
 // quarter batch leaves in well under a millisecond, less than the answer takes to come.
 constexpr double kAskAheadSeconds = 0.02;
 
-std::vector<ClaimedTile> tiles_of(const json& lease) {
+std::vector<ClaimedTile> tiles_of(const protocol::Lease& lease) {
   std::vector<ClaimedTile> tiles;
-  for (const json& tile : lease.at("tiles"))
-    tiles.push_back({tile.at("index"),
-                     TileRect{tile.at("x"), tile.at("y"), tile.at("width"), tile.at("height")}});
+  tiles.reserve(lease.tiles.size());
+  for (const protocol::LeaseTile& tile : lease.tiles)
+    tiles.push_back({tile.index, TileRect{tile.x, tile.y, tile.width, tile.height}});
   return tiles;
 }
 
@@ -69,21 +68,17 @@ std::vector<ClaimedTile> tiles_of(const json& lease) {
 WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
     : options_(std::move(options)),
       stop_(stop),
-      client_(options_.server_url,
-              std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
-      extend_client_(options_.server_url, std::chrono::seconds(15)) {
+      // A claim long-polls for claim_wait_s; the answer may take a while more.
+      control_(options_.server_url, options_.token,
+               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
+      heartbeat_client_(options_.server_url, options_.token, std::chrono::seconds(10)),
+      uploads_client_(options_.server_url, options_.token, kUploadTimeout) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
-  client_.set_bearer_token(options_.token);
-  for (int sender = 0; sender < kUploadSenders; ++sender) {
-    upload_clients_.push_back(std::make_unique<HttpClient>(options_.server_url, kUploadTimeout));
-    upload_clients_.back()->set_bearer_token(options_.token);
-  }
-  extend_client_.set_bearer_token(options_.token);
   uploads_ = std::make_unique<TileUploads>(
-      [this](int sender, const std::vector<FinishedTile>& tiles) {
-        return upload(*upload_clients_[sender], uploading_lease_, tiles);
+      [this](int, const std::vector<FinishedTile>& tiles) {
+        return upload(uploading_lease_, tiles);
       },
       kUploadGather, static_cast<std::size_t>(limits_.max_result_tiles), group_bytes(),
       kUploadSenders);
@@ -123,56 +118,37 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
 }
 
 bool WorkerDaemon::register_self() {
-  const json body = {{"name", options_.name},
-                     {"host", host_name()},
-                     {"threads", options_.threads},
-                     {"protocol", kWorkerProtocolVersion}};
-  const auto result =
-      with_retry("register", [&] { return client_.request("POST", "/v1/workers", body.dump()); });
-  if (!result) return false;
-  if (result->status != 201) {
-    spdlog::error("registration refused ({}): {}", result->status, result->body);
+  protocol::WorkerRegistration registration{options_.name, host_name(), options_.threads};
+  std::optional<protocol::Registration> reply;
+  try {
+    reply = with_retry("register", [&] { return control_.register_worker(registration); });
+  } catch (const ApiError& e) {
+    spdlog::error("registration refused ({}): {}", e.status(), e.what());
     // A refusal (another protocol, a wrong token) stands; a coordinator that could not
     // answer (5xx) may next time.
-    if (result->status < 500) incompatible_ = true;
+    if (e.status() < 500) incompatible_ = true;
     return false;
-  }
-  json reply;
-  try {
-    reply = json::parse(result->body);
-  } catch (const json::exception&) {
-    spdlog::error("registration answered with something other than JSON: {}",
-                  result->body.substr(0, 200));
+  } catch (const protocol::ProtocolMismatch& e) {
+    // A coordinator of another protocol (or one from before version 2, which states no
+    // limits) would refuse this worker's results, or misread them: stop here, saying why.
+    spdlog::error("{} ({})", e.message(), options_.server_url);
     incompatible_ = true;
     return false;
-  }
-  // A coordinator of another protocol (or one from before version 2, which states no
-  // limits) would refuse this worker's results, or misread them: stop here, saying why.
-  const auto version = reply.find("protocol");
-  if (version == reply.end() || !version->is_number_integer() ||
-      version->get<std::int64_t>() != kWorkerProtocolVersion) {
+  } catch (const protocol::ProtocolError& e) {
     spdlog::error(
-        "the coordinator at {} speaks worker protocol {}, this worker {}: run the same Tessera "
-        "release on both",
-        options_.server_url, version == reply.end() ? "1 (it states none)" : version->dump(),
-        kWorkerProtocolVersion);
+        "the coordinator at {} answered the registration with something this worker "
+        "cannot keep to: {}",
+        options_.server_url, e.what());
     incompatible_ = true;
     return false;
   }
-  const ParsedLimits limits = limits_from_json(reply.value("limits", json()));
-  if (!limits.limits) {
-    spdlog::error("the coordinator at {} stated no usable limits at registration ({})",
-                  options_.server_url, limits.error);
-    incompatible_ = true;
-    return false;
-  }
-  limits_ = *limits.limits;
+  if (!reply) return false;
+  limits_ = reply->limits;
   uploads_->set_limits(static_cast<std::size_t>(limits_.max_result_tiles), group_bytes());
-  worker_id_ = reply.at("id").get<std::string>();
-  const double interval_s = reply.value("heartbeat_interval_s", 5.0);
+  worker_id_ = reply->id;
   heartbeat_ = std::make_unique<LeaseHeartbeat>(
-      options_.server_url, options_.token,
-      std::chrono::milliseconds(static_cast<long>(interval_s * 1000)));
+      heartbeat_client_,
+      std::chrono::milliseconds(static_cast<long>(reply->heartbeat_interval_s * 1000)));
   spdlog::info("registered as {} ({}, {} threads; results of at most {} tiles and {} bytes)",
                worker_id_, options_.name, options_.threads, limits_.max_result_tiles,
                group_bytes());
@@ -193,22 +169,23 @@ int WorkerDaemon::batch_tiles(double tile_thread_seconds) const {
 }
 
 std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
-  const std::string target = "/v1/workers/" + worker_id_ +
-                             "/claim?wait_s=" + std::to_string(options_.claim_wait_s) +
-                             "&max_tiles=" + std::to_string(batch_tiles(tile_thread_seconds_));
-  const auto result = with_retry("claim", [&] { return client_.request("POST", target); });
-  if (!result || result->status == 204) return std::nullopt;
-  if (result->status == 404) {  // the coordinator forgot us (a new data dir): join again
-    register_self();
-    return std::nullopt;
-  }
-  if (result->status != 200) {
-    spdlog::warn("claim answered {}: {}", result->status, result->body);
+  std::optional<std::optional<protocol::Lease>> lease;
+  try {
+    lease = with_retry("claim", [&] {
+      return control_.claim(worker_id_, options_.claim_wait_s, batch_tiles(tile_thread_seconds_));
+    });
+  } catch (const ApiError& e) {
+    if (e.status() == 404) {  // the coordinator forgot us (a new data dir): join again
+      register_self();
+      return std::nullopt;
+    }
+    spdlog::warn("claim answered {}: {}", e.status(), e.what());
     std::this_thread::sleep_for(1s);
     return std::nullopt;
   }
-  const json lease = json::parse(result->body);
-  return Claimed{lease.at("id"), lease.at("job_id"), lease.at("scene_digest"), tiles_of(lease)};
+  if (!lease || !*lease) return std::nullopt;
+  const protocol::Lease& l = **lease;
+  return Claimed{l.id, l.job_id, l.scene_digest, tiles_of(l)};
 }
 
 std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& lease_id,
@@ -216,11 +193,9 @@ std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& 
   // One try: without an answer the lease simply ends with the tiles it has, and the next
   // claim goes through with_retry().
   try {
-    const auto result = extend_client_.request(
-        "POST", "/v1/leases/" + lease_id +
-                    "/extend?max_tiles=" + std::to_string(batch_tiles(tile_thread_seconds)));
-    if (result.status != 200) return std::nullopt;
-    return tiles_of(json::parse(result.body));
+    const auto lease = control_.extend(lease_id, batch_tiles(tile_thread_seconds));
+    if (!lease) return std::nullopt;
+    return tiles_of(*lease);
   } catch (const std::exception&) {
     return std::nullopt;
   }
@@ -228,13 +203,17 @@ std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& 
 
 const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   if (auto it = renderers_.find(digest); it != renderers_.end()) return *it->second;
-  const auto result =
-      with_retry("scene", [&] { return client_.request("GET", "/v1/scenes/" + digest); });
-  if (!result || result->status != 200) throw std::runtime_error("cannot fetch scene " + digest);
+  std::optional<std::string> scene;
+  try {
+    scene = with_retry("scene", [&] { return control_.scene(digest); });
+  } catch (const ApiError& e) {
+    throw std::runtime_error("cannot fetch scene " + digest + ": " + e.what());
+  }
+  if (!scene) throw std::runtime_error("cannot fetch scene " + digest);
   if (renderers_.size() >= kMaxCachedScenes) renderers_.erase(renderers_.begin());
   // The coordinator validated the scene against its own limits, which may be above the
   // defaults: here it is only rebuilt.
-  auto renderer = std::make_unique<Renderer>(parse_scene_text(result->body, Limits::none()));
+  auto renderer = std::make_unique<Renderer>(parse_scene_text(*scene, Limits::none()));
   return *renderers_.emplace(digest, std::move(renderer)).first->second;
 }
 
@@ -333,48 +312,44 @@ void WorkerDaemon::render(const Claimed& lease) {
   if (rendered < count) release(lease.lease_id);  // stopping: give back what was not rendered
 }
 
-bool WorkerDaemon::upload(HttpClient& client, const std::string& lease_id,
-                          const std::vector<FinishedTile>& tiles) {
+bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles) {
   std::string body;
-  std::string indexes;
-  std::string rays;
+  std::vector<std::uint64_t> indexes;
+  std::vector<std::uint64_t> rays;
   std::size_t bytes = 0;
   for (const FinishedTile& tile : tiles) bytes += tile.pixels.size() * sizeof(float);
   body.reserve(bytes);
+  indexes.reserve(tiles.size());
+  rays.reserve(tiles.size());
   for (const FinishedTile& tile : tiles) {
     body.append(reinterpret_cast<const char*>(tile.pixels.data()),
                 tile.pixels.size() * sizeof(float));
-    indexes += (indexes.empty() ? "" : ",") + std::to_string(tile.index);
-    rays += (rays.empty() ? "" : ",") + std::to_string(tile.rays);
+    indexes.push_back(static_cast<std::uint64_t>(tile.index));
+    rays.push_back(tile.rays);
   }
-  const auto result = with_retry("upload", [&] {
-    return client.request("PUT", "/v1/leases/" + lease_id + "/result", body,
-                          "application/octet-stream",
-                          {{"X-Tessera-Tiles", indexes}, {"X-Tessera-Rays", rays}});
-  });
-  if (!result) return true;  // stopping while unreachable: the lease will expire
-  if (result->status == 200) return true;
-  if (result->status == 409 || result->status == 410 || result->status >= 500) {
-    // The lease is no longer ours, or the coordinator could not take it (a full disk fails
-    // the job, which says so): nothing this worker sent was wrong.
-    spdlog::info("result for lease {} refused ({}): {}", lease_id, result->status, result->body);
-    return false;
-  }
-  // Anything else is a bug, or a coordinator of another build: said loudly, and reported.
-  std::string message = result->body;
   try {
-    message = json::parse(result->body).at("error").at("message").get<std::string>();
-  } catch (const std::exception&) {
-  }
-  const std::string error = "the coordinator refused a result of " + std::to_string(tiles.size()) +
-                            " tiles (" + std::to_string(bytes) + " bytes) with " +
-                            std::to_string(result->status) + ": " + message;
-  spdlog::error("lease {}: {}", lease_id, error);
-  {
+    with_retry("upload", [&] { return uploads_client_.upload(lease_id, indexes, rays, body); });
+    return true;  // taken, or stopping while unreachable (the lease will expire)
+  } catch (const ApiError& e) {
+    if (e.status() == 409 || e.status() == 410 || e.status() >= 500) {
+      // The lease is no longer ours, or the coordinator could not take it (a full disk fails
+      // the job, which says so): nothing this worker sent was wrong.
+      spdlog::info("result for lease {} refused ({}): {}", lease_id, e.status(), e.what());
+      return false;
+    }
+    // Anything else is a bug, or a coordinator of another build: said loudly, and reported.
+    const std::string error = "the coordinator refused a result of " +
+                              std::to_string(tiles.size()) + " tiles (" + std::to_string(bytes) +
+                              " bytes) with " + std::to_string(e.status()) + ": " + e.what();
+    spdlog::error("lease {}: {}", lease_id, error);
     std::lock_guard lock(refusal_mutex_);
     if (!refusal_) refusal_.emplace(tiles.front().index, error);
+    return false;
+  } catch (const protocol::ProtocolError& e) {
+    // Taken (a 2xx), with an answer this build does not read: the pixels are there.
+    spdlog::warn("lease {}: the coordinator's answer to a result: {}", lease_id, e.what());
+    return true;
   }
-  return false;
 }
 
 std::optional<std::pair<int, std::string>> WorkerDaemon::take_refusal() {
@@ -383,15 +358,20 @@ std::optional<std::pair<int, std::string>> WorkerDaemon::take_refusal() {
 }
 
 void WorkerDaemon::interrupt() {
-  client_.interrupt();
-  extend_client_.interrupt();  // a lease's threads may wait on an extension
+  control_.interrupt();  // a claim's long poll, or an extension a lease's threads wait on
 }
 
 void WorkerDaemon::report_failure(const std::string& lease_id, int tile_index,
                                   const std::string& error) {
-  const std::string body = json{{"tile", tile_index}, {"error", error}}.dump();
-  with_retry("failure report",
-             [&] { return client_.request("POST", "/v1/leases/" + lease_id + "/fail", body); });
+  try {
+    with_retry("failure report", [&] {
+      control_.fail(lease_id, {tile_index, error});
+      return true;
+    });
+  } catch (const ApiError& e) {
+    spdlog::warn("the failure report for lease {} was refused ({}): {}", lease_id, e.status(),
+                 e.what());
+  }
 }
 
 void WorkerDaemon::inject_fault(int tile_index) const {
@@ -414,11 +394,11 @@ void WorkerDaemon::inject_fault(int tile_index) const {
 }
 
 void WorkerDaemon::release(const std::string& lease_id) {
-  client_.clear_interrupt();  // a stop may have interrupted the client: this must still go out
+  control_.clear_interrupt();  // a stop may have interrupted the client: this must still go out
   try {
-    client_.request("POST", "/v1/leases/" + lease_id + "/release");
-  } catch (const HttpError&) {
-    // The lease will expire on its own.
+    control_.release(lease_id);
+  } catch (const std::exception&) {
+    // Unreachable, or refused: the lease will expire on its own.
   }
 }
 
@@ -443,10 +423,11 @@ int WorkerDaemon::run() {
       release(tile->lease_id);
     }
   }
-  client_.clear_interrupt();
+  control_.clear_interrupt();
   try {
-    client_.request("DELETE", "/v1/workers/" + worker_id_);
-  } catch (const HttpError&) {
+    control_.leave(worker_id_);
+  } catch (const std::exception&) {
+    // Its leases expire and it shows as gone after a while.
   }
   spdlog::info("worker {} stopped after rendering {} tiles", worker_id_, tiles_rendered_.load());
   return incompatible_ ? 1 : 0;

@@ -11,11 +11,10 @@
 #include <optional>
 #include <string>
 
-#include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
-#include "client/http_client.hpp"
-#include "common/protocol_limits.hpp"
+#include "common/net/coordinator_client.hpp"
+#include "common/protocol/limits.hpp"
 #include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
 #include "worker/renderer.hpp"
@@ -73,8 +72,7 @@ class WorkerDaemon {
                                                  double tile_thread_seconds);
   // Sends one group; false when refused. A refusal other than a lost lease is kept for
   // take_refusal(): the first tile of the group and what the coordinator said.
-  bool upload(HttpClient& client, const std::string& lease_id,
-              const std::vector<FinishedTile>& tiles);
+  bool upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles);
   std::optional<std::pair<int, std::string>> take_refusal();
   void report_failure(const std::string& lease_id, int tile_index, const std::string& error);
   // Applies options_.fault to a tile about to be rendered.
@@ -88,7 +86,11 @@ class WorkerDaemon {
 
   WorkerOptions options_;
   const std::atomic<bool>& stop_;
-  HttpClient client_;
+  // One client per concern, each a pool of kept-alive connections (HttpClient):
+  CoordinatorClient
+      control_;  // registration, claims, extensions, scenes, reports; interrupted on stop
+  CoordinatorClient heartbeat_client_;  // the heartbeat thread's
+  CoordinatorClient uploads_client_;    // shared by the upload senders, a connection each
   std::string worker_id_;
   // What the coordinator stated at registration; until then the protocol's defaults.
   ProtocolLimits limits_;
@@ -97,10 +99,7 @@ class WorkerDaemon {
   bool incompatible_ = false;
   std::mutex refusal_mutex_;
   std::optional<std::pair<int, std::string>> refusal_;  // set by the upload threads
-  std::unique_ptr<LeaseHeartbeat> heartbeat_;  // made at registration, with its interval
-  // One per sender of uploads_, each used by that sender's thread only.
-  std::vector<std::unique_ptr<HttpClient>> upload_clients_;
-  HttpClient extend_client_;                   // used by a lease's BatchTiles only
+  std::unique_ptr<LeaseHeartbeat> heartbeat_;           // made at registration, with its interval
   std::string uploading_lease_;                // the lease uploads_ sends for
   std::unique_ptr<TileUploads> uploads_;
   double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet

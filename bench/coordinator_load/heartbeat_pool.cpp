@@ -1,4 +1,5 @@
 #include "bench/coordinator_load/heartbeat_pool.hpp"
+#include "common/protocol/paths.hpp"
 
 namespace tessera::load {
 
@@ -23,7 +24,7 @@ void HeartbeatPool::next(Link& link) {
     return;
   }
   link.busy = true;
-  link.target = "/v1/leases/" + queue_.front() + "/heartbeat";
+  link.target = protocol::fill(protocol::route::lease_heartbeat, queue_.front());
   queue_.pop_front();
   post(link, false);
 }

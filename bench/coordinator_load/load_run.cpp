@@ -20,6 +20,8 @@
 #include "bench/coordinator_load/heartbeat_pool.hpp"
 #include "bench/coordinator_load/server_process.hpp"
 #include "bench/coordinator_load/simulated_worker.hpp"
+#include "common/protocol/jobs.hpp"
+#include "common/protocol/paths.hpp"
 
 namespace tessera::load {
 namespace {
@@ -51,13 +53,13 @@ double quantile(const std::vector<float>& sorted, double q) {
 
 // A scene with nothing to render: only the image and the tile size matter here.
 nlohmann::json job_body(const LoadOptions& o) {
-  return {{"name", "coordinator-load"},
-          {"priority", 50},
-          {"scene",
-           {{"version", 1},
-            {"image", {{"width", o.width}, {"height", o.height}}},
-            {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40}}},
-            {"render", {{"samples_per_pixel", 1}, {"max_depth", 1}, {"tile_size", o.tile_size}}}}}};
+  return protocol::to_json(protocol::JobSubmission{
+      "coordinator-load",
+      50,
+      {{"version", 1},
+       {"image", {{"width", o.width}, {"height", o.height}}},
+       {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40}}},
+       {"render", {{"samples_per_pixel", 1}, {"max_depth", 1}, {"tile_size", o.tile_size}}}}});
 }
 
 class LoadRun {
@@ -151,21 +153,29 @@ class LoadRun {
     client_.connect([this](const error_code& ec) {
       if (ec) return fail_and_stop("connect for the submission: " + ec.message());
       submitted_ = steady::now();
-      client_.request("POST", "/v1/jobs", "Content-Type: application/json\r\n", body_,
-                      [this](const error_code& e, int status, std::string_view body) {
-        if (e || status != 201)
-          return fail_and_stop("submit: " + (e ? e.message() : std::to_string(status) + " " + std::string(body)));
-        accepted_ = steady::now();
-        const nlohmann::json job = nlohmann::json::parse(body);
-        job_id_ = job.at("id").get<std::string>();
-        tiles_total_ = job.at("tiles").at("total").get<std::int64_t>();
-        state_.timing = true;
-        cpu_at_accept_ = server_.pid ? process_cpu_seconds(server_.pid) : 0;
-        if (server_.pid) io_at_accept_ = process_io(server_.pid);
-        own_cpu_at_accept_ = own_cpu_seconds();
-        machine_at_accept_ = machine_cpu();
-        state_.on_uploaded();  // the parked workers may have finished a tiny job already
-      });
+      client_.request(
+          "POST", std::string(protocol::route::jobs), "Content-Type: application/json\r\n", body_,
+          [this](const error_code& e, int status, std::string_view body) {
+            if (e || status != 201)
+              return fail_and_stop(
+                  "submit: " +
+                  (e ? e.message() : std::to_string(status) + " " + std::string(body)));
+            accepted_ = steady::now();
+            protocol::JobStatus job;
+            try {
+              job = protocol::read_body<protocol::JobStatus>(body);
+            } catch (const protocol::ProtocolError& error) {
+              return fail_and_stop(std::string("submit: ") + error.what());
+            }
+            job_id_ = job.id;
+            tiles_total_ = job.tiles.total;
+            state_.timing = true;
+            cpu_at_accept_ = server_.pid ? process_cpu_seconds(server_.pid) : 0;
+            if (server_.pid) io_at_accept_ = process_io(server_.pid);
+            own_cpu_at_accept_ = own_cpu_seconds();
+            machine_at_accept_ = machine_cpu();
+            state_.on_uploaded();  // the parked workers may have finished a tiny job already
+          });
     });
   }
 
@@ -193,16 +203,21 @@ class LoadRun {
   }
 
   void check_job() {
-    client_.request("GET", "/v1/jobs/" + job_id_, "", {},
-                    [this](const error_code& ec, int status, std::string_view body) {
-      if (ec || status != 200) {
-        state_.record_error("job status: " + (ec ? ec.message() : std::to_string(status)));
-      } else {
-        final_state_ = nlohmann::json::parse(body).at("state").get<std::string>();
-        if (final_state_ != "completed") state_.record_error("the job ended " + final_state_);
-      }
-      stop();
-    });
+    client_.request(
+        "GET", protocol::job_target(job_id_), "", {},
+        [this](const error_code& ec, int status, std::string_view body) {
+          if (ec || status != 200) {
+            state_.record_error("job status: " + (ec ? ec.message() : std::to_string(status)));
+          } else {
+            try {
+              final_state_ = to_string(protocol::read_body<protocol::JobStatus>(body).state);
+            } catch (const protocol::ProtocolError& error) {
+              final_state_ = error.what();
+            }
+            if (final_state_ != "completed") state_.record_error("the job ended " + final_state_);
+          }
+          stop();
+        });
   }
 
   // Resident memory every 100 ms, for the peak during the run.
@@ -243,7 +258,9 @@ class LoadRun {
         if (!ec) sample();
       });
     };
-    const std::string target = "/v1/jobs/" + job_id_ + "/image?format=" + format;
+    const ImageFormat* named = image_format_named(format);
+    const std::string target =
+        protocol::image_target(job_id_, named ? *named : kImageFormats[0], false);
     const auto start = steady::now();
     http.connect([&](const error_code& ec) {
       if (ec) {

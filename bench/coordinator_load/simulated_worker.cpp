@@ -1,8 +1,8 @@
 #include "bench/coordinator_load/simulated_worker.hpp"
 
-#include "common/protocol_limits.hpp"
-
-#include <nlohmann/json.hpp>
+#include "common/protocol/leases.hpp"
+#include "common/protocol/paths.hpp"
+#include "common/protocol/workers.hpp"
 
 namespace tessera::load {
 
@@ -43,22 +43,24 @@ void SimulatedWorker::start() {
 void SimulatedWorker::do_register() {
   static const std::string json_header = "Content-Type: application/json\r\n";
   // Kept in a member: the body must outlive the request.
-  register_body_ =
-      nlohmann::json{
-          {"name", name_}, {"host", "load"}, {"threads", 1}, {"protocol", kWorkerProtocolVersion}}
-          .dump();
-  http_.request("POST", "/v1/workers", json_header, register_body_,
-                [this](const error_code& ec, int status, std::string_view body) {
-    if (ec || status != 201)
-      return state_.fail(name_ + ": register: " + (ec ? ec.message() : std::to_string(status)));
-    const nlohmann::json reply = nlohmann::json::parse(body);
-    id_ = reply.at("id").get<std::string>();
-    state_.heartbeat_interval = std::chrono::milliseconds(
-        static_cast<long>(reply.value("heartbeat_interval_s", 5.0) * 1000));
-    claim_target_ = "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(state_.claim_wait_s) +
-                    "&max_tiles=" + std::to_string(state_.max_tiles);
-    do_claim();
-  });
+  register_body_ = protocol::to_json(protocol::WorkerRegistration{name_, "load", 1}).dump();
+  http_.request(
+      "POST", std::string(protocol::route::workers), json_header, register_body_,
+      [this](const error_code& ec, int status, std::string_view body) {
+        if (ec || status != 201)
+          return state_.fail(name_ + ": register: " + (ec ? ec.message() : std::to_string(status)));
+        protocol::Registration reply;
+        try {
+          reply = protocol::read_body<protocol::Registration>(body);
+        } catch (const protocol::ProtocolError& e) {
+          return state_.fail(name_ + ": register: " + e.what());
+        }
+        id_ = reply.id;
+        state_.heartbeat_interval =
+            std::chrono::milliseconds(static_cast<long>(reply.heartbeat_interval_s * 1000));
+        claim_target_ = protocol::claim_target(id_, state_.claim_wait_s, state_.max_tiles);
+        do_claim();
+      });
 }
 
 void SimulatedWorker::do_claim() {
@@ -87,13 +89,18 @@ void SimulatedWorker::on_claim(int status, std::string_view body) {
     state_.claim_latency_ms.push_back(
         std::chrono::duration<float, std::milli>(std::chrono::steady_clock::now() - claim_sent_).count());
   ++state_.leases;
-  const nlohmann::json lease = nlohmann::json::parse(body);
-  lease_target_ = "/v1/leases/" + lease.at("id").get<std::string>() + "/result";
+  protocol::Lease lease;
+  try {
+    lease = protocol::read_body<protocol::Lease>(body);
+  } catch (const protocol::ProtocolError& e) {
+    return state_.fail(name_ + ": claim: " + e.what());
+  }
+  lease_id_ = lease.id;
+  lease_target_ = protocol::fill(protocol::route::lease_result, lease.id);
   tiles_.clear();
-  for (const nlohmann::json& tile : lease.at("tiles"))
-    tiles_.push_back({tile.at("index").get<int>(),
-                      tile.at("width").get<std::size_t>() * tile.at("height").get<std::size_t>() * 3 *
-                          sizeof(float)});
+  for (const protocol::LeaseTile& tile : lease.tiles)
+    tiles_.push_back({tile.index, static_cast<std::size_t>(tile.width) *
+                                      static_cast<std::size_t>(tile.height) * 3 * sizeof(float)});
   next_tile_ = 0;
   schedule_heartbeat();
   if (state_.render_time.count() == 0) return do_upload();
@@ -106,11 +113,9 @@ void SimulatedWorker::on_claim(int status, std::string_view body) {
 void SimulatedWorker::schedule_heartbeat() {
   // Every interval while the lease owes tiles, as worker/lease_heartbeat.cpp does.
   heartbeat_timer_.expires_after(state_.heartbeat_interval);
-  heartbeat_timer_.async_wait([this, lease = lease_target_](const error_code& ec) {
-    if (ec || state_.finished || lease != lease_target_ || next_tile_ == tiles_.size()) return;
-    // "/v1/leases/ID/result" -> "ID"
-    const std::size_t start = std::string("/v1/leases/").size();
-    state_.heartbeat(lease_target_.substr(start, lease_target_.rfind('/') - start));
+  heartbeat_timer_.async_wait([this, lease = lease_id_](const error_code& ec) {
+    if (ec || state_.finished || lease != lease_id_ || next_tile_ == tiles_.size()) return;
+    state_.heartbeat(lease_id_);
     schedule_heartbeat();
   });
 }
@@ -123,28 +128,31 @@ void SimulatedWorker::do_upload() {
   }
   // Whole tiles up to the byte limit, and always at least one (worker/tile_uploads.cpp).
   std::size_t bytes = 0;
-  std::string indexes;
-  std::string rays;
+  std::vector<std::uint64_t> indexes;
   group_end_ = next_tile_;
   while (group_end_ < tiles_.size() &&
          (group_end_ == next_tile_ || bytes + tiles_[group_end_].bytes <= state_.max_upload_bytes)) {
     bytes += tiles_[group_end_].bytes;
-    if (!indexes.empty()) {
-      indexes += ',';
-      rays += ',';
-    }
-    indexes += std::to_string(tiles_[group_end_].index);
-    rays += "1000";
+    indexes.push_back(static_cast<std::uint64_t>(tiles_[group_end_].index));
     ++group_end_;
   }
-  upload_headers_ = "Content-Type: application/octet-stream\r\nX-Tessera-Tiles: " + indexes +
-                    "\r\nX-Tessera-Rays: " + rays + "\r\n";
+  const std::vector<std::uint64_t> rays(indexes.size(), 1000);
+  upload_headers_ = "Content-Type: " + std::string(protocol::kPixelsContentType) + "\r\n" +
+                    std::string(protocol::kTilesHeader) + ": " + protocol::number_list(indexes) +
+                    "\r\n" + std::string(protocol::kRaysHeader) + ": " +
+                    protocol::number_list(rays) + "\r\n";
   const std::span<const char> body(state_.pixels.data(), std::min(bytes, state_.pixels.size()));
   http_.request("PUT", lease_target_, upload_headers_, body,
                 [this](const error_code& ec, int status, std::string_view answer) {
     if (state_.finished) return;
     if (ec) return state_.fail(name_ + ": upload: " + ec.message());
-    if (status != 200 || answer.find("\"accepted\"") == std::string_view::npos)
+    bool accepted = false;
+    try {
+      accepted = status == 200 && protocol::read_body<protocol::ResultAnswer>(answer).status ==
+                                      protocol::ResultStatus::accepted;
+    } catch (const protocol::ProtocolError&) {
+    }
+    if (!accepted)
       return state_.fail(name_ + ": upload answered " + std::to_string(status) + ": " +
                          std::string(answer));
     ++state_.uploads;

@@ -78,6 +78,7 @@ class SimulatedWorker {
   bool parked_once_ = false;
   bool timed_ = false;
   std::chrono::steady_clock::time_point claim_sent_;
+  std::string lease_id_;
   std::string lease_target_;  // "/v1/leases/ID/result"
   std::vector<Tile> tiles_;
   std::size_t next_tile_ = 0;  // first tile not yet uploaded

@@ -1,4 +1,4 @@
-#include "common/protocol_limits.hpp"
+#include "common/protocol/limits.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -24,42 +24,27 @@ ProtocolLimits coordinator_limits(int max_tile_size) {
   return limits;
 }
 
-nlohmann::json to_json(const ProtocolLimits& limits) {
+nlohmann::json protocol::to_json(const ProtocolLimits& limits) {
   return {{kMaxResultTiles, limits.max_result_tiles},
           {kMaxResultBytes, limits.max_result_bytes},
           {kMaxBatchTiles, limits.max_batch_tiles},
           {kMaxLeaseTiles, limits.max_lease_tiles}};
 }
 
-ParsedLimits limits_from_json(const nlohmann::json& json) {
-  if (!json.is_object()) return {std::nullopt, "limits: expected an object"};
-  ProtocolLimits limits;
-  std::string error;
-  // Each limit must be there, and a whole number of at least 1: a coordinator that states
-  // 0 or nothing is not one this worker can keep to.
+ProtocolLimits protocol::read_limits(const FieldReader& json) {
+  // Each within its field's type, so that no coordinator's number wraps around here.
   const auto read = [&](const char* key, auto& field) {
     using Field = std::remove_reference_t<decltype(field)>;
-    if (!error.empty()) return;
-    const auto it = json.find(key);
-    // Signed or unsigned as JSON goes: a number parsed from text is unsigned, one built
-    // in memory may be either.
-    const bool whole = it != json.end() && it->is_number_integer();
-    const bool positive =
-        whole && (it->is_number_unsigned() || it->template get<std::int64_t>() >= 1);
-    if (!positive || it->template get<std::uint64_t>() < 1 ||
-        it->template get<std::uint64_t>() >
-            static_cast<std::uint64_t>(std::numeric_limits<Field>::max())) {
-      error = std::string("limits/") + key + ": expected a positive integer";
-      return;
-    }
-    field = static_cast<Field>(it->template get<std::uint64_t>());
+    const std::uint64_t most = std::min<std::uint64_t>(std::numeric_limits<Field>::max(),
+                                                       std::numeric_limits<std::int64_t>::max());
+    field = static_cast<Field>(json.integer(key, 1, static_cast<std::int64_t>(most)));
   };
+  ProtocolLimits limits;
   read(kMaxResultTiles, limits.max_result_tiles);
   read(kMaxResultBytes, limits.max_result_bytes);
   read(kMaxBatchTiles, limits.max_batch_tiles);
   read(kMaxLeaseTiles, limits.max_lease_tiles);
-  if (!error.empty()) return {std::nullopt, error};
-  return {limits, ""};
+  return limits;
 }
 
 std::string with_thousands(std::uint64_t n) {

@@ -1,4 +1,4 @@
-#include "client/http_client.hpp"
+#include "common/net/http_client.hpp"
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 
@@ -8,12 +8,14 @@
 #include <charconv>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <optional>
+#include <set>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/post.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
@@ -38,7 +40,8 @@ std::string lower(beast::string_view text) {
 }
 
 [[noreturn]] void bad_url(std::string_view url, std::string_view why) {
-  throw std::invalid_argument("invalid server URL \"" + std::string(url) + "\": " + std::string(why));
+  throw std::invalid_argument("invalid server URL \"" + std::string(url) +
+                              "\": " + std::string(why));
 }
 
 // The server closed a kept-alive connection before (or while) we reused it: harmless,
@@ -56,13 +59,16 @@ BaseUrl parse_base_url(std::string_view url) {
   if (scheme_end == std::string_view::npos) bad_url(url, "expected http://host[:port]");
   const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
   if (scheme == "https")
-    bad_url(url, "https is not supported; the coordinator speaks plain http:// (terminate TLS in a proxy)");
+    bad_url(
+        url,
+        "https is not supported; the coordinator speaks plain http:// (terminate TLS in a proxy)");
   if (scheme != "http") bad_url(url, "expected http://host[:port]");
 
   std::string_view authority = url.substr(scheme_end + 3);
   const std::size_t slash = authority.find('/');
   if (slash != std::string_view::npos) {
-    if (authority.substr(slash) != "/") bad_url(url, "a path is not allowed; expected http://host[:port]");
+    if (authority.substr(slash) != "/")
+      bad_url(url, "a path is not allowed; expected http://host[:port]");
     authority = authority.substr(0, slash);
   }
 
@@ -90,20 +96,28 @@ BaseUrl parse_base_url(std::string_view url) {
   if (result.host.find('@') != std::string::npos) bad_url(url, "user information is not supported");
   if (!port_text.empty()) {
     unsigned value = 0;
-    const auto [end, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), value);
-    if (ec != std::errc() || end != port_text.data() + port_text.size() || value == 0 || value > 65535)
+    const auto [end, ec] =
+        std::from_chars(port_text.data(), port_text.data() + port_text.size(), value);
+    if (ec != std::errc() || end != port_text.data() + port_text.size() || value == 0 ||
+        value > 65535)
       bad_url(url, "the port must be a number from 1 to 65535");
     result.port = static_cast<std::uint16_t>(value);
   }
   return result;
 }
 
+namespace {
+
+std::string host_header_of(const BaseUrl& url) {
+  const bool v6 = url.host.find(':') != std::string::npos;
+  return (v6 ? "[" + url.host + "]" : url.host) + ":" + std::to_string(url.port);
+}
+
+}  // namespace
+
 struct HttpClient::Connection {
   Connection(BaseUrl base, std::chrono::milliseconds limit)
-      : url(std::move(base)), timeout(limit), stream(io) {
-    const bool v6 = url.host.find(':') != std::string::npos;
-    host_header = (v6 ? "[" + url.host + "]" : url.host) + ":" + std::to_string(url.port);
-  }
+      : url(std::move(base)), host_header(host_header_of(url)), timeout(limit), stream(io) {}
 
   // Runs one asynchronous operation to completion on the private io_context: the
   // asynchronous form is what gives tcp_stream its timeouts.
@@ -122,13 +136,17 @@ struct HttpClient::Connection {
     tcp::resolver resolver(io);
     error_code ec;
     const auto endpoints = resolver.resolve(url.host, std::to_string(url.port), ec);
-    if (ec) throw HttpError(HttpError::Kind::connect_failed, "cannot resolve " + url.host + ": " + ec.message());
+    if (ec)
+      throw HttpError(HttpError::Kind::connect_failed,
+                      "cannot resolve " + url.host + ": " + ec.message());
     stream.expires_after(timeout);
     ec = run([&](auto handler) { stream.async_connect(endpoints, std::move(handler)); });
     if (ec == beast::error::timeout)
       throw HttpError(HttpError::Kind::timeout, "connecting to " + where() + " timed out after " +
                                                     std::to_string(timeout.count()) + " ms");
-    if (ec) throw HttpError(HttpError::Kind::connect_failed, "cannot connect to " + where() + ": " + ec.message());
+    if (ec)
+      throw HttpError(HttpError::Kind::connect_failed,
+                      "cannot connect to " + where() + ": " + ec.message());
     stream.socket().set_option(tcp::no_delay(true), ec);
     buffer.clear();
     open = true;
@@ -188,47 +206,98 @@ struct HttpClient::Connection {
   BaseUrl url;
   std::string host_header;
   std::chrono::milliseconds timeout;
-  std::atomic<bool> interrupted{false};
   net::io_context io;
   beast::tcp_stream stream;  // after io, which it uses
   beast::flat_buffer buffer;
   bool open = false;
 };
 
+// The connections of one client: those kept alive between requests, and those a request
+// is using, which interrupt() reaches.
+struct HttpClient::Pool {
+  explicit Pool(BaseUrl base, std::chrono::milliseconds limit)
+      : url(std::move(base)), where("http://" + host_header_of(url)), timeout(limit) {}
+
+  // Also the interrupt generation it is taken in, which give_back() compares.
+  std::unique_ptr<Connection> take(std::uint64_t& taken_in) {
+    std::unique_ptr<Connection> c;
+    {
+      std::lock_guard lock(mutex);
+      if (!idle.empty()) {
+        c = std::move(idle.back());
+        idle.pop_back();
+      }
+    }
+    if (!c) c = std::make_unique<Connection>(url, timeout.load());
+    c->timeout = timeout.load();
+    std::lock_guard lock(mutex);
+    busy.insert(c.get());
+    taken_in = interrupts;
+    return c;
+  }
+
+  // Kept for the next request while it is open; a connection an interrupt may have reached
+  // is not kept (the cancel posted to it could still be queued).
+  void give_back(std::unique_ptr<Connection> c, std::uint64_t taken_in) {
+    std::lock_guard lock(mutex);
+    busy.erase(c.get());
+    if (c->open && !interrupted && interrupts == taken_in) idle.push_back(std::move(c));
+  }
+
+  BaseUrl url;
+  std::string where;
+  std::uint64_t interrupts = 0;  // interrupt() calls so far, under the mutex
+  std::atomic<std::chrono::milliseconds> timeout;
+  std::atomic<bool> interrupted{false};
+  std::mutex mutex;
+  std::vector<std::unique_ptr<Connection>> idle;
+  std::set<Connection*> busy;
+};
+
 HttpClient::HttpClient(std::string base_url, std::chrono::milliseconds timeout)
     : base_url_(std::move(base_url)),
-      connection_(std::make_unique<Connection>(parse_base_url(base_url_), timeout)) {}
+      pool_(std::make_unique<Pool>(parse_base_url(base_url_), timeout)) {}
 
 HttpClient::~HttpClient() = default;
 HttpClient::HttpClient(HttpClient&&) noexcept = default;
 HttpClient& HttpClient::operator=(HttpClient&&) noexcept = default;
 
-void HttpClient::set_timeout(std::chrono::milliseconds timeout) { connection_->timeout = timeout; }
+void HttpClient::set_timeout(std::chrono::milliseconds timeout) { pool_->timeout = timeout; }
 
 void HttpClient::set_bearer_token(std::string token) {
   authorization_ = token.empty() ? "" : "Bearer " + token;
 }
 
 void HttpClient::interrupt() {
-  Connection& c = *connection_;
-  c.interrupted = true;
+  std::lock_guard lock(pool_->mutex);
+  pool_->interrupted = true;
+  ++pool_->interrupts;
   // Posting is what io_context allows from another thread; the cancel then runs on the
   // requesting thread, inside its run(), and aborts the operation under way.
-  net::post(c.io, [&c] { c.stream.cancel(); });
+  for (Connection* c : pool_->busy) net::post(c->io, [c] { c->stream.cancel(); });
+  pool_->idle.clear();
 }
 
-void HttpClient::clear_interrupt() {
-  Connection& c = *connection_;
-  c.interrupted = false;
-  // A cancel posted while no request ran is still queued: run it now, harmlessly.
-  c.io.restart();
-  c.io.poll();
-  if (c.open) c.close();
-}
+void HttpClient::clear_interrupt() { pool_->interrupted = false; }
 
 HttpResult HttpClient::request(std::string_view method, std::string_view target, std::string body,
                                std::string_view content_type, const Headers& headers) {
-  Connection& c = *connection_;
+  const auto interrupted = [&] {
+    return HttpError(HttpError::Kind::interrupted, std::string(method) + " " + std::string(target) +
+                                                       " on " + pool_->where + ": interrupted");
+  };
+  if (pool_->interrupted) throw interrupted();
+  std::uint64_t taken_in = 0;
+  std::unique_ptr<Connection> connection = pool_->take(taken_in);
+  // Back to the pool however the request ends.
+  struct Return {
+    Pool& pool;
+    std::unique_ptr<Connection>& c;
+    std::uint64_t taken_in;
+    ~Return() { pool.give_back(std::move(c), taken_in); }
+  } give_back{*pool_, connection, taken_in};
+  Connection& c = *connection;
+
   http::request<http::string_body> message;
   message.version(11);
   const http::verb verb = http::string_to_verb(to_beast(method));
@@ -239,41 +308,41 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
   message.target(to_beast(target));
   message.set(http::field::host, c.host_header);
   message.set(http::field::user_agent, "tessera");
-  if (!body.empty() && !content_type.empty()) message.set(http::field::content_type, to_beast(content_type));
+  if (!body.empty() && !content_type.empty())
+    message.set(http::field::content_type, to_beast(content_type));
   if (!authorization_.empty()) message.set(http::field::authorization, authorization_);
   for (const auto& [name, value] : headers) message.set(name, value);
   message.body() = std::move(body);
   message.prepare_payload();
 
-  const auto interrupted = [&] {
-    return HttpError(HttpError::Kind::interrupted, std::string(method) + " " + std::string(target) +
-                                                       " on " + c.where() + ": interrupted");
-  };
   for (int attempt = 0;; ++attempt) {
-    if (c.interrupted) throw interrupted();
+    if (pool_->interrupted) throw interrupted();
     const bool reused = c.open;
     if (!c.open) {
       try {
         c.connect();
       } catch (const HttpError&) {
-        if (c.interrupted) throw interrupted();  // the interrupt canceled the connect
+        if (pool_->interrupted) throw interrupted();  // the interrupt canceled the connect
         throw;
       }
     }
     Connection::Outcome outcome = c.exchange(message);
     if (outcome.result) return std::move(*outcome.result);
     c.close();
-    if (c.interrupted) throw interrupted();
+    if (pool_->interrupted) throw interrupted();
     if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) continue;
 
     const std::string what = std::string(method) + " " + std::string(target) + " on " + c.where();
     if (outcome.error == beast::error::timeout)
-      throw HttpError(HttpError::Kind::timeout, what + ": no answer within " +
-                                                    std::to_string(c.timeout.count()) + " ms");
+      throw HttpError(HttpError::Kind::timeout,
+                      what + ": no answer within " + std::to_string(c.timeout.count()) + " ms");
     if (outcome.error.category() == http::make_error_code(http::error::end_of_stream).category() &&
-        outcome.error != http::error::end_of_stream && outcome.error != http::error::partial_message)
-      throw HttpError(HttpError::Kind::protocol, what + ": malformed answer: " + outcome.error.message());
-    throw HttpError(HttpError::Kind::protocol, what + ": connection failed: " + outcome.error.message());
+        outcome.error != http::error::end_of_stream &&
+        outcome.error != http::error::partial_message)
+      throw HttpError(HttpError::Kind::protocol,
+                      what + ": malformed answer: " + outcome.error.message());
+    throw HttpError(HttpError::Kind::protocol,
+                    what + ": connection failed: " + outcome.error.message());
   }
 }
 

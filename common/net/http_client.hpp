@@ -1,6 +1,8 @@
 // A small synchronous HTTP/1.1 client for talking to the coordinator: the CLI, the worker
-// daemon and the tests. One connection, kept alive between requests. Not thread-safe: use
-// one client per thread. No Asio or Beast in this header; they stay in http_client.cpp.
+// daemon and the tests. Safe to share between threads: each request takes a kept-alive
+// connection that no other request is using, or opens one, so threads that send at once
+// each have their own (a worker's two upload senders share one client). No Asio or Beast in
+// this header; they stay in http_client.cpp, the one place that would take TLS.
 #pragma once
 
 #include <chrono>
@@ -65,23 +67,26 @@ class HttpClient {
                      std::string_view content_type = "application/json",
                      const Headers& headers = {});
 
-  // For requests that may legitimately take long, such as a long-polled claim.
+  // For requests that may legitimately take long, such as a long-polled claim; from the
+  // next request on.
   void set_timeout(std::chrono::milliseconds timeout);
-  // Sent as "Authorization: Bearer TOKEN" with every request from now on; "" for none.
+  // Sent as "Authorization: Bearer TOKEN" with every request; "" for none. Set it before
+  // the client is shared.
   void set_bearer_token(std::string token);
-  // Safe from any thread: ends the request in progress, if any, and every later one, with
-  // an HttpError of kind `interrupted`, until clear_interrupt(). For a process that must
-  // not sit out a long poll when it is asked to stop.
+  // Ends the requests in progress, if any, and every later one, with an HttpError of kind
+  // `interrupted`, until clear_interrupt(). For a process that must not sit out a long
+  // poll when it is asked to stop.
   void interrupt();
-  // Makes the client usable again after interrupt(), on a new connection.
+  // Makes the client usable again after interrupt(), on new connections.
   void clear_interrupt();
   const std::string& base_url() const { return base_url_; }
 
  private:
   struct Connection;
+  struct Pool;
   std::string base_url_;
   std::string authorization_;  // the whole header value; "" for none
-  std::unique_ptr<Connection> connection_;
+  std::unique_ptr<Pool> pool_;
 };
 
 }  // namespace tessera

@@ -2,8 +2,6 @@
 // coordinator states its limits when a worker registers (POST /v1/workers) and the worker
 // keeps to them; a worker and a coordinator that speak different versions of the protocol
 // refuse each other there, clearly, instead of meeting later as refused results.
-//
-// Here until the typed protocol of issue #23 (common/protocol/) takes it in.
 #pragma once
 
 #include <cstddef>
@@ -12,6 +10,8 @@
 #include <string>
 
 #include <nlohmann/json_fwd.hpp>
+
+#include "common/protocol/field_reader.hpp"
 
 namespace tessera {
 
@@ -37,15 +37,13 @@ struct ProtocolLimits {
 // The coordinator's limits for scenes whose tiles are at most `max_tile_size` pixels wide.
 ProtocolLimits coordinator_limits(int max_tile_size);
 
-// As stated in the registration's answer: {"max_result_tiles": ..., ...}.
+namespace protocol {
+// As stated in the registration's answer (`Limits`): {"max_result_tiles": ..., ...}.
 nlohmann::json to_json(const ProtocolLimits& limits);
-// The limits of a registration's answer, or a message saying what is missing or wrong
-// (the worker refuses such a coordinator).
-struct ParsedLimits {
-  std::optional<ProtocolLimits> limits;
-  std::string error;
-};
-ParsedLimits limits_from_json(const nlohmann::json& limits);
+// Each limit must be there, and a whole number of at least 1: a coordinator that states 0
+// or nothing is not one a worker can keep to. Throws ProtocolError.
+ProtocolLimits read_limits(const FieldReader& limits);
+}  // namespace protocol
 
 // "1365" -> "1,365": counts in messages people read.
 std::string with_thousands(std::uint64_t n);

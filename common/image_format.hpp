@@ -1,0 +1,64 @@
+// The image file formats Tessera writes, each named once: its name in the API
+// (?format=png), its file extensions and its media type.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace tessera {
+
+enum class ImageFileKind { exr, png, jpg, tif, unknown };
+
+struct ImageFormat {
+  ImageFileKind kind;
+  std::string_view name;          // in the API's ?format= and on the command line
+  std::string_view extension;     // of the files written, with its dot
+  std::string_view alias;         // another extension read as the same format ("" for none)
+  std::string_view content_type;  // the HTTP media type
+};
+
+inline constexpr std::array<ImageFormat, 4> kImageFormats{{
+    {ImageFileKind::png, "png", ".png", "", "image/png"},
+    {ImageFileKind::exr, "exr", ".exr", "", "image/x-exr"},
+    {ImageFileKind::jpg, "jpg", ".jpg", ".jpeg", "image/jpeg"},
+    {ImageFileKind::tif, "tif", ".tif", ".tiff", "image/tiff"},
+}};
+
+inline const ImageFormat* image_format_named(std::string_view name) {
+  for (const ImageFormat& format : kImageFormats)
+    if (format.name == name) return &format;
+  return nullptr;
+}
+
+inline const ImageFormat& image_format_of(ImageFileKind kind) {
+  for (const ImageFormat& format : kImageFormats)
+    if (format.kind == kind) return format;
+  return kImageFormats.front();
+}
+
+// By the path's extension, in any case; nullptr for none of them.
+inline const ImageFormat* image_format_of_path(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const ImageFormat& format : kImageFormats)
+    if (!ext.empty() && (ext == format.extension || ext == format.alias)) return &format;
+  return nullptr;
+}
+
+// "png, exr, jpg or tif", for messages; with `dots`, ".png, .exr, .jpg or .tif".
+inline std::string image_format_names(bool dots = false) {
+  std::string text;
+  for (std::size_t i = 0; i < kImageFormats.size(); ++i) {
+    if (i > 0) text += i + 1 == kImageFormats.size() ? " or " : ", ";
+    text += dots ? kImageFormats[i].extension : kImageFormats[i].name;
+  }
+  return text;
+}
+
+}  // namespace tessera

@@ -1,0 +1,118 @@
+#include "common/net/coordinator_client.hpp"
+
+#include "common/protocol/paths.hpp"
+
+namespace tessera {
+
+namespace route = protocol::route;
+using protocol::fill;
+using protocol::read_body;
+
+CoordinatorClient::CoordinatorClient(const std::string& server_url, const std::string& token,
+                                     std::chrono::milliseconds timeout)
+    : http_(server_url, timeout) {
+  http_.set_bearer_token(token);
+}
+
+namespace {
+
+// The answer, when its status is below 400 or one of `accepted`; otherwise ApiError.
+HttpResult checked(HttpResult result, std::initializer_list<int> accepted = {}) {
+  if (result.status < 400) return result;
+  for (const int status : accepted)
+    if (result.status == status) return result;
+  if (auto error = protocol::error_of(result.body))
+    throw ApiError(result.status, std::move(*error));
+  throw ApiError(result.status,
+                 {"", protocol::error_message(result.status, result.body), {}, {}, {}});
+}
+
+}  // namespace
+
+HttpResult CoordinatorClient::call(std::string_view method, const std::string& target,
+                                   std::string body, std::initializer_list<int> accepted) {
+  return checked(http_.request(method, target, std::move(body)), accepted);
+}
+
+protocol::JobStatus CoordinatorClient::submit(const protocol::JobSubmission& submission) {
+  return read_body<protocol::JobStatus>(
+      call("POST", std::string(route::jobs), protocol::to_json(submission).dump()).body);
+}
+
+protocol::JobStatus CoordinatorClient::job(std::string_view id, double wait_s) {
+  return read_body<protocol::JobStatus>(call("GET", protocol::job_target(id, wait_s)).body);
+}
+
+protocol::JobList CoordinatorClient::jobs(std::optional<JobState> state, int limit) {
+  return read_body<protocol::JobList>(call("GET", protocol::jobs_target(state, limit)).body);
+}
+
+protocol::JobStatus CoordinatorClient::cancel(std::string_view id) {
+  return read_body<protocol::JobStatus>(call("POST", fill(route::job_cancel, id)).body);
+}
+
+void CoordinatorClient::remove(std::string_view id) { call("DELETE", fill(route::job, id)); }
+
+std::string CoordinatorClient::image(std::string_view id, const ImageFormat& format, bool partial) {
+  return call("GET", protocol::image_target(id, format, partial)).body;
+}
+
+protocol::WorkerList CoordinatorClient::workers() {
+  return read_body<protocol::WorkerList>(call("GET", std::string(route::workers)).body);
+}
+
+protocol::Registration CoordinatorClient::register_worker(
+    const protocol::WorkerRegistration& registration) {
+  return read_body<protocol::Registration>(
+      call("POST", std::string(route::workers), protocol::to_json(registration).dump()).body);
+}
+
+std::optional<protocol::Lease> CoordinatorClient::claim(std::string_view worker, double wait_s,
+                                                        int max_tiles) {
+  const HttpResult result = call("POST", protocol::claim_target(worker, wait_s, max_tiles));
+  if (result.status == 204) return std::nullopt;
+  return read_body<protocol::Lease>(result.body);
+}
+
+std::optional<protocol::Lease> CoordinatorClient::heartbeat(std::string_view lease) {
+  const HttpResult result = call("POST", fill(route::lease_heartbeat, lease), {}, {410});
+  if (result.status == 410) return std::nullopt;
+  return read_body<protocol::Lease>(result.body);
+}
+
+std::optional<protocol::Lease> CoordinatorClient::extend(std::string_view lease, int max_tiles) {
+  const HttpResult result = call("POST", protocol::extend_target(lease, max_tiles), {}, {410});
+  if (result.status == 410) return std::nullopt;
+  return read_body<protocol::Lease>(result.body);
+}
+
+std::string CoordinatorClient::scene(std::string_view digest) {
+  return call("GET", fill(route::scene, digest)).body;
+}
+
+protocol::ResultAnswer CoordinatorClient::upload(std::string_view lease,
+                                                 std::span<const std::uint64_t> tiles,
+                                                 std::span<const std::uint64_t> rays,
+                                                 std::string pixels) {
+  const HttpClient::Headers headers = {
+      {std::string(protocol::kTilesHeader), protocol::number_list(tiles)},
+      {std::string(protocol::kRaysHeader), protocol::number_list(rays)}};
+  return read_body<protocol::ResultAnswer>(
+      checked(http_.request("PUT", fill(route::lease_result, lease), std::move(pixels),
+                            protocol::kPixelsContentType, headers))
+          .body);
+}
+
+void CoordinatorClient::fail(std::string_view lease, const protocol::TileFailure& failure) {
+  call("POST", fill(route::lease_fail, lease), protocol::to_json(failure).dump());
+}
+
+void CoordinatorClient::release(std::string_view lease) {
+  call("POST", fill(route::lease_release, lease));
+}
+
+void CoordinatorClient::leave(std::string_view worker) {
+  call("DELETE", fill(route::worker, worker));
+}
+
+}  // namespace tessera

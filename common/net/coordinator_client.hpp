@@ -1,0 +1,88 @@
+// The coordinator's API (docs/openapi.yaml) from the other side: every route of the CLI
+// and of a worker, with the typed bodies of common/protocol. Safe to share between threads
+// (HttpClient is), though a worker keeps one per concern: claims, its lease's heartbeat,
+// uploads.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "common/image_format.hpp"
+#include "common/net/http_client.hpp"
+#include "common/protocol/error.hpp"
+#include "common/protocol/jobs.hpp"
+#include "common/protocol/leases.hpp"
+#include "common/protocol/workers.hpp"
+
+namespace tessera {
+
+// An error answer of the API: its status and its `Error` body.
+class ApiError : public std::runtime_error {
+ public:
+  ApiError(int status, protocol::Error error)
+      : std::runtime_error(error.message), status_(status), error_(std::move(error)) {}
+  int status() const { return status_; }
+  const std::string& code() const { return error_.code; }
+  std::string path() const { return error_.path.value_or(""); }
+  const protocol::Error& error() const { return error_; }
+
+ private:
+  int status_;
+  protocol::Error error_;
+};
+
+class CoordinatorClient {
+ public:
+  // `token`: the API or worker token to send, "" for none. Throws std::invalid_argument
+  // for a bad URL.
+  CoordinatorClient(const std::string& server_url, const std::string& token,
+                    std::chrono::milliseconds timeout = std::chrono::seconds(60));
+
+  // Each throws ApiError for an error answer (but those named), HttpError for none, and
+  // protocol::ProtocolError for an answer not of the protocol's shape.
+
+  // The client's routes.
+  protocol::JobStatus submit(const protocol::JobSubmission& submission);
+  // With `wait_s` > 0 the server answers once the job has finished, or after wait_s.
+  protocol::JobStatus job(std::string_view id, double wait_s = 0);
+  protocol::JobList jobs(std::optional<JobState> state, int limit);
+  protocol::JobStatus cancel(std::string_view id);
+  void remove(std::string_view id);
+  std::string image(std::string_view id, const ImageFormat& format, bool partial);
+  protocol::WorkerList workers();
+
+  // The worker's routes. A registration of another protocol version throws ApiError 409
+  // (protocol_mismatch); an answer of another version throws protocol::ProtocolMismatch.
+  protocol::Registration register_worker(const protocol::WorkerRegistration& registration);
+  // Nothing when no tile came within wait_s (204).
+  std::optional<protocol::Lease> claim(std::string_view worker, double wait_s, int max_tiles);
+  // Nothing when the lease is lost (410).
+  std::optional<protocol::Lease> heartbeat(std::string_view lease);
+  std::optional<protocol::Lease> extend(std::string_view lease, int max_tiles);
+  std::string scene(std::string_view digest);  // the scene's JSON text
+  // Tiles' pixels (float32 RGB, one tile after another) named by `tiles`, with the rays
+  // each took.
+  protocol::ResultAnswer upload(std::string_view lease, std::span<const std::uint64_t> tiles,
+                                std::span<const std::uint64_t> rays, std::string pixels);
+  void fail(std::string_view lease, const protocol::TileFailure& failure);
+  void release(std::string_view lease);
+  void leave(std::string_view worker);
+
+  HttpClient& http() { return http_; }
+  void interrupt() { http_.interrupt(); }
+  void clear_interrupt() { http_.clear_interrupt(); }
+
+ private:
+  // The answer, when its status is below 400 or one of `accepted`; otherwise ApiError.
+  HttpResult call(std::string_view method, const std::string& target, std::string body = {},
+                  std::initializer_list<int> accepted = {});
+  HttpClient http_;
+};
+
+}  // namespace tessera

@@ -1,0 +1,88 @@
+// The bodies of /v1/jobs: a submission, a job's status and a list of them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/protocol/field_reader.hpp"
+#include "common/protocol/job_state.hpp"
+
+namespace tessera::protocol {
+
+// Names (of jobs, workers, hosts) are for people and appear in every listing: a name of
+// megabytes would make each list that large.
+inline constexpr std::size_t kMaxNameBytes = 256;
+
+// POST /v1/jobs (`JobSubmission`).
+struct JobSubmission {
+  std::string name = "job";
+  int priority = 50;
+  nlohmann::json scene;  // checked by the scene parser, which names the scene's own errors
+
+  // Moves the scene out of `body` rather than copying it: a scene may be tens of megabytes.
+  static JobSubmission take(nlohmann::json& body);
+  static JobSubmission read(const FieldReader& body);
+};
+nlohmann::json to_json(const JobSubmission& submission);
+
+// Signs of trouble on a job (`JobHealth`).
+struct JobHealth {
+  int tile_failures = 0;
+  int refused_results = 0;
+  int repeated_handouts = 0;
+  std::optional<std::string> last_problem;
+  double no_progress_s = 0;
+
+  static JobHealth read(const FieldReader& body);
+};
+nlohmann::json to_json(const JobHealth& health);
+
+// A job's status (`JobStatus`): the answer to a submission, a status request or a cancel.
+struct JobStatus {
+  struct Tiles {
+    int total = 0;
+    int done = 0;
+    int rendering = 0;
+  };
+  struct Stats {
+    std::uint64_t rays = 0;
+    double rays_per_s = 0;
+  };
+  std::string id;
+  std::string name;
+  JobState state = JobState::queued;
+  int priority = 50;
+  int width = 0;
+  int height = 0;
+  Tiles tiles;
+  double progress = 0;
+  std::string created_at;  // RFC 3339 (timestamp.hpp)
+  std::optional<std::string> started_at;
+  std::optional<std::string> finished_at;
+  double elapsed_s = 0;
+  std::optional<double> eta_s;  // unknown before the first tile is done
+  std::optional<std::string> error;
+  JobHealth health;
+  Stats stats;
+
+  static JobStatus read(const FieldReader& body);
+};
+nlohmann::json to_json(const JobStatus& job);
+
+// GET /v1/jobs.
+struct JobList {
+  std::vector<JobStatus> jobs;
+
+  static JobList read(const FieldReader& body);
+};
+nlohmann::json to_json(const JobList& list);
+
+// The job states' words, "queued, running, completed, failed or canceled".
+JobState read_job_state(const FieldReader& body, std::string_view key);
+
+}  // namespace tessera::protocol

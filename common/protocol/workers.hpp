@@ -1,0 +1,79 @@
+// The bodies of /v1/workers: a worker's registration and its answer, and the workers list.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/protocol/field_reader.hpp"
+#include "common/protocol/limits.hpp"
+#include "common/protocol/names.hpp"
+
+namespace tessera::protocol {
+
+// The other side speaks another version of the worker protocol (or states none, as builds
+// before version 2 did). The coordinator answers 409 protocol_mismatch; a worker stops.
+class ProtocolMismatch : public ProtocolError {
+ public:
+  using ProtocolError::ProtocolError;
+};
+
+// POST /v1/workers: a worker introduces itself.
+struct WorkerRegistration {
+  std::string name;
+  std::optional<std::string> host;  // the coordinator takes the peer's address without it
+  std::optional<int> threads;
+  int protocol = kWorkerProtocolVersion;
+
+  // Throws ProtocolMismatch for another version, once the rest has been read.
+  static WorkerRegistration read(const FieldReader& body);
+};
+nlohmann::json to_json(const WorkerRegistration& registration);
+
+// Its answer (`Registration`).
+struct Registration {
+  std::string id;
+  double heartbeat_interval_s = 5;
+  double lease_timeout_s = 30;
+  int protocol = kWorkerProtocolVersion;
+  ProtocolLimits limits;
+
+  // Throws ProtocolMismatch for a coordinator of another version.
+  static Registration read(const FieldReader& body);
+};
+nlohmann::json to_json(const Registration& registration);
+
+enum class WorkerState { idle, rendering, gone };
+inline constexpr NameTable<WorkerState, 3> kWorkerStateNames{{
+    {WorkerState::idle, "idle"},
+    {WorkerState::rendering, "rendering"},
+    {WorkerState::gone, "gone"},
+}};
+
+// One worker of GET /v1/workers (`Worker`).
+struct Worker {
+  std::string id;
+  std::string name;
+  std::string host;
+  int threads = 1;
+  WorkerState state = WorkerState::idle;
+  std::optional<std::string> current_job;
+  std::optional<int> current_tile;
+  std::uint64_t tiles_rendered = 0;
+  std::string last_seen;  // RFC 3339 (timestamp.hpp)
+
+  static Worker read(const FieldReader& body);
+};
+nlohmann::json to_json(const Worker& worker);
+
+struct WorkerList {
+  std::vector<Worker> workers;
+
+  static WorkerList read(const FieldReader& body);
+};
+nlohmann::json to_json(const WorkerList& list);
+
+}  // namespace tessera::protocol

@@ -1,0 +1,210 @@
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cstdint>
+#include <cstring>
+#include <span>
+
+#include <spdlog/spdlog.h>
+
+#include "common/protocol/leases.hpp"
+#include "common/protocol/paths.hpp"
+#include "server/access.hpp"
+#include "server/api_json.hpp"
+#include "server/api_routes.hpp"
+#include "server/worker_limits.hpp"
+
+namespace tessera {
+namespace {
+
+namespace route = protocol::route;
+
+static_assert(std::endian::native == std::endian::little,
+              "tile pixels travel as little-endian float32");
+
+HttpResponse lease_lost(const std::string& id) {
+  return error_response(
+      410, "lease_lost",
+      "lease " + id + " is no longer held: it expired, was reassigned or its job ended");
+}
+
+// The body's bytes as float32 pixels, in place: a copy of every upload would double the
+// memory that the uploads of a thousand workers take while they queue. memmove onto
+// itself starts the floats' lifetime (what C++23's std::start_lifetime_as says outright);
+// a body that happens not to be aligned for float is copied into `copy` instead.
+std::span<const float> floats_of(std::string& body, std::vector<float>& copy) {
+  const std::size_t count = body.size() / sizeof(float);
+  if (count == 0) return {};
+  if (reinterpret_cast<std::uintptr_t>(body.data()) % alignof(float) != 0) {
+    copy.resize(count);
+    std::memcpy(copy.data(), body.data(), count * sizeof(float));
+    return copy;
+  }
+  return {static_cast<const float*>(std::memmove(body.data(), body.data(), count * sizeof(float))),
+          count};
+}
+
+HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
+  const std::string& id = request.params.at("id");
+  if (request.body.size() % (3 * sizeof(float)) != 0)
+    return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
+  // The request's headers are kept under lower-case names.
+  const auto header = [&](std::string_view name) -> const std::string* {
+    std::string lower(name);
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const auto it = request.headers.find(lower);
+    return it == request.headers.end() ? nullptr : &it->second;
+  };
+  std::vector<std::uint64_t> rays{0};
+  if (const std::string* text = header(protocol::kRaysHeader)) {
+    const auto parsed = protocol::parse_number_list(*text);
+    if (!parsed)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must be whole numbers separated by commas");
+    rays = *parsed;
+  }
+  std::vector<float> copy;
+  const std::span<const float> pixels = floats_of(request.body, copy);
+
+  ResultOutcome outcome{};
+  if (const std::string* text = header(protocol::kTilesHeader)) {
+    // Some of the lease's tiles, in the order given, each the size of its tile. Counted
+    // before the list is parsed, so that an over-long one costs no more than its header.
+    const ProtocolLimits limits = protocol_limits(context);
+    const std::uint64_t named =
+        static_cast<std::uint64_t>(std::count(text->begin(), text->end(), ',')) + 1;
+    if (named > static_cast<std::uint64_t>(limits.max_result_tiles))
+      return error_response(413, "too_many_tiles", result_tiles_over_limit(limits, named));
+    const auto tiles = protocol::parse_number_list(*text);
+    if (!tiles)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Tiles must be tile indexes separated by commas");
+    if (rays.size() != tiles->size())
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must give one count per tile in X-Tessera-Tiles");
+    const auto sizes = context.scheduler.tile_pixel_counts(id, *tiles);
+    if (!sizes)
+      return error_response(409, "lease_lost",
+                            "lease " + id + " is no longer held; the result was refused");
+    std::vector<TileResult> results;
+    std::size_t offset = 0;
+    for (std::size_t i = 0; i < tiles->size(); ++i) {
+      const std::size_t floats = (*sizes)[i] * 3;
+      if (offset + floats > pixels.size()) break;
+      results.push_back({static_cast<int>((*tiles)[i]),
+                         std::span<const float>(pixels).subspan(offset, floats), rays[i]});
+      offset += floats;
+    }
+    outcome = results.size() != tiles->size() || offset != pixels.size()
+                  ? ResultOutcome::wrong_size
+                  : context.scheduler.complete(id, results);
+  } else {
+    if (rays.size() != 1)
+      return error_response(400, "invalid_request",
+                            "X-Tessera-Rays must be one count when X-Tessera-Tiles is absent");
+    outcome = context.scheduler.complete(id, pixels, rays.front());
+  }
+  switch (outcome) {
+    case ResultOutcome::accepted:
+      return body_response(200, protocol::ResultAnswer{protocol::ResultStatus::accepted});
+    case ResultOutcome::duplicate:
+      // Harmless to the image, but a healthy worker never renders a tile twice.
+      spdlog::warn("duplicate result for lease {}: the tiles were already delivered", id);
+      return body_response(200, protocol::ResultAnswer{protocol::ResultStatus::duplicate});
+    case ResultOutcome::stale:
+      return error_response(409, "lease_lost",
+                            "lease " + id + " is no longer held; the result was refused");
+    case ResultOutcome::wrong_size:
+      return error_response(400, "wrong_size", "the pixel count does not match the tiles");
+    case ResultOutcome::unstored:
+      return error_response(507, "storage_failed",
+                            "the coordinator could not store the result (is its disk full?), so "
+                            "the job has failed; its status says why");
+    case ResultOutcome::wrong_tile:
+      return error_response(
+          400, "wrong_tile",
+          "a tile named in X-Tessera-Tiles is not this lease's, or is named twice");
+  }
+  return error_response(500, "internal", "unexpected result outcome");
+}
+
+// A result refused for any reason but a lost lease is a bug or a version mismatch on one
+// side: shown on the job, not only in the worker's log.
+HttpResponse upload(ApiContext& context, HttpRequest& request) {
+  HttpResponse response = check_upload(context, request);
+  if (response.status >= 400 && response.status < 500 && response.status != 409) {
+    const std::string& id = request.params.at("id");
+    const std::string why = std::to_string(response.status) + ": " +
+                            protocol::error_message(response.status, response.body);
+    spdlog::warn("result for lease {} refused ({})", id, why);
+    context.scheduler.note_refused_result(id, why);
+  }
+  return response;
+}
+
+// The worker could not render that tile of its lease (`TileFailure`).
+HttpResponse report_failure(ApiContext& context, const HttpRequest& request) {
+  auto failure = request_body<protocol::TileFailure>(request);
+  if (auto* refused = std::get_if<HttpResponse>(&failure)) return std::move(*refused);
+  const auto& [tile, error] = std::get<protocol::TileFailure>(failure);
+  context.scheduler.fail_tile(request.params.at("id"), tile, error);
+  return HttpResponse{204, "", "", {}};
+}
+
+}  // namespace
+
+void add_lease_routes(Router& router, ApiContext& context) {
+  router.add(
+      "POST", std::string(route::lease_heartbeat),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        const auto lease = context.scheduler.heartbeat(id);
+        if (lease) context.scheduler.touch_worker(lease->worker_id);
+        respond(lease ? body_response(200, lease_of(*lease, context.clock.now_ms()))
+                      : lease_lost(id));
+      },
+      std::nullopt, role_worker);
+  router.add(
+      "POST", std::string(route::lease_extend),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        const auto max_tiles = max_tiles_of(context, request);
+        if (!max_tiles) return respond(bad_max_tiles(context));
+        std::optional<Lease> lease;
+        try {
+          lease = context.scheduler.extend(id, *max_tiles);
+        } catch (const std::exception& e) {
+          // As for a claim: the store refused the new tiles, and the job has failed.
+          return respond(error_response(507, "storage_failed",
+                                        std::string("cannot store the lease: ") + e.what()));
+        }
+        if (lease) context.scheduler.touch_worker(lease->worker_id);
+        respond(lease ? body_response(200, lease_of(*lease, context.clock.now_ms()))
+                      : lease_lost(id));
+      },
+      std::nullopt, role_worker);
+  router.add(
+      "PUT", std::string(route::lease_result),
+      [&context](HttpRequest&& request, Respond respond) {
+        HttpResponse response = upload(context, request);
+        request.body = std::string();  // the pixels are stored: free them before answering
+        respond(std::move(response));
+      },
+      protocol_limits(context).max_result_bytes, role_worker);
+  router.add(
+      "POST", std::string(route::lease_fail),
+      [&context](HttpRequest&& request, Respond respond) {
+        respond(report_failure(context, request));
+      },
+      std::nullopt, role_worker);
+  router.add(
+      "POST", std::string(route::lease_release),
+      [&context](HttpRequest&& request, Respond respond) {
+        context.scheduler.release(request.params.at("id"));
+        respond(HttpResponse{204, "", "", {}});
+      },
+      std::nullopt, role_worker);
+}
+
+}  // namespace tessera
