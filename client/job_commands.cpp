@@ -1,12 +1,12 @@
 #include "client/job_commands.hpp"
 
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <unistd.h>
 
 #include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
@@ -167,8 +167,9 @@ int submit(const Options& options, CoordinatorClient& api) {
   } catch (const std::exception& e) {
     fail(kExitUsage, e.what());
   }
-  const std::string name =
-      options.name.empty() ? std::filesystem::path(options.scene_path).stem().string() : options.name;
+  const std::string name = options.name.empty()
+                               ? std::filesystem::path(options.scene_path).stem().string()
+                               : options.name;
   const protocol::JobStatus job = api.submit({name, options.priority, std::move(scene)});
   const std::string id = job.id;
   if (options.json_output && !options.wait)

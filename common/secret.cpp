@@ -26,7 +26,8 @@ std::string resolve_secret(const std::string& value, const std::string& file, co
   // It travels in an HTTP header: no room for anything that would end or split it.
   for (const char c : secret)
     if (static_cast<unsigned char>(c) <= ' ' || c == 0x7f)
-      throw std::runtime_error("the " + what + " must not contain white space or control characters");
+      throw std::runtime_error("the " + what +
+                               " must not contain white space or control characters");
   return secret;
 }
 

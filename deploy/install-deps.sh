@@ -12,7 +12,8 @@ packages=(
   libgtest-dev libgmock-dev
   clang libclang-rt-14-dev  # the scene parser's libFuzzer test (tests/fuzz/run.sh)
   iproute2  # `ip netns`: the multi-host farm test (tests/farm_netns_test.cpp)
-  libyaml-cpp-dev shellcheck  # the checks of deploy/ (tests/deploy_*_test.cpp, tests/deploy/)
+  libyaml-cpp-dev shellcheck  # the checks of deploy/ and the protocol's contract with docs/openapi.yaml
+  clang-format  # tests/format_check.sh: every C++ file as .clang-format writes it
 )
 
 if [ "$(id -u)" -ne 0 ]; then

@@ -6,8 +6,8 @@
 #include <filesystem>
 
 #include "common/scene.hpp"
-#include "server/long_polls.hpp"
 #include "server/clock.hpp"
+#include "server/long_polls.hpp"
 #include "server/readiness.hpp"
 #include "server/router.hpp"
 #include "server/scheduler.hpp"
@@ -21,7 +21,7 @@ struct ApiContext {
   LongPolls& job_waits;  // parked GET /v1/jobs/{id}?wait_s=, woken when a job finishes
   Limits limits;
   std::size_t max_job_body_bytes = 64 << 20;
-  std::filesystem::path temp_dir;  // where images are encoded before they are sent
+  std::filesystem::path temp_dir;         // where images are encoded before they are sent
   std::atomic<unsigned> temp_counter{0};  // unique temporary names under temp_dir
 };
 

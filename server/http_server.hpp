@@ -38,7 +38,7 @@ struct ServerShared;
 
 struct HttpServerOptions {
   std::string address = "127.0.0.1";  // an IP address; "0.0.0.0" or "::" for every interface
-  std::uint16_t port = 8640;           // 0: any free port; see HttpServer::port()
+  std::uint16_t port = 8640;          // 0: any free port; see HttpServer::port()
   // From a request's first byte until its header is complete. A new connection must also
   // send its first byte within this.
   std::chrono::milliseconds header_timeout{10'000};

@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
+#include <spdlog/spdlog.h>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <spdlog/spdlog.h>
 
 #include "server/router.hpp"
 
@@ -110,9 +110,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     phase_ = Phase::idle;
     stream_.expires_after(first_request_ ? shared_->options.header_timeout
                                          : shared_->options.idle_timeout);
-    stream_.async_read_some(buffer_.prepare(4096), beast::bind_front_handler(
-                                                       &HttpSession::on_wait_for_request,
-                                                       shared_from_this()));
+    stream_.async_read_some(
+        buffer_.prepare(4096),
+        beast::bind_front_handler(&HttpSession::on_wait_for_request, shared_from_this()));
   }
 
   void on_wait_for_request(error_code ec, std::size_t bytes) {
@@ -158,8 +158,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     auto query = parse_query(question == std::string_view::npos ? std::string_view()
                                                                 : target.substr(question + 1));
     if (!query)
-      return send(error_response(400, "bad_request", "the query string is not valid percent-encoding"),
-                  body_follows || !keep_alive_);
+      return send(
+          error_response(400, "bad_request", "the query string is not valid percent-encoding"),
+          body_follows || !keep_alive_);
     query_ = std::move(*query);
 
     const std::size_t limit = route_.body_limit.value_or(shared_->options.default_body_limit);
@@ -228,7 +229,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     // begin is unknown. Anything else (timeouts, resets, end of stream) leaves no one to tell.
     if (ec.category() == http::make_error_code(http::error::end_of_stream).category() &&
         ec != http::error::end_of_stream && ec != http::error::partial_message)
-      return send(error_response(400, "bad_request", "malformed HTTP request: " + ec.message()), true);
+      return send(error_response(400, "bad_request", "malformed HTTP request: " + ec.message()),
+                  true);
     spdlog::debug("http {}: reading the {} failed: {}", remote_address_, what, ec.message());
     close();
   }
@@ -250,7 +252,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (phase_ == Phase::closed || phase_ == Phase::closing) return;
     close_after = close_after || stopping();
     if (response.status < 100 || response.status > 599) {
-      spdlog::error("http {} {}: handler answered with status {}", route_.pattern, path_, response.status);
+      spdlog::error("http {} {}: handler answered with status {}", route_.pattern, path_,
+                    response.status);
       response = error_response(500, "internal_error", "the handler answered an invalid status");
     }
     if (!response.file.empty() && !has_no_body(response.status)) {
@@ -271,8 +274,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         message.prepare_payload();
         return write(message, close_after);
       }
-      spdlog::error("http {} {}: cannot open {} to answer: {}", route_.pattern, path_, response.file,
-                    ec.message());
+      spdlog::error("http {} {}: cannot open {} to answer: {}", route_.pattern, path_,
+                    response.file, ec.message());
       response = error_response(500, "internal_error", "the answer's file cannot be read");
     }
     response_.emplace();
@@ -300,8 +303,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void write(Message& message, bool close_after) {
     phase_ = Phase::writing;
     stream_.expires_after(shared_->options.write_timeout);
-    http::async_write(stream_, message,
-                      beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), close_after));
+    http::async_write(
+        stream_, message,
+        beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), close_after));
   }
 
   void on_write(bool close_after, error_code ec, std::size_t) {
@@ -334,10 +338,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void do_drain() {
     if (!drain_) drain_ = std::make_unique<std::array<char, 4096>>();
-    stream_.async_read_some(net::buffer(*drain_), [self = shared_from_this()](error_code ec, std::size_t) {
-      if (ec) return self->close();
-      self->do_drain();
-    });
+    stream_.async_read_some(net::buffer(*drain_),
+                            [self = shared_from_this()](error_code ec, std::size_t) {
+                              if (ec) return self->close();
+                              self->do_drain();
+                            });
   }
 
   void close() {
@@ -364,7 +369,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::string path_;
   std::map<std::string, std::string> query_;
   RouteMatch route_;
-
 };
 
 namespace {

@@ -15,8 +15,8 @@
 namespace tessera {
 
 struct HttpRequest {
-  std::string method;  // as sent, e.g. "GET"
-  std::string path;    // percent-encoded, as sent, without the query
+  std::string method;                          // as sent, e.g. "GET"
+  std::string path;                            // percent-encoded, as sent, without the query
   std::map<std::string, std::string> query;    // decoded; a repeated key keeps its last value
   std::map<std::string, std::string> params;   // decoded, from the route pattern's {names}
   std::map<std::string, std::string> headers;  // lower-case names; repeats joined with ", "
@@ -51,8 +51,10 @@ using Handler = std::function<void(HttpRequest&&, Respond)>;
 inline HttpResponse json_response(int status, const nlohmann::json& body) {
   // Replace rather than throw on invalid UTF-8: a response must always be producible,
   // even when it echoes bytes a client sent.
-  return HttpResponse{status, "application/json",
-                      body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), {}};
+  return HttpResponse{status,
+                      "application/json",
+                      body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+                      {}};
 }
 
 // The body every error has: {"error": {"code", "message", "path"?}}. `path` is a JSON

@@ -33,7 +33,8 @@ HttpResponse submit(ApiContext& context, const HttpRequest& request) {
     scene = parse_scene(submission.scene, context.limits);
   } catch (const SceneError& e) {
     const std::string path = "/scene" + e.pointer();
-    if (e.limit().empty()) return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+    if (e.limit().empty())
+      return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
     // Valid, but more than this server takes: say which limit, so the user can ask for it.
     return json_response(
         422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(), path,
@@ -95,15 +96,17 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
                           : not_found(id));
     return true;
   };
-  context.job_waits.wait(*wait, [answer] { return answer(true); }, [answer] { answer(false); });
+  context.job_waits.wait(
+      *wait, [answer] { return answer(true); }, [answer] { answer(false); });
 }
 
 // Only "render" is kept while parsing: a mesh scene's vertex arrays need not be built to
 // read one setting.
 OutputTransfer transfer_of(const std::string& scene_json) {
-  const json scene = json::parse(scene_json, [](int depth, json::parse_event_t event, json& parsed) {
-    return !(depth == 1 && event == json::parse_event_t::key && parsed != "render");
-  });
+  const json scene =
+      json::parse(scene_json, [](int depth, json::parse_event_t event, json& parsed) {
+        return !(depth == 1 && event == json::parse_event_t::key && parsed != "render");
+      });
   const auto render = scene.find("render");
   if (render != scene.end() && render->contains("output_transfer") &&
       (*render)["output_transfer"] == "linear")

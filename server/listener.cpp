@@ -2,10 +2,10 @@
 
 #include <chrono>
 
+#include <spdlog/spdlog.h>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/strand.hpp>
-#include <spdlog/spdlog.h>
 
 namespace tessera {
 
@@ -42,11 +42,11 @@ void Listener::do_accept() {
   if (!acceptor_.is_open()) return;
   // Each connection gets its own strand, so its handlers never run concurrently even
   // when several threads run the io_context.
-  acceptor_.async_accept(net::make_strand(io_),
-                         [self = shared_from_this()](const boost::system::error_code& ec,
-                                                     tcp::socket socket) {
-                           self->on_accept(ec, std::move(socket));
-                         });
+  acceptor_.async_accept(
+      net::make_strand(io_),
+      [self = shared_from_this()](const boost::system::error_code& ec, tcp::socket socket) {
+        self->on_accept(ec, std::move(socket));
+      });
 }
 
 void Listener::on_accept(const boost::system::error_code& ec, tcp::socket socket) {

@@ -1,11 +1,11 @@
 #include "server/local_workers.hpp"
 
-#include <csignal>
-#include <cstring>
-#include <stdexcept>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <csignal>
+#include <cstring>
+#include <stdexcept>
 
 #include <spdlog/spdlog.h>
 
@@ -20,8 +20,8 @@ std::filesystem::path sibling_worker_binary() {
   throw std::runtime_error("cannot find tessera-worker beside " + self.string());
 }
 
-LocalWorkers::LocalWorkers(std::filesystem::path worker_binary, std::string server_url,
-                           int count, int threads_each, std::string log_level)
+LocalWorkers::LocalWorkers(std::filesystem::path worker_binary, std::string server_url, int count,
+                           int threads_each, std::string log_level)
     : binary_(std::move(worker_binary)),
       server_url_(std::move(server_url)),
       threads_each_(threads_each),

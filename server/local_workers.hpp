@@ -2,10 +2,10 @@
 // loopback, started with the server, restarted if one dies, and stopped with the server.
 #pragma once
 
+#include <sys/types.h>
 #include <filesystem>
 #include <mutex>
 #include <string>
-#include <sys/types.h>
 #include <vector>
 
 namespace tessera {

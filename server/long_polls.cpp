@@ -17,7 +17,7 @@ struct LongPolls::Waiter {
 LongPolls::LongPolls(boost::asio::io_context& io) : strand_(boost::asio::make_strand(io)) {}
 
 void LongPolls::wait(std::chrono::milliseconds wait, std::function<bool()> attempt,
-                        std::function<void()> on_timeout) {
+                     std::function<void()> on_timeout) {
   if (attempt()) return;
   if (wait.count() <= 0 || closed_) {
     on_timeout();

@@ -35,7 +35,8 @@ bool PendingTiles::contains(int position) const {
 int PendingTiles::first_from(int position) const {
   if (count_ == 0 || position < 0) return -1;
   auto word = static_cast<std::size_t>(position) / 64;
-  std::uint64_t bits = word < words_.size() ? words_[word] & (~std::uint64_t{0} << (position % 64)) : 0;
+  std::uint64_t bits =
+      word < words_.size() ? words_[word] & (~std::uint64_t{0} << (position % 64)) : 0;
   if (word < first_word_) {
     word = first_word_;
     bits = word < words_.size() ? words_[word] : 0;

@@ -63,7 +63,8 @@ std::optional<std::map<std::string, std::string>> parse_query(std::string_view q
     if (part.empty()) continue;
     const std::size_t eq = part.find('=');
     auto key = percent_decode(part.substr(0, eq), true);
-    auto value = percent_decode(eq == std::string_view::npos ? std::string_view() : part.substr(eq + 1), true);
+    auto value = percent_decode(
+        eq == std::string_view::npos ? std::string_view() : part.substr(eq + 1), true);
     if (!key || !value) return std::nullopt;
     values.insert_or_assign(std::move(*key), std::move(*value));
   }
@@ -102,11 +103,11 @@ void Router::add(std::string method, std::string pattern, Handler handler,
         throw std::logic_error("route " + method + " " + pattern + " added twice");
       continue;
     }
-    const bool same_shape = std::equal(
-        route.segments.begin(), route.segments.end(), segments.begin(), segments.end(),
-        [](const Segment& a, const Segment& b) {
-          return a.is_param == b.is_param && (a.is_param || a.text == b.text);
-        });
+    const bool same_shape =
+        std::equal(route.segments.begin(), route.segments.end(), segments.begin(), segments.end(),
+                   [](const Segment& a, const Segment& b) {
+                     return a.is_param == b.is_param && (a.is_param || a.text == b.text);
+                   });
     if (same_shape)
       throw std::logic_error("route pattern \"" + pattern + "\" is \"" + route.pattern +
                              "\" with other parameter names");
@@ -170,14 +171,15 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
     allow += route.method;
   }
   result.pattern = best->pattern;
-  result.error = error_response(405, "method_not_allowed",
-                                std::string(method) + " is not allowed on " + std::string(path) +
-                                    "; allowed: " + allow);
+  result.error = error_response(
+      405, "method_not_allowed",
+      std::string(method) + " is not allowed on " + std::string(path) + "; allowed: " + allow);
   result.error.headers.emplace_back("Allow", allow);
   return result;
 }
 
-std::optional<std::string> Router::role_of(std::string_view method, std::string_view pattern) const {
+std::optional<std::string> Router::role_of(std::string_view method,
+                                           std::string_view pattern) const {
   for (const Route& route : routes_)
     if (route.method == method && route.pattern == pattern) return route.role;
   return std::nullopt;

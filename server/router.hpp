@@ -16,8 +16,8 @@
 namespace tessera {
 
 struct RouteMatch {
-  const Handler* handler = nullptr;  // null when nothing is to be called; see `error`
-  std::string pattern;               // the matched route's pattern, for logs
+  const Handler* handler = nullptr;           // null when nothing is to be called; see `error`
+  std::string pattern;                        // the matched route's pattern, for logs
   std::map<std::string, std::string> params;  // percent-decoded
   std::optional<std::size_t> body_limit;      // nullopt: the server's default
   std::string role;                           // who may call it; "" for anyone

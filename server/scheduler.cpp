@@ -199,10 +199,12 @@ void Scheduler::paste_stored(Image& image, const JobEntry& job) const {
                                std::to_string(index));
     return job.tiles[index].rect.pixel_count() * 3;
   };
-  store_.for_each_tile_pixels(job.status.id, floats_of, [&](int index, std::span<const float> pixels) {
-    // Only a done tile's pixels are the accepted result.
-    if (job.tiles[index].state == TileState::done) image.paste(job.tiles[index].rect, pixels);
-  });
+  store_.for_each_tile_pixels(job.status.id, floats_of,
+                              [&](int index, std::span<const float> pixels) {
+                                // Only a done tile's pixels are the accepted result.
+                                if (job.tiles[index].state == TileState::done)
+                                  image.paste(job.tiles[index].rect, pixels);
+                              });
 }
 
 void Scheduler::wait_for_images() {

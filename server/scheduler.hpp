@@ -33,7 +33,7 @@ namespace tessera {
 struct SchedulerConfig {
   std::int64_t lease_timeout_ms = 30'000;      // a lease expires this long after its last heartbeat
   std::int64_t heartbeat_interval_ms = 5'000;  // what workers are told to use
-  int max_tile_attempts = 3;  // a tile that fails this often fails its job
+  int max_tile_attempts = 3;                   // a tile that fails this often fails its job
   // A worker that failed this often on a job gets no more of its tiles while another
   // worker could take them.
   int worker_failures_per_job = 2;
@@ -73,7 +73,7 @@ struct JobStatus {
   int tile_size = 0;
   int tiles_total = 0;
   int tiles_done = 0;
-  int tiles_rendering = 0;      // tiles under a live lease
+  int tiles_rendering = 0;  // tiles under a live lease
   std::int64_t created_at_ms = 0;
   std::int64_t started_at_ms = 0;   // 0: not started
   std::int64_t finished_at_ms = 0;  // 0: not finished
@@ -88,8 +88,8 @@ struct WorkerInfo {
   std::string name;
   std::string host;
   int threads = 0;
-  std::string state;  // "idle", "rendering", "gone"
-  std::string current_job;         // empty when idle
+  std::string state;        // "idle", "rendering", "gone"
+  std::string current_job;  // empty when idle
   int current_tile = -1;
   std::uint64_t tiles_rendered = 0;
   std::int64_t last_seen_ms = 0;

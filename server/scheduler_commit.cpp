@@ -23,7 +23,8 @@ void Scheduler::commit(StagedChange& change) {
     std::set<JobEntry*> touched;
     for (const auto& [job, status] : change.jobs) touched.insert(job);
     for (const auto& [key, tile] : change.tiles) touched.insert(key.first);
-    for (JobEntry* job : touched) fail_unstorable(*job, std::string("cannot store a change: ") + e.what());
+    for (JobEntry* job : touched)
+      fail_unstorable(*job, std::string("cannot store a change: ") + e.what());
     throw;
   }
   apply(change);
@@ -123,7 +124,8 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   // Every job state change passes here: one log line each.
   if (next.state != s.state) {
     if (next.error.empty())
-      spdlog::info("job {} ({}): {} -> {}", s.id, s.name, to_string(s.state), to_string(next.state));
+      spdlog::info("job {} ({}): {} -> {}", s.id, s.name, to_string(s.state),
+                   to_string(next.state));
     else
       spdlog::info("job {} ({}): {} -> {}: {}", s.id, s.name, to_string(s.state),
                    to_string(next.state), next.error);

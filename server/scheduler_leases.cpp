@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <set>
 
-#include "server/ids.hpp"
 #include <spdlog/spdlog.h>
+#include "server/ids.hpp"
 
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
@@ -231,7 +231,8 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const f
   return complete(lease_id, results);
 }
 
-ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const TileResult> results) {
+ResultOutcome Scheduler::complete(const std::string& lease_id,
+                                  std::span<const TileResult> results) {
   std::unique_lock lock(mutex_);
   const auto it = leases_.find(lease_id);
   if (it == leases_.end()) return ResultOutcome::stale;
@@ -248,7 +249,8 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const T
     if (tile.result_lease_id == lease_id) continue;  // a repeat: ignored
     // A live lease gives up tiles only by delivering them, so a tile it neither holds nor
     // delivered was never its own; a lease with no live tile left has ended.
-    if (tile.lease_id != lease_id) return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    if (tile.lease_id != lease_id)
+      return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
     if (result.pixels.size() != tile.rect.pixel_count() * 3) return ResultOutcome::wrong_size;
     fresh.push_back(&result);
   }
@@ -409,7 +411,8 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
   if (!expired) return;
   // Any of the tiles still owed may be the one the worker crashed or hung on. Each is
   // charged, and goes out alone next time (see claim()), where a further failure is its own.
-  const std::string who = worker ? "worker " + worker->info.name + " on " + worker->info.host : "its worker";
+  const std::string who =
+      worker ? "worker " + worker->info.name + " on " + worker->info.host : "its worker";
   for (const int index : ended)
     stage_tile_failure(change, job, index, worker, who + " stopped responding (its lease expired)");
 }
@@ -423,8 +426,8 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
   if (worker) job.failures_by_worker[worker->key()] += 1;
   job.status.health.tile_failures += 1;
   job.status.health.last_problem = "tile " + std::to_string(index) + ": " + error;
-  spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index, tile.attempts,
-               config_.max_tile_attempts, error);
+  spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index,
+               tile.attempts, config_.max_tile_attempts, error);
   if (tile.attempts < config_.max_tile_attempts) return;
   stage_job_failure(change, job,
                     "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
@@ -440,7 +443,8 @@ void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std
   status.error = error;
   // Its other tiles are withdrawn from their workers, as for a cancel.
   for (const auto& [lease_id, entry] : leases_)
-    if (entry.job_id == job.status.id && !entry.live.empty()) stage_lease_end(change, lease_id, false);
+    if (entry.job_id == job.status.id && !entry.live.empty())
+      stage_lease_end(change, lease_id, false);
 }
 
 void Scheduler::count_handout(JobEntry& job, TileSlot& tile) {

@@ -1,8 +1,8 @@
 // Workers: registration, liveness and departure.
 #include <algorithm>
 
-#include "server/ids.hpp"
 #include <spdlog/spdlog.h>
+#include "server/ids.hpp"
 
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"

@@ -3,19 +3,19 @@
 
 #include <csignal>
 #include <cstdlib>
-#include <stdexcept>
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
-#include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
 
 #include "common/image_io.hpp"
 #include "common/secret.hpp"
@@ -62,7 +62,8 @@ std::pair<std::string, std::uint16_t> split_listen(const std::string& listen) {
   const auto colon = listen.rfind(':');
   if (colon == std::string::npos) throw CLI::ValidationError("--listen", "expected HOST:PORT");
   std::string host = listen.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
   const int port = std::stoi(listen.substr(colon + 1));
   if (port < 0 || port > 65535) throw CLI::ValidationError("--listen", "port out of range");
   return {host, static_cast<std::uint16_t>(port)};
@@ -90,7 +91,8 @@ int run(const ServerOptions& options) {
                      "worker token")};
   if (!is_loopback(host) && (tokens.client.empty() || tokens.worker.empty()) && !options.insecure)
     throw StartRefused(
-        "refusing to listen on " + host + " without both --api-token and --worker-token: anyone "
+        "refusing to listen on " + host +
+        " without both --api-token and --worker-token: anyone "
         "who can reach it could submit jobs, read every image and pose as a worker. Set both "
         "tokens (or TESSERA_API_TOKEN and TESSERA_WORKER_TOKEN, or the --*-token-file options), "
         "listen on 127.0.0.1, or pass --insecure to accept the risk");
@@ -121,7 +123,12 @@ int run(const ServerOptions& options) {
 
   Readiness readiness;
   Router router;
-  ApiContext context{scheduler, clock, claims, job_waits, options.limits, options.max_job_bytes,
+  ApiContext context{scheduler,
+                     clock,
+                     claims,
+                     job_waits,
+                     options.limits,
+                     options.max_job_bytes,
                      std::filesystem::path(options.data_dir) / "tmp"};
   add_health_routes(router, &readiness);
   add_job_routes(router, context);
@@ -231,15 +238,24 @@ int main(int argc, char** argv) {
                  "Write the bound port here once listening (useful with --listen HOST:0)");
   // What one job may cost; a scene over a limit is refused with 422 naming it.
   tessera::Limits& limits = options.limits;
-  app.add_option("--max-width", limits.max_width, "Largest image width")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--max-height", limits.max_height, "Largest image height")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--max-pixels", limits.max_pixels, "Largest width x height")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--max-width", limits.max_width, "Largest image width")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-height", limits.max_height, "Largest image height")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-pixels", limits.max_pixels, "Largest width x height")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--max-samples", limits.max_samples_per_pixel, "Most samples per pixel")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--max-depth", limits.max_depth, "Deepest recursion (render.max_depth)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-tile-size", limits.max_tile_size, "Largest render.tile_size")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--max-objects", limits.max_objects, "Most objects")->capture_default_str();
   app.add_option("--max-lights", limits.max_lights, "Most lights")->capture_default_str();
   app.add_option("--max-materials", limits.max_materials, "Most materials")->capture_default_str();
@@ -247,7 +263,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-job-bytes", options.max_job_bytes,
                  "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--api-token", options.api_token,
                  "Secret clients must send (Authorization: Bearer); also $TESSERA_API_TOKEN");
   app.add_option("--api-token-file", options.api_token_file, "Read the API token from this file");
@@ -255,8 +272,7 @@ int main(int argc, char** argv) {
                  "Secret workers must send; also $TESSERA_WORKER_TOKEN");
   app.add_option("--worker-token-file", options.worker_token_file,
                  "Read the worker token from this file");
-  app.add_flag("--insecure", options.insecure,
-               "Allow a non-loopback --listen without both tokens");
+  app.add_flag("--insecure", options.insecure, "Allow a non-loopback --listen without both tokens");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(options.log_level));
   try {

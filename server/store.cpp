@@ -178,7 +178,9 @@ void Store::create_schema() {
     db_.exec("ALTER TABLE tiles ADD COLUMN pixels_id INTEGER");
     db_.exec(v3_pixels_table_sql);
     // The tile rows' own rowids are unique, so they serve as the new keys.
-    db_.exec("INSERT INTO tile_pixels (id, pixels) SELECT rowid, pixels FROM tiles WHERE pixels IS NOT NULL");
+    db_.exec(
+        "INSERT INTO tile_pixels (id, pixels) SELECT rowid, pixels FROM tiles WHERE pixels IS NOT "
+        "NULL");
     db_.exec("UPDATE tiles SET pixels_id = rowid WHERE pixels IS NOT NULL");
     db_.exec("ALTER TABLE tiles DROP COLUMN pixels");
   }

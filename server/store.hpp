@@ -120,7 +120,8 @@ class Store {
   // appends them to the job's pixel file, then inserts the row that points to them (in the
   // caller's transaction, if any; a rollback leaves bytes in the file that nothing points
   // to). Returns the result's id.
-  std::int64_t insert_result(const ResultRow& result, std::span<const std::span<const float>> pixels);
+  std::int64_t insert_result(const ResultRow& result,
+                             std::span<const std::span<const float>> pixels);
   // Forgets a result whose pixels cannot be used (load() found them cut short).
   void delete_result(std::int64_t result_id);
   // Stores how often the tile failed and why, replacing what was stored of it.
@@ -128,9 +129,9 @@ class Store {
   // Calls `visit` for each tile of the job's results, in the order they were stored;
   // `floats_of(tile_index)` says how many floats each tile has (load() has checked that
   // they add up). The span is valid during the call.
-  void for_each_tile_pixels(const std::string& job_id,
-                            const std::function<std::size_t(int tile_index)>& floats_of,
-                            const std::function<void(int tile_index, std::span<const float>)>& visit);
+  void for_each_tile_pixels(
+      const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
+      const std::function<void(int tile_index, std::span<const float>)>& visit);
 
   void upsert_worker(const WorkerRow& worker);
   void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);

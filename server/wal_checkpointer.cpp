@@ -60,7 +60,8 @@ void WalCheckpointer::run() {
     // is restarted: RESTART blocks the writer while it copies the little that arrived
     // since the passive pass, syncs, and resets.
     int wal_pages = 0;
-    int rc = sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, &wal_pages, nullptr);
+    int rc =
+        sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, &wal_pages, nullptr);
     if (rc == SQLITE_OK && wal_pages >= restart_pages)
       rc = sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_RESTART, nullptr, nullptr);
     if (rc != SQLITE_OK && rc != SQLITE_BUSY)

@@ -42,7 +42,8 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
 void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string worker = request.params.at("id");
   if (!context.scheduler.worker_known(worker))
-    return respond(error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
+    return respond(
+        error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
   const auto max_tiles_or_none = max_tiles_of(context, request);
   if (!max_tiles_or_none) return respond(bad_max_tiles(context));
   const int max_tiles = *max_tiles_or_none;
@@ -60,15 +61,17 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
         } catch (const std::exception& e) {
           // The store refused the lease (a full disk, say); the job has failed and says why.
           // Answered here, since a claim woken by notify() runs where nothing would catch it.
-          (*shared_respond)(error_response(
-              507, "storage_failed", std::string("cannot store the lease: ") + e.what()));
+          (*shared_respond)(error_response(507, "storage_failed",
+                                           std::string("cannot store the lease: ") + e.what()));
           return true;
         }
         if (!lease) return false;
         (*shared_respond)(body_response(200, lease_of(*lease, context.clock.now_ms())));
         return true;
       },
-      [shared_respond] { (*shared_respond)(HttpResponse{204, "", "", {}}); });
+      [shared_respond] {
+        (*shared_respond)(HttpResponse{204, "", "", {}});
+      });
 }
 
 }  // namespace

@@ -27,8 +27,9 @@ TEST(Access, EachRoleTakesOnlyItsOwnToken) {
   EXPECT_EQ(status_of(both, role_client, "bearer client-secret"), 0);  // the scheme in any case
   EXPECT_EQ(status_of(both, role_client, "Bearer worker-secret"), 403);
   EXPECT_EQ(status_of(both, role_worker, "Bearer client-secret"), 403);
-  for (const char* wrong : {"", "Bearer", "Bearer ", "Basic Y2xpZW50LXNlY3JldA==", "client-secret",
-                            "Bearer client-secre", "Bearer client-secretX", "Bearer CLIENT-SECRET"}) {
+  for (const char* wrong :
+       {"", "Bearer", "Bearer ", "Basic Y2xpZW50LXNlY3JldA==", "client-secret",
+        "Bearer client-secre", "Bearer client-secretX", "Bearer CLIENT-SECRET"}) {
     EXPECT_EQ(status_of(both, role_client, wrong), 401) << wrong;
     EXPECT_EQ(status_of(both, role_worker, wrong), 401) << wrong;
   }
@@ -71,7 +72,8 @@ TEST(Access, BearerTokenParsing) {
 }
 
 TEST(Secret, FromTheValueThenTheFileThenTheEnvironment) {
-  const auto dir = std::filesystem::temp_directory_path() / ("tessera-secret-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("tessera-secret-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   { std::ofstream(dir / "token") << "from-file\n"; }
   { std::ofstream(dir / "empty") << "\n"; }

@@ -47,7 +47,8 @@ TEST(DeployCompose, TheCoordinatorKeepsItsDataInANamedVolume) {
   const std::string port = std::to_string(test::port_of(*listen));
   ASSERT_TRUE(test::is_sequence(coordinator["ports"]));
   const std::string published = text_of(coordinator["ports"][0]);
-  EXPECT_EQ(published.substr(published.rfind(':') + 1), port) << "the published port is not --listen's";
+  EXPECT_EQ(published.substr(published.rfind(':') + 1), port)
+      << "the published port is not --listen's";
 }
 
 TEST(DeployCompose, TheWorkerServiceScales) {
@@ -81,7 +82,8 @@ TEST(DeployCompose, TokensComeFromSecretFilesOnly) {
   for (const auto& [name, flags] : uses) {
     const YAML::Node service = file["services"][name];
     const auto command = texts_of(service["command"]);
-    EXPECT_TRUE(test::token_flags_in(command).empty()) << name << " has a token on its command line";
+    EXPECT_TRUE(test::token_flags_in(command).empty())
+        << name << " has a token on its command line";
     for (const char* flag : flags)
       EXPECT_TRUE(is_given_secret(service, flag_value(command, flag).value_or("")))
           << name << " " << flag << " is not one of its secrets";
@@ -102,8 +104,10 @@ TEST(DeployCompose, TokensComeFromSecretFilesOnly) {
     EXPECT_FALSE(path.empty()) << secret.first.as<std::string>() << " must come from a file";
     // Relative to deploy/; ignored by git and never sent to an image build.
     const std::string relative = path.rfind("./", 0) == 0 ? path.substr(2) : path;
-    EXPECT_TRUE(test::ignored_by("deploy/.gitignore", relative)) << path << " is not in deploy/.gitignore";
-    EXPECT_TRUE(test::ignored_by(".dockerignore", "deploy/" + relative, true)) << path << " is not in .dockerignore";
+    EXPECT_TRUE(test::ignored_by("deploy/.gitignore", relative))
+        << path << " is not in deploy/.gitignore";
+    EXPECT_TRUE(test::ignored_by(".dockerignore", "deploy/" + relative, true))
+        << path << " is not in .dockerignore";
   }
 }
 

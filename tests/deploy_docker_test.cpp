@@ -42,8 +42,10 @@ std::vector<Stage> dockerfile_stages() {
     const std::string text = squeeze(line);
     if (text.empty()) return;
     const auto space = text.find(' ');
-    Instruction instruction{text.substr(0, space), space == std::string::npos ? "" : text.substr(space + 1)};
-    std::transform(instruction.keyword.begin(), instruction.keyword.end(), instruction.keyword.begin(), ::toupper);
+    Instruction instruction{text.substr(0, space),
+                            space == std::string::npos ? "" : text.substr(space + 1)};
+    std::transform(instruction.keyword.begin(), instruction.keyword.end(),
+                   instruction.keyword.begin(), ::toupper);
     if (instruction.keyword == "FROM") {
       std::smatch match;
       static const std::regex from(R"((\S+)(?: [Aa][Ss] (\S+))?)");
@@ -86,8 +88,9 @@ std::string readme_test_command() {
 // The steps before the tests run: install the packages, configure, build.
 std::vector<std::string> readme_build_steps() {
   std::vector<std::string> steps = split_steps(readme_test_command());
-  const auto tests = std::find_if(steps.begin(), steps.end(),
-                                  [](const std::string& step) { return step.rfind("ctest", 0) == 0; });
+  const auto tests = std::find_if(steps.begin(), steps.end(), [](const std::string& step) {
+    return step.rfind("ctest", 0) == 0;
+  });
   steps.erase(tests, steps.end());
   return steps;
 }
@@ -138,7 +141,8 @@ TEST(DeployDocker, TheRuntimeStageHoldsTheThreeProgramsAsAPlainUser) {
 
   std::string copied_from_build, user, healthcheck, run_text, expose, cmd;
   for (const Instruction& instruction : runtime.instructions) {
-    if (instruction.keyword == "COPY" && instruction.arguments.rfind("--from=" + build.name + " ", 0) == 0)
+    if (instruction.keyword == "COPY" &&
+        instruction.arguments.rfind("--from=" + build.name + " ", 0) == 0)
       copied_from_build += instruction.arguments + " ";
     if (instruction.keyword == "USER") user = instruction.arguments;
     if (instruction.keyword == "HEALTHCHECK") healthcheck = instruction.arguments;
@@ -167,20 +171,25 @@ TEST(DeployDocker, TheRuntimeStageHoldsTheThreeProgramsAsAPlainUser) {
   EXPECT_NE(healthcheck.find("tessera-healthcheck"), std::string::npos) << healthcheck;
   const std::string script = test::read_source("deploy/docker/healthcheck.sh");
   EXPECT_NE(script.find("GET /healthz "), std::string::npos);
-  ASSERT_TRUE(std::regex_search(cmd, match, std::regex(R"re("--listen", "0\.0\.0\.0:(\d+)")re"))) << cmd;
+  ASSERT_TRUE(std::regex_search(cmd, match, std::regex(R"re("--listen", "0\.0\.0\.0:(\d+)")re")))
+      << cmd;
   const std::string port = match[1];
   EXPECT_EQ(expose, port);
-  EXPECT_NE(script.find("127.0.0.1:" + port), std::string::npos) << "the check's default port is not " << port;
+  EXPECT_NE(script.find("127.0.0.1:" + port), std::string::npos)
+      << "the check's default port is not " << port;
 }
 
 TEST(DeployDocker, TheBuildContextLeavesOutBuildTreesHistoryAndTokens) {
-  for (const char* path : {".git", "build", "build-asan", "deploy/secrets/api.token", "deploy/k8s/worker.token",
-                           "deploy/.env", "tessera-data"})
-    EXPECT_TRUE(test::ignored_by(".dockerignore", path, true)) << path << " would be sent to the build";
-  for (const char* path : {"CMakeLists.txt", "common/scene.cpp", "server/server_main.cpp", "worker/tracer.cpp",
-                           "client/main.cpp", "tests/CMakeLists.txt", "examples/showcase.json",
-                           "bench/run", "deploy/install-deps.sh", "deploy/docker/healthcheck.sh"})
-    EXPECT_FALSE(test::ignored_by(".dockerignore", path, true)) << path << " is needed by the build";
+  for (const char* path : {".git", "build", "build-asan", "deploy/secrets/api.token",
+                           "deploy/k8s/worker.token", "deploy/.env", "tessera-data"})
+    EXPECT_TRUE(test::ignored_by(".dockerignore", path, true))
+        << path << " would be sent to the build";
+  for (const char* path :
+       {"CMakeLists.txt", "common/scene.cpp", "server/server_main.cpp", "worker/tracer.cpp",
+        "client/main.cpp", "tests/CMakeLists.txt", "examples/showcase.json", "bench/run",
+        "deploy/install-deps.sh", "deploy/docker/healthcheck.sh"})
+    EXPECT_FALSE(test::ignored_by(".dockerignore", path, true))
+        << path << " is needed by the build";
 }
 
 }  // namespace

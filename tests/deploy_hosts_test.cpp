@@ -33,7 +33,8 @@ Unit read_unit(const std::string& relative) {
       continue;
     }
     const auto equals = line.find('=');
-    if (equals != std::string::npos) unit.emplace(section + "." + line.substr(0, equals), line.substr(equals + 1));
+    if (equals != std::string::npos)
+      unit.emplace(section + "." + line.substr(0, equals), line.substr(equals + 1));
   }
   return unit;
 }
@@ -82,7 +83,8 @@ void expect_token_credentials(const Unit& unit, const std::string& name,
     const std::string file = test::flag_value(exec, flag).value_or("");
     ASSERT_EQ(file.rfind("%d/", 0), 0u) << name << ": " << flag << " is not a credential (%d/NAME)";
     const auto credential = loaded.find(file.substr(3));
-    ASSERT_NE(credential, loaded.end()) << name << ": no LoadCredential=" << file.substr(3) << ":...";
+    ASSERT_NE(credential, loaded.end())
+        << name << ": no LoadCredential=" << file.substr(3) << ":...";
     EXPECT_EQ(credential->second.rfind("/etc/tessera/", 0), 0u) << name;
   }
 }
@@ -97,7 +99,8 @@ TEST(DeploySystemd, TheServerUnitIsHardenedAndKeepsItsDataInItsStateDirectory) {
   ASSERT_FALSE(exec.empty());
   EXPECT_EQ(exec[0], "/usr/local/bin/tessera-server");
   const std::string data_dir = test::flag_value(exec, "--data-dir").value_or("");
-  EXPECT_TRUE(data_dir == "%S/" + state || data_dir == "${STATE_DIRECTORY}" || data_dir == "/var/lib/" + state)
+  EXPECT_TRUE(data_dir == "%S/" + state || data_dir == "${STATE_DIRECTORY}" ||
+              data_dir == "/var/lib/" + state)
       << "--data-dir " << data_dir << " is not StateDirectory=" << state;
   EXPECT_EQ(test::flag_value(exec, "--local-workers").value_or(""), "0");
   expect_token_credentials(unit, name, {"--api-token-file", "--worker-token-file"});
@@ -135,7 +138,8 @@ TEST(DeploySlurm, OneWorkerPerNodeWarnedBeforeTheTimeLimit) {
   std::smatch match;
   const std::string signal = sbatch["--signal"];
   ASSERT_TRUE(std::regex_match(signal, match, std::regex(R"((?:B:)?(TERM|15)@(\d+))")))
-      << "--signal=TERM@SECONDS lets the workers stop cleanly before the time limit, not " << signal;
+      << "--signal=TERM@SECONDS lets the workers stop cleanly before the time limit, not "
+      << signal;
   EXPECT_GE(std::stoi(match[2]), test::worker_shutdown_bound_s());
   EXPECT_NE(srun.find("--ntasks-per-node=1"), std::string::npos) << srun;
 }

@@ -29,7 +29,8 @@ std::vector<YAML::Node> manifests() {
 
 YAML::Node only(const std::string& kind) {
   const auto found = test::of_kind(manifests(), kind);
-  if (found.size() != 1) throw std::runtime_error("expected one " + kind + ", found " + std::to_string(found.size()));
+  if (found.size() != 1)
+    throw std::runtime_error("expected one " + kind + ", found " + std::to_string(found.size()));
   return found.front();
 }
 
@@ -70,11 +71,13 @@ std::pair<std::string, std::string> secret_mount(const YAML::Node& workload) {
 
 TEST(DeployYaml, EveryYamlFileUnderDeployParses) {
   int files = 0;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(test::source_path("deploy"))) {
+  for (const auto& entry :
+       std::filesystem::recursive_directory_iterator(test::source_path("deploy"))) {
     const auto extension = entry.path().extension();
     if (extension != ".yaml" && extension != ".yml") continue;
     ++files;
-    const std::string relative = std::filesystem::relative(entry.path(), TESSERA_SOURCE_DIR).string();
+    const std::string relative =
+        std::filesystem::relative(entry.path(), TESSERA_SOURCE_DIR).string();
     std::vector<YAML::Node> documents;
     ASSERT_NO_THROW(documents = test::load_yaml(relative)) << relative;
     EXPECT_FALSE(documents.empty()) << relative;
@@ -91,22 +94,26 @@ TEST(DeployK8s, TheKustomizationListsEveryManifestAndGeneratesTheTokens) {
   for (const auto& entry : std::filesystem::directory_iterator(test::source_path(k8s_dir))) {
     const std::string name = entry.path().filename().string();
     if (entry.path().extension() == ".yaml" && name != "kustomization.yaml") {
-      EXPECT_TRUE(listed.contains(name)) << k8s_dir << name << " is not in the kustomization's resources";
+      EXPECT_TRUE(listed.contains(name))
+          << k8s_dir << name << " is not in the kustomization's resources";
     }
   }
   for (const std::string& file : resources)
     EXPECT_TRUE(std::filesystem::exists(test::source_path(k8s_dir + file))) << file;
 
   const YAML::Node generators = kustomization["secretGenerator"];
-  ASSERT_TRUE(test::is_sequence(generators) && test::size_of(generators) == 1) << "one secretGenerator";
+  ASSERT_TRUE(test::is_sequence(generators) && test::size_of(generators) == 1)
+      << "one secretGenerator";
   EXPECT_EQ(text_of(generators[0]["name"]), "tessera-tokens");
   const auto files = texts_of(generators[0]["files"]);
   EXPECT_EQ(std::set<std::string>(files.begin(), files.end()),
             (std::set<std::string>{"api.token", "worker.token"}));
   // The user makes these files; they must never be committed, nor sent to an image build.
   for (const std::string& file : files) {
-    EXPECT_TRUE(test::ignored_by(k8s_dir + ".gitignore", file)) << file << " is not in deploy/k8s/.gitignore";
-    EXPECT_TRUE(test::ignored_by(".dockerignore", k8s_dir + file, true)) << file << " is not in .dockerignore";
+    EXPECT_TRUE(test::ignored_by(k8s_dir + ".gitignore", file))
+        << file << " is not in deploy/k8s/.gitignore";
+    EXPECT_TRUE(test::ignored_by(".dockerignore", k8s_dir + file, true))
+        << file << " is not in .dockerignore";
   }
 }
 
@@ -128,7 +135,8 @@ TEST(DeployK8s, TheCoordinatorIsOneReplicaWithItsOwnVolume) {
   ASSERT_TRUE(data_dir) << "the coordinator needs --data-dir on its volume";
   bool mounted = false;
   for (const YAML::Node& mount : coordinator["volumeMounts"])
-    mounted = mounted || (text_of(mount["name"]) == claim && text_of(mount["mountPath"]) == *data_dir);
+    mounted =
+        mounted || (text_of(mount["name"]) == claim && text_of(mount["mountPath"]) == *data_dir);
   EXPECT_TRUE(mounted) << "volume " << claim << " is not mounted at --data-dir " << *data_dir;
   // Workers run in their own pods, scaled apart from the coordinator.
   EXPECT_EQ(flag_value(argv, "--local-workers").value_or(""), "0");
@@ -167,7 +175,8 @@ TEST(DeployK8s, TheCoordinatorIsProbedOnHealthzAndReadyz) {
     const YAML::Node get = coordinator[probe]["httpGet"];
     ASSERT_TRUE(test::is_map(get)) << probe << " must be an httpGet probe";
     EXPECT_EQ(text_of(get["path"]), path) << probe;
-    EXPECT_EQ(container_port(coordinator, text_of(get["port"])), port) << probe << " probes another port";
+    EXPECT_EQ(container_port(coordinator, text_of(get["port"])), port)
+        << probe << " probes another port";
   }
 }
 
@@ -177,7 +186,8 @@ TEST(DeployK8s, WorkersHaveAsManyThreadsAsCpusRequested) {
   ASSERT_FALSE(argv.empty());
   EXPECT_EQ(argv[0], "tessera-worker");
   const auto threads = flag_value(argv, "--threads");
-  ASSERT_TRUE(threads) << "without --threads a worker takes every core of the node, not its request";
+  ASSERT_TRUE(threads)
+      << "without --threads a worker takes every core of the node, not its request";
   const std::string cpu = text_of(worker["resources"]["requests"]["cpu"]);
   ASSERT_FALSE(cpu.empty()) << "the worker needs resources.requests.cpu";
   EXPECT_EQ(millicores(cpu), std::stoi(*threads) * 1000)
@@ -189,7 +199,8 @@ TEST(DeployK8s, WorkersHaveTimeToStopCleanly) {
   const YAML::Node deployment = only("Deployment");
   const int bound = test::worker_shutdown_bound_s();
   EXPECT_GE(pod_spec(deployment)["terminationGracePeriodSeconds"].as<int>(0), bound)
-      << "a worker may need " << bound << " s after SIGTERM to upload its tile and release the rest";
+      << "a worker may need " << bound
+      << " s after SIGTERM to upload its tile and release the rest";
   // The autoscaler owns the replica count; a fixed one would be reset by every apply.
   EXPECT_FALSE(deployment["spec"]["replicas"].IsDefined());
 }
@@ -216,13 +227,15 @@ TEST(DeployK8s, TokensComeOnlyFromTheGeneratedSecret) {
   const auto keys = texts_of(kustomization["secretGenerator"][0]["files"]);
   EXPECT_TRUE(test::of_kind(manifests(), "Secret").empty()) << "a Secret committed with its value";
   const std::pair<const char*, std::vector<const char*>> uses[] = {
-      {"StatefulSet", {"--api-token-file", "--worker-token-file"}}, {"Deployment", {"--token-file"}}};
+      {"StatefulSet", {"--api-token-file", "--worker-token-file"}},
+      {"Deployment", {"--token-file"}}};
   for (const auto& [kind, flags] : uses) {
     const YAML::Node workload = only(kind);
     const auto argv = argv_of(container(workload));
     EXPECT_TRUE(test::token_flags_in(argv).empty()) << kind << " has a token on its command line";
     for (const YAML::Node& variable : container(workload)["env"])
-      EXPECT_EQ(text_of(variable["name"]).find("TOKEN"), std::string::npos) << kind << ": a token in env";
+      EXPECT_EQ(text_of(variable["name"]).find("TOKEN"), std::string::npos)
+          << kind << ": a token in env";
     const auto [mount, name] = secret_mount(workload);
     EXPECT_EQ(name, secret) << kind << " does not mount the generated Secret";
     // Its files are mode 0440, root's: the image's user reads them through fsGroup.
@@ -230,7 +243,8 @@ TEST(DeployK8s, TokensComeOnlyFromTheGeneratedSecret) {
         << kind << " cannot read the Secret's files";
     for (const char* flag : flags) {
       const std::string file = flag_value(argv, flag).value_or("");
-      EXPECT_EQ(file.substr(0, mount.size() + 1), mount + "/") << kind << " " << flag << " is not in the Secret";
+      EXPECT_EQ(file.substr(0, mount.size() + 1), mount + "/")
+          << kind << " " << flag << " is not in the Secret";
       EXPECT_NE(std::find(keys.begin(), keys.end(), file.substr(file.rfind('/') + 1)), keys.end())
           << kind << " " << flag << " " << file << " is not a key of the Secret";
     }

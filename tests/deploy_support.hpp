@@ -3,8 +3,8 @@
 // there fails the tests instead of silently making the manifests wrong.
 #pragma once
 
-#include <filesystem>
 #include <fnmatch.h>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <regex>
@@ -37,7 +37,8 @@ inline std::vector<std::string> source_lines(const std::string& relative) {
 }
 
 // The first capture of `pattern` in the file, or nothing.
-inline std::optional<std::string> find_in_source(const std::string& relative, const std::string& pattern) {
+inline std::optional<std::string> find_in_source(const std::string& relative,
+                                                 const std::string& pattern) {
   const std::string text = read_source(relative);
   std::smatch match;
   if (!std::regex_search(text, match, std::regex(pattern))) return std::nullopt;
@@ -53,7 +54,8 @@ inline int worker_shutdown_bound_s() {
                                      R"(kUploadTimeout\s*=\s*std::chrono::seconds\((\d+)\))");
   const auto margin = find_in_source("worker/worker_daemon.cpp",
                                      R"(\(options_\.claim_wait_s\s*\+\s*(\d+)\)\s*\*\s*1000)");
-  const auto claim_wait = find_in_source("worker/worker_daemon.hpp", R"(double claim_wait_s\s*=\s*(\d+))");
+  const auto claim_wait =
+      find_in_source("worker/worker_daemon.hpp", R"(double claim_wait_s\s*=\s*(\d+))");
   if (!upload || !margin || !claim_wait)
     throw std::runtime_error(
         "worker/worker_daemon.{cpp,hpp} no longer show the upload timeout, the claim timeout "
@@ -67,7 +69,8 @@ inline std::optional<int> duration_s(const std::string& text) {
   static const std::regex part(R"((\d+)\s*(h|min|m|s|sec)?)");
   int total = 0;
   std::size_t consumed = 0;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), part); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), part); it != std::sregex_iterator();
+       ++it) {
     const int n = std::stoi((*it)[1]);
     const std::string unit = (*it)[2];
     total += unit == "h" ? n * 3600 : (unit == "m" || unit == "min") ? n * 60 : n;
@@ -81,7 +84,8 @@ inline std::optional<int> duration_s(const std::string& text) {
 }
 
 // The value after `flag` in an argument list ("--threads", "4"), or "--flag=value".
-inline std::optional<std::string> flag_value(const std::vector<std::string>& args, const std::string& flag) {
+inline std::optional<std::string> flag_value(const std::vector<std::string>& args,
+                                             const std::string& flag) {
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == flag && i + 1 < args.size()) return args[i + 1];
     if (args[i].rfind(flag + "=", 0) == 0) return args[i].substr(flag.size() + 1);
@@ -99,14 +103,17 @@ inline std::vector<std::string> token_flags_in(const std::vector<std::string>& a
 }
 
 // The port of "HOST:PORT".
-inline int port_of(const std::string& listen) { return std::stoi(listen.substr(listen.rfind(':') + 1)); }
+inline int port_of(const std::string& listen) {
+  return std::stoi(listen.substr(listen.rfind(':') + 1));
+}
 
 // Whether the ignore file (a .gitignore, or with `docker` a .dockerignore) excludes
 // `relative`, a path from the ignore file's directory. Enough of both syntaxes for the
 // patterns used here: globs, a leading "/" anchoring, a trailing "/" for directories, a
 // pattern matching a directory excluding what is under it. A .gitignore pattern without
 // a "/" matches a name at any depth; a .dockerignore pattern always starts at the root.
-inline bool ignored_by(const std::string& ignore_file, const std::string& relative, bool docker = false) {
+inline bool ignored_by(const std::string& ignore_file, const std::string& relative,
+                       bool docker = false) {
   std::vector<std::string> parts;  // relative's components
   std::stringstream split(relative);
   for (std::string part; std::getline(split, part, '/');) parts.push_back(part);

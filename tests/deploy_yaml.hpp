@@ -33,7 +33,8 @@ inline std::vector<std::string> texts_of(const YAML::Node& node) {
 }
 
 // The documents of these files whose `kind` is `kind`.
-inline std::vector<YAML::Node> of_kind(const std::vector<YAML::Node>& documents, const std::string& kind) {
+inline std::vector<YAML::Node> of_kind(const std::vector<YAML::Node>& documents,
+                                       const std::string& kind) {
   std::vector<YAML::Node> found;
   for (const YAML::Node& document : documents)
     if (text_of(document["kind"]) == kind) found.push_back(document);

@@ -56,7 +56,8 @@ int status_for_header_only(int port, const std::string& head) {
   if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0 &&
       ::send(fd, head.data(), head.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(head.size())) {
     char buffer[256] = {};
-    if (::recv(fd, buffer, sizeof buffer - 1, 0) > 12 && std::string(buffer).rfind("HTTP/1.1 ", 0) == 0)
+    if (::recv(fd, buffer, sizeof buffer - 1, 0) > 12 &&
+        std::string(buffer).rfind("HTTP/1.1 ", 0) == 0)
       status = std::stoi(std::string(buffer + 9, 3));
   }
   ::close(fd);
@@ -68,7 +69,8 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
   Farm farm("auth-routes", 0, token_args(secrets));
   const auto routes = test::openapi_routes(fs::path(TESSERA_SOURCE_DIR) / "docs" / "openapi.yaml");
   ASSERT_GE(routes.size(), 10u);
-  const auto call = [&](const std::string& method, const std::string& path, const std::string& token) {
+  const auto call = [&](const std::string& method, const std::string& path,
+                        const std::string& token) {
     HttpClient http(farm.url(), 10s);
     http.set_bearer_token(token);
     return http.request(method, concrete(path), method == "GET" || method == "DELETE" ? "" : "{}");
@@ -99,14 +101,16 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
     EXPECT_NE(allowed.status, 403) << allowed.body;
   }
   // Refused from the headers: a stranger cannot make the server take in a body.
-  EXPECT_EQ(status_for_header_only(farm.port(),
-                                   "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n"
-                                   "Content-Length: 1073741824\r\n\r\n"),
+  EXPECT_EQ(status_for_header_only(
+                farm.port(),
+                "POST /v1/jobs HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n"
+                "Content-Length: 1073741824\r\n\r\n"),
             401);
-  EXPECT_EQ(status_for_header_only(farm.port(),
-                                   "PUT /v1/leases/l-x/result HTTP/1.1\r\nHost: t\r\nAuthorization: Bearer " +
-                                       api_token + "\r\nContent-Length: 1073741824\r\n\r\n"),
-            403);
+  EXPECT_EQ(
+      status_for_header_only(
+          farm.port(), "PUT /v1/leases/l-x/result HTTP/1.1\r\nHost: t\r\nAuthorization: Bearer " +
+                           api_token + "\r\nContent-Length: 1073741824\r\n\r\n"),
+      403);
   // The server kept serving, and logged no secret.
   HttpClient http(farm.url(), 10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
@@ -175,8 +179,9 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
 TEST(FarmAuth, BeyondLoopbackOnlyWithTokensOrInsecure) {
   const fs::path dir = test::fresh_dir("auth-listen");
   const auto start = [&](const std::string& name, std::vector<std::string> extra) {
-    std::vector<std::string> args{"--listen", "0.0.0.0:0", "--data-dir", (dir / name).string(),
-                                  "--local-workers", "0", "--port-file", (dir / (name + ".port")).string()};
+    std::vector<std::string> args{
+        "--listen",        "0.0.0.0:0", "--data-dir",  (dir / name).string(),
+        "--local-workers", "0",         "--port-file", (dir / (name + ".port")).string()};
     args.insert(args.end(), extra.begin(), extra.end());
     return std::make_unique<test::Process>(TESSERA_SERVER_BIN, args, dir / (name + ".log"));
   };

@@ -38,7 +38,8 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
             // them out again: many kills must not add up to a failed job.
             "--max-tile-attempts", "1000", "--max-tile-handouts", "1000", "--log-level", "info"},
         dir / ("coordinator-" + std::to_string(++coordinator_starts) + ".log"));
-    EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s)) << "the coordinator did not start";
+    EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s))
+        << "the coordinator did not start";
     std::ifstream(dir / "port") >> port;
     return server;
   };
@@ -49,7 +50,8 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
   const auto start_worker = [&](int slot) {
     return std::make_unique<test::Process>(
         TESSERA_WORKER_BIN,
-        std::vector<std::string>{"--server", url, "--threads", "1", "--name", "chaos-" + std::to_string(slot)},
+        std::vector<std::string>{"--server", url, "--threads", "1", "--name",
+                                 "chaos-" + std::to_string(slot)},
         dir / ("worker-" + std::to_string(++worker_starts) + ".log"));
   };
   std::vector<std::unique_ptr<test::Process>> workers;
@@ -59,7 +61,8 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
   std::vector<std::string> jobs;
   {
     test::JsonApi api(url);
-    for (int i = 0; i < 3; ++i) jobs.push_back(api.submit("chaos-" + std::to_string(i), 40 + 10 * i, scene)["id"]);
+    for (int i = 0; i < 3; ++i)
+      jobs.push_back(api.submit("chaos-" + std::to_string(i), 40 + 10 * i, scene)["id"]);
   }
   // Whether every job has completed, asked of whichever coordinator is up; false while
   // none answers.
@@ -95,11 +98,12 @@ TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKil
       ++coordinator_kills;
     }
   }
-  std::printf("chaos (seed %u): survived %d worker kills and %d coordinator kills\n", seed, worker_kills,
-              coordinator_kills);
+  std::printf("chaos (seed %u): survived %d worker kills and %d coordinator kills\n", seed,
+              worker_kills, coordinator_kills);
   RecordProperty("worker_kills", worker_kills);
   RecordProperty("coordinator_kills", coordinator_kills);
-  EXPECT_GE(worker_kills + coordinator_kills, 5) << "too little chaos to mean anything: make the jobs bigger";
+  EXPECT_GE(worker_kills + coordinator_kills, 5)
+      << "too little chaos to mean anything: make the jobs bigger";
 
   ASSERT_TRUE(test::eventually(all_completed, 60s)) << "not every job completed; see " << dir;
   const Image expected = test::render_image(scene, 2);

@@ -23,7 +23,8 @@ using test::CliRun;
 using test::Farm;
 
 // The CLI against `farm`, with its server URL.
-CliRun tessera_cli(Farm& farm, std::vector<std::string> args, std::chrono::milliseconds limit = 30s) {
+CliRun tessera_cli(Farm& farm, std::vector<std::string> args,
+                   std::chrono::milliseconds limit = 30s) {
   args.insert(args.begin(), {"--server", farm.url()});
   return test::run_cli(farm.dir(), args, limit);
 }
@@ -35,7 +36,9 @@ std::vector<std::string> lines_of(const std::string& text) {
   return lines;
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 // A loopback port on which nothing listens, for as long as this object lives: the socket
 // is bound (so no one else gets the port) but never listens, so connecting is refused.
@@ -82,7 +85,8 @@ TEST(FarmCli, JobCommandsEndToEnd) {
   const CliRun submitted = tessera_cli(farm, {"submit", scene_file.string()});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
   std::smatch match;
-  ASSERT_TRUE(std::regex_search(submitted.output, match, std::regex(R"(submitted (\S+) \(scene\))")))
+  ASSERT_TRUE(
+      std::regex_search(submitted.output, match, std::regex(R"(submitted (\S+) \(scene\))")))
       << submitted.output;
   const std::string id = match[1];
   EXPECT_EQ(farm.api().job(id)["state"], "queued");
@@ -97,7 +101,8 @@ TEST(FarmCli, JobCommandsEndToEnd) {
   EXPECT_EQ(status_reply["tiles"]["total"], 12);
 
   // A second job, submitted with --json, canceled while queued.
-  const CliRun other = tessera_cli(farm, {"--json", "submit", scene_file.string(), "--name", "other"});
+  const CliRun other =
+      tessera_cli(farm, {"--json", "submit", scene_file.string(), "--name", "other"});
   ASSERT_EQ(other.exit_code, 0) << other.output;
   const json other_job = json::parse(other.output);
   const std::string other_id = other_job["id"];
@@ -179,7 +184,8 @@ TEST(FarmCli, SubmitWaitReportsACanceledJobWithExitOne) {
   Farm farm("cli-wait-cancel", 0);
   const fs::path scene_file = farm.dir() / "scene.json";
   test::write_text(scene_file, test::showcase(64, 48, 1, 16).dump());
-  test::Process waiting(TESSERA_CLI_BIN, {"--server", farm.url(), "submit", scene_file.string(), "--wait"},
+  test::Process waiting(TESSERA_CLI_BIN,
+                        {"--server", farm.url(), "submit", scene_file.string(), "--wait"},
                         farm.dir() / "wait.log");
   json jobs;
   ASSERT_TRUE(test::eventually(

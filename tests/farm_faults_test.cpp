@@ -28,7 +28,8 @@ int tiles_rendered_by(const fs::path& log) {
   std::smatch match;
   static const std::regex line("after rendering ([0-9]+) tiles");
   int count = -1;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator(); ++it)
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator();
+       ++it)
     count = std::stoi((*it)[1]);
   return count;
 }
@@ -38,11 +39,13 @@ int tiles_rendered_by(const fs::path& log) {
   const bool seen = test::eventually(
       [&] {
         const auto info = farm.worker_named(name);
-        return info && (*info)["state"] == "rendering" && (*info)["tiles_rendered"].get<int>() >= delivered;
+        return info && (*info)["state"] == "rendering" &&
+               (*info)["tiles_rendered"].get<int>() >= delivered;
       },
       30s);
   if (seen) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << name << " never got to rendering after " << delivered << " tiles";
+  return ::testing::AssertionFailure()
+         << name << " never got to rendering after " << delivered << " tiles";
 }
 
 TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
@@ -92,11 +95,15 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
   auto frozen = farm.start_worker("frozen", 1);
   ASSERT_TRUE(rendering_after(farm, "frozen", 1));
   frozen->signal(SIGSTOP);  // mid-lease: no heartbeats, no uploads
-  ASSERT_TRUE(test::eventually([&] { return farm.worker_named("frozen").value()["state"] == "idle"; }, 20s))
+  ASSERT_TRUE(
+      test::eventually([&] { return farm.worker_named("frozen").value()["state"] == "idle"; }, 20s))
       << "the frozen worker's lease did not expire";
   auto rescuer = farm.start_worker("rescuer", 1);
   ASSERT_TRUE(test::eventually(
-      [&] { return farm.worker_named("rescuer").value_or(json{{"tiles_rendered", 0}})["tiles_rendered"] >= 2; },
+      [&] {
+        return farm.worker_named("rescuer").value_or(
+                   json{{"tiles_rendered", 0}})["tiles_rendered"] >= 2;
+      },
       30s));
   frozen->signal(SIGCONT);
 
@@ -105,9 +112,13 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
   // The frozen worker was told its late tiles were refused, dropped them and went on.
   ASSERT_TRUE(test::eventually(
-      [&] { return test::read_text(farm.dir() / "frozen.log").find("refused") != std::string::npos; }, 10s))
+      [&] {
+        return test::read_text(farm.dir() / "frozen.log").find("refused") != std::string::npos;
+      },
+      10s))
       << "the late result was not refused; see " << (farm.dir() / "frozen.log");
-  EXPECT_TRUE(frozen->wait_for(0ms) == std::nullopt) << "the frozen worker died instead of carrying on";
+  EXPECT_TRUE(frozen->wait_for(0ms) == std::nullopt)
+      << "the frozen worker died instead of carrying on";
   EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("duplicate result"), std::string::npos);
   const int by_frozen = farm.worker_named("frozen").value()["tiles_rendered"];
   const int by_rescuer = farm.worker_named("rescuer").value()["tiles_rendered"];
@@ -125,7 +136,8 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
                                  "--local-workers", "0", "--port-file", (dir / "port").string(),
                                  "--log-level", "info"},
         dir / log);
-    EXPECT_TRUE(test::eventually([&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s));
+    EXPECT_TRUE(test::eventually(
+        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s));
     int port = 0;
     std::ifstream(dir / "port") >> port;
     return std::pair{std::move(server), port};
@@ -139,7 +151,8 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   ASSERT_EQ(api.cancel(canceled)["state"], "canceled");
   auto worker = std::make_unique<test::Process>(
       TESSERA_WORKER_BIN,
-      std::vector<std::string>{"--server", url, "--threads", "1", "--name", "survivor", "--log-level", "info"},
+      std::vector<std::string>{"--server", url, "--threads", "1", "--name", "survivor",
+                               "--log-level", "info"},
       dir / "survivor.log");
   ASSERT_TRUE(test::eventually([&] { return api.job(id)["tiles"]["done"].get<int>() >= 10; }, 60s));
   server->signal(SIGKILL);
@@ -187,7 +200,9 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
 // Sets an environment variable for the processes started while it lives.
 class ScopedEnv {
  public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name) { ::setenv(name, value.c_str(), 1); }
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    ::setenv(name, value.c_str(), 1);
+  }
   ~ScopedEnv() { ::unsetenv(name_); }
 
  private:
@@ -240,22 +255,25 @@ TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob
   const json done = farm.wait_finished(id, 60s);
   ASSERT_EQ(done["state"], "failed") << done.dump();
   // 8 columns of 32-pixel tiles.
-  const std::string at = "(" + std::to_string(poison % 8 * 32) + ", " + std::to_string(poison / 8 * 32) + ")";
+  const std::string at =
+      "(" + std::to_string(poison % 8 * 32) + ", " + std::to_string(poison / 8 * 32) + ")";
   EXPECT_EQ(done["error"], "tile " + std::to_string(poison) + " at " + at +
                                " failed 3 times; the last error: fault injection: error on tile " +
                                std::to_string(poison));
   // Reporting is not crashing: every worker is still there, and tried the tile.
   int reporters = 0;
   for (const char* name : {"one", "two", "three"}) {
-    EXPECT_FALSE(workers[static_cast<std::size_t>(reporters)]->wait_for(0ms).has_value()) << name << " died";
-    reporters += test::read_text(farm.dir() / (std::string(name) + ".log")).find("failed: fault injection") !=
-                 std::string::npos;
+    EXPECT_FALSE(workers[static_cast<std::size_t>(reporters)]->wait_for(0ms).has_value())
+        << name << " died";
+    reporters += test::read_text(farm.dir() / (std::string(name) + ".log"))
+                     .find("failed: fault injection") != std::string::npos;
   }
   EXPECT_GE(reporters, 2) << "the tile was not retried on another worker";
 }
 
 // Runs a command to completion; true when it exited 0.
-bool run_command(const std::string& binary, const std::vector<std::string>& args, const fs::path& log) {
+bool run_command(const std::string& binary, const std::vector<std::string>& args,
+                 const fs::path& log) {
   test::Process process(binary, args, log);
   const auto status = process.wait_for(20s);
   return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
@@ -266,28 +284,33 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   const fs::path data = dir / "data";
   fs::create_directories(data);
   // A 2 MiB file system for the data dir: as root, a tmpfs of that size.
-  if (::geteuid() != 0 || !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=2m", "tmpfs", data.string()},
-                                       dir / "mount.log"))
+  if (::geteuid() != 0 ||
+      !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=2m", "tmpfs", data.string()},
+                   dir / "mount.log"))
     GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
                  << (dir / "mount.log");
   struct Unmount {
     fs::path path;
-    ~Unmount() { run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log"); }
+    ~Unmount() {
+      run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log");
+    }
   } unmount{data};
 
   auto server = std::make_unique<test::Process>(
       TESSERA_SERVER_BIN,
-      std::vector<std::string>{"--listen", "127.0.0.1:0", "--data-dir", data.string(), "--local-workers", "1",
-                               "--worker-threads", "1", "--port-file", (dir / "port").string(),
-                               "--log-level", "info"},
+      std::vector<std::string>{"--listen", "127.0.0.1:0", "--data-dir", data.string(),
+                               "--local-workers", "1", "--worker-threads", "1", "--port-file",
+                               (dir / "port").string(), "--log-level", "info"},
       dir / "server.log");
-  ASSERT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s)) << test::read_text(dir / "server.log");
+  ASSERT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s))
+      << test::read_text(dir / "server.log");
   int port = 0;
   std::ifstream(dir / "port") >> port;
   const std::string url = "http://127.0.0.1:" + std::to_string(port);
   test::JsonApi api(url);
   // 256 tiles of 12 KiB of pixels: 3 MiB, more than the disk holds.
-  const std::string id = api.submit("too big for the disk", 50, test::showcase(512, 512, 1, 32))["id"];
+  const std::string id =
+      api.submit("too big for the disk", 50, test::showcase(512, 512, 1, 32))["id"];
   json job;
   ASSERT_TRUE(test::eventually(
       [&] {
@@ -306,8 +329,8 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   HttpClient http(url, 10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
   EXPECT_EQ(http.request("GET", "/v1/jobs").status, 200);
-  const HttpResult again = http.request("POST", "/v1/jobs",
-                                        json{{"name", "small"}, {"scene", test::showcase(16, 16, 1, 16)}}.dump());
+  const HttpResult again = http.request(
+      "POST", "/v1/jobs", json{{"name", "small"}, {"scene", test::showcase(16, 16, 1, 16)}}.dump());
   EXPECT_TRUE(again.status == 201 || again.status == 507) << again.status << " " << again.body;
   if (again.status == 507) {
     EXPECT_NE(again.body.find("storage_failed"), std::string::npos) << again.body;
@@ -323,7 +346,8 @@ TEST(FarmFaults, AWorkerThatKeepsFailingOnAJobIsKeptOffIt) {
   std::unique_ptr<test::Process> flaky;
   {
     // It fails on three tiles; after two failures it gets no more of this job's tiles.
-    const ScopedEnv fault("TESSERA_FAULT_INJECTION", "error:" + std::to_string(first_tile_of(scene)) + ",0,47");
+    const ScopedEnv fault("TESSERA_FAULT_INJECTION",
+                          "error:" + std::to_string(first_tile_of(scene)) + ",0,47");
     flaky = farm.start_worker("flaky", 1);
   }
   auto sound = farm.start_worker("sound", 1);

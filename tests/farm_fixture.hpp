@@ -43,7 +43,8 @@ inline std::string read_text(const farm_fs::path& path) {
 }
 
 inline void write_text(const farm_fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary).write(text.data(), static_cast<std::streamsize>(text.size()));
+  std::ofstream(path, std::ios::binary)
+      .write(text.data(), static_cast<std::streamsize>(text.size()));
 }
 
 // A coordinator with `workers` local worker processes on an ephemeral port.
@@ -52,13 +53,16 @@ class Farm {
   Farm(const std::string& name, int workers, const std::vector<std::string>& extra = {})
       : dir_(fresh_dir(name)) {
     using namespace std::chrono_literals;
-    std::vector<std::string> args{"--listen", "127.0.0.1:0", "--data-dir", (dir_ / "data").string(),
-                                  "--local-workers", std::to_string(workers), "--port-file",
-                                  (dir_ / "port").string(), "--log-level", "warn"};
+    std::vector<std::string> args{"--listen",        "127.0.0.1:0",
+                                  "--data-dir",      (dir_ / "data").string(),
+                                  "--local-workers", std::to_string(workers),
+                                  "--port-file",     (dir_ / "port").string(),
+                                  "--log-level",     "warn"};
     args.insert(args.end(), extra.begin(), extra.end());
     server_ = std::make_unique<Process>(TESSERA_SERVER_BIN, args, dir_ / "server.log");
     const bool up = eventually([&] { return farm_fs::exists(dir_ / "port"); }, 20s);
-    if (!up) throw std::runtime_error("server did not start; see " + (dir_ / "server.log").string());
+    if (!up)
+      throw std::runtime_error("server did not start; see " + (dir_ / "server.log").string());
     std::ifstream(dir_ / "port") >> port_;
     api_ = std::make_unique<JsonApi>(url());
   }
@@ -139,7 +143,8 @@ inline std::vector<pid_t> children_of(pid_t parent) {
 
 // The showcase scene at a size, sampling and tile size small enough for a test.
 inline nlohmann::json showcase(int width, int height, int spp, int tile_size) {
-  nlohmann::json scene = read_json_file(farm_fs::path(TESSERA_SOURCE_DIR) / "examples" / "showcase.json");
+  nlohmann::json scene =
+      read_json_file(farm_fs::path(TESSERA_SOURCE_DIR) / "examples" / "showcase.json");
   scene["image"] = {{"width", width}, {"height", height}};
   scene["render"]["samples_per_pixel"] = spp;
   scene["render"]["tile_size"] = tile_size;
@@ -160,7 +165,8 @@ inline ::testing::AssertionResult same_pixels(const Image& actual, const Image& 
     return ::testing::AssertionFailure()
            << actual.width() << "x" << actual.height() << " instead of " << expected.width() << "x"
            << expected.height();
-  if (std::memcmp(actual.pixels().data(), expected.pixels().data(), expected.pixels().size_bytes()) != 0)
+  if (std::memcmp(actual.pixels().data(), expected.pixels().data(),
+                  expected.pixels().size_bytes()) != 0)
     return ::testing::AssertionFailure() << "pixels differ from the local render";
   return ::testing::AssertionSuccess();
 }

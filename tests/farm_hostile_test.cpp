@@ -45,10 +45,14 @@ std::vector<BadRequest> bad_requests() {
       {"wrong type", "POST", "/v1/jobs", with_scene("/image/width", "wide"), 400},
       {"negative radius", "POST", "/v1/jobs", with_scene("/objects/1/radius", -1), 400},
       {"huge string", "POST", "/v1/jobs",
-       json{{"name", std::string(2 << 20, 'x')}, {"scene", scene}}.dump().substr(0, 60) + "\"}", 400},
-      {"a huge name", "POST", "/v1/jobs", json{{"name", std::string(1 << 20, 'x')}, {"scene", scene}}.dump(), 400},
-      {"a huge worker name", "POST", "/v1/workers", json{{"name", std::string(100000, 'w')}}.dump(), 400},
-      {"a huge array of zeros", "POST", "/v1/jobs", with_scene("/objects", json(std::vector<int>(50000, 0))), 400},
+       json{{"name", std::string(2 << 20, 'x')}, {"scene", scene}}.dump().substr(0, 60) + "\"}",
+       400},
+      {"a huge name", "POST", "/v1/jobs",
+       json{{"name", std::string(1 << 20, 'x')}, {"scene", scene}}.dump(), 400},
+      {"a huge worker name", "POST", "/v1/workers", json{{"name", std::string(100000, 'w')}}.dump(),
+       400},
+      {"a huge array of zeros", "POST", "/v1/jobs",
+       with_scene("/objects", json(std::vector<int>(50000, 0))), 400},
       {"not an object", "POST", "/v1/jobs", "[1, 2, 3]", 400},
       {"unknown route", "GET", "/v1/nope", "", 404},
       {"unknown job", "GET", "/v1/jobs/j-nope", "", 404},
@@ -58,7 +62,8 @@ std::vector<BadRequest> bad_requests() {
       {"upload for no lease", "PUT", "/v1/leases/l-nope/result", std::string(12, '\0'), 409},
       {"upload of a broken size", "PUT", "/v1/leases/l-nope/result", std::string(13, '\0'), 400},
       {"register without a name", "POST", "/v1/workers", "{\"threads\": 2}", 400},
-      {"failure report without a tile", "POST", "/v1/leases/l-nope/fail", "{\"error\": \"x\"}", 400},
+      {"failure report without a tile", "POST", "/v1/leases/l-nope/fail", "{\"error\": \"x\"}",
+       400},
       {"claim for no worker", "POST", "/v1/workers/w-nope/claim?wait_s=0", "", 404},
       {"bad wait", "GET", "/v1/jobs/j-nope?wait_s=forever", "", 400},
   };
@@ -79,8 +84,8 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
         try {
           const HttpResult result = http.request(bad.method, bad.target, bad.body);
           const json body = json::parse(result.body, nullptr, false);
-          const bool shaped = body.is_object() && body.contains("error") && body["error"].contains("code") &&
-                              body["error"].contains("message");
+          const bool shaped = body.is_object() && body.contains("error") &&
+                              body["error"].contains("code") && body["error"].contains("message");
           if (result.status != bad.status || !shaped) {
             ADD_FAILURE() << bad.what << ": " << result.status << " " << result.body.substr(0, 200);
             ++wrong;

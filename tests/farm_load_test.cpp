@@ -34,7 +34,8 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   Farm farm("load", 0);
   const json scene = test::showcase(16, 16, 1, 16);
   std::vector<std::string> ids;
-  for (int i = 0; i < 20; ++i) ids.push_back(farm.api().submit("seed-" + std::to_string(i), 50, scene)["id"]);
+  for (int i = 0; i < 20; ++i)
+    ids.push_back(farm.api().submit("seed-" + std::to_string(i), 50, scene)["id"]);
 
   constexpr int pollers = 300;
   constexpr int submitters = 4;
@@ -98,14 +99,17 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   ASSERT_FALSE(latencies_ms.empty());
   std::sort(latencies_ms.begin(), latencies_ms.end());
   const auto percentile = [&](double p) {
-    return latencies_ms[std::min(latencies_ms.size() - 1, static_cast<std::size_t>(p * latencies_ms.size()))];
+    return latencies_ms[std::min(latencies_ms.size() - 1,
+                                 static_cast<std::size_t>(p * latencies_ms.size()))];
   };
   std::printf(
-      "load: %d pollers and %d submitters for %.1f s: %ld status polls (%.0f/s), %ld jobs submitted "
+      "load: %d pollers and %d submitters for %.1f s: %ld status polls (%.0f/s), %ld jobs "
+      "submitted "
       "(%.0f/s), %ld errors; GET /v1/jobs/{id} latency p50 %.2f ms, p99 %.2f ms, max %.2f ms; "
       "coordinator memory %ld KiB after warm-up, peak %ld KiB\n",
-      pollers, submitters, seconds, polls.load(), polls / seconds, submissions.load(), submissions / seconds,
-      errors.load(), percentile(0.50), percentile(0.99), latencies_ms.back(), warm_kib, peak_kib);
+      pollers, submitters, seconds, polls.load(), polls / seconds, submissions.load(),
+      submissions / seconds, errors.load(), percentile(0.50), percentile(0.99), latencies_ms.back(),
+      warm_kib, peak_kib);
   RecordProperty("p99_ms", std::to_string(percentile(0.99)));
   EXPECT_EQ(errors.load(), 0);
   EXPECT_GT(submissions.load(), 0);

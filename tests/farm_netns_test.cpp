@@ -41,7 +41,8 @@ class Namespaces {
  public:
   Namespaces(std::string ip, fs::path log) : ip_(std::move(ip)), log_(std::move(log)) {}
   ~Namespaces() {
-    for (auto it = names_.rbegin(); it != names_.rend(); ++it) ip_command(ip_, {"netns", "del", *it}, log_);
+    for (auto it = names_.rbegin(); it != names_.rend(); ++it)
+      ip_command(ip_, {"netns", "del", *it}, log_);
   }
   Namespaces(const Namespaces&) = delete;
   Namespaces& operator=(const Namespaces&) = delete;
@@ -76,8 +77,10 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   // its worker's namespace, so nothing ever appears in the host's namespace.
   const std::vector<std::vector<std::string>> links = {
       {"-n", coordinator, "link", "add", "br0", "type", "bridge"},
-      {"-n", coordinator, "link", "add", "va", "type", "veth", "peer", "name", "eth0", "netns", host_a},
-      {"-n", coordinator, "link", "add", "vb", "type", "veth", "peer", "name", "eth0", "netns", host_b},
+      {"-n", coordinator, "link", "add", "va", "type", "veth", "peer", "name", "eth0", "netns",
+       host_a},
+      {"-n", coordinator, "link", "add", "vb", "type", "veth", "peer", "name", "eth0", "netns",
+       host_b},
   };
   for (const auto& command : links)
     if (!ip_command(ip, command, setup_log))
@@ -102,10 +105,11 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
 
   // Off loopback and without tokens, the coordinator refuses to start, and says why.
   {
-    test::Process open_server(ip,
-                              {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0",
-                               "--data-dir", (dir / "open-data").string(), "--local-workers", "0"},
-                              dir / "open-server.log");
+    test::Process open_server(
+        ip,
+        {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0", "--data-dir",
+         (dir / "open-data").string(), "--local-workers", "0"},
+        dir / "open-server.log");
     const auto status = open_server.wait_for(20s);
     ASSERT_TRUE(status.has_value()) << "a coordinator without tokens listened on 10.77.0.1";
     EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 2) << "status " << *status;
@@ -120,12 +124,13 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
 
   // The coordinator listens on its bridge address only, on an ephemeral port.
   const fs::path port_file = dir / "port";
-  test::Process server(ip,
-                       {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0",
-                        "--data-dir", (dir / "data").string(), "--local-workers", "0", "--port-file",
-                        port_file.string(), "--log-level", "info", "--api-token-file",
-                        (dir / "api.token").string(), "--worker-token-file", (dir / "worker.token").string()},
-                       dir / "server.log");
+  test::Process server(
+      ip,
+      {"netns", "exec", coordinator, TESSERA_SERVER_BIN, "--listen", "10.77.0.1:0", "--data-dir",
+       (dir / "data").string(), "--local-workers", "0", "--port-file", port_file.string(),
+       "--log-level", "info", "--api-token-file", (dir / "api.token").string(),
+       "--worker-token-file", (dir / "worker.token").string()},
+      dir / "server.log");
   ASSERT_TRUE(test::eventually([&] { return fs::exists(port_file); }, 20s))
       << "the server did not start; see " << (dir / "server.log");
   int port = 0;
@@ -135,8 +140,9 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   const auto start_worker = [&](const std::string& ns, const std::string& name) {
     return std::make_unique<test::Process>(
         ip,
-        std::vector<std::string>{"netns", "exec", ns, TESSERA_WORKER_BIN, "--server", url, "--threads", "1",
-                                 "--name", name, "--token-file", (dir / "worker.token").string()},
+        std::vector<std::string>{"netns", "exec", ns, TESSERA_WORKER_BIN, "--server", url,
+                                 "--threads", "1", "--name", name, "--token-file",
+                                 (dir / "worker.token").string()},
         dir / (name + ".log"));
   };
   const auto worker_a = start_worker(host_a, "host-a");
@@ -146,8 +152,8 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   const std::vector<std::string> on_host_b{ip, "netns", "exec", host_b};
   const auto workers = [&] {
     const test::CliRun run = test::run_cli(
-        dir, {"--server", url, "--token-file", (dir / "api.token").string(), "--json", "workers"}, 30s,
-        on_host_b);
+        dir, {"--server", url, "--token-file", (dir / "api.token").string(), "--json", "workers"},
+        30s, on_host_b);
     if (run.exit_code != 0) return json::array();
     const json reply = json::parse(run.output, nullptr, false);
     return reply.is_discarded() ? json::array() : reply["workers"];
@@ -166,11 +172,11 @@ TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
   const fs::path scene_file = dir / "scene.json";
   test::write_text(scene_file, scene.dump());
   const fs::path image_file = dir / "out.exr";
-  const test::CliRun submitted = test::run_cli(
-      dir,
-      {"--server", url, "--token-file", (dir / "api.token").string(), "submit", scene_file.string(), "--wait",
-       "-o", image_file.string()},
-      60s, on_host_b);
+  const test::CliRun submitted =
+      test::run_cli(dir,
+                    {"--server", url, "--token-file", (dir / "api.token").string(), "submit",
+                     scene_file.string(), "--wait", "-o", image_file.string()},
+                    60s, on_host_b);
   ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
   EXPECT_TRUE(test::same_pixels(read_image(image_file), test::render_image(scene, 2)));
 

@@ -42,13 +42,14 @@ std::string tile_body(int width, int height, float value) {
 // Checks the one error shape of docs/api.md: the status and {"error": {"code", "message"}}.
 ::testing::AssertionResult is_error(const HttpResult& result, int status, const std::string& code) {
   if (result.status != status)
-    return ::testing::AssertionFailure() << "status " << result.status << " instead of " << status
-                                         << ": " << result.body;
+    return ::testing::AssertionFailure()
+           << "status " << result.status << " instead of " << status << ": " << result.body;
   const auto type = result.headers.find("content-type");
   if (type == result.headers.end() || type->second.find("application/json") == std::string::npos)
     return ::testing::AssertionFailure() << "error answer " << status << " is not JSON";
   const json body = json::parse(result.body, nullptr, false);
-  if (body.is_discarded() || !body.is_object() || !body.contains("error") || !body["error"].is_object())
+  if (body.is_discarded() || !body.is_object() || !body.contains("error") ||
+      !body["error"].is_object())
     return ::testing::AssertionFailure() << "no {\"error\": {...}} body: " << result.body;
   const json& error = body["error"];
   if (!error.contains("code") || !error["code"].is_string() || error["code"] != code)
@@ -76,8 +77,8 @@ class RawWorker {
   const json& registration() const { return registration_; }
 
   HttpResult claim(double wait_s, const std::string& more_query = "") {
-    return http_.request("POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s) +
-                                     more_query);
+    return http_.request(
+        "POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s) + more_query);
   }
   HttpResult heartbeat(const std::string& lease) {
     return http_.request("POST", "/v1/leases/" + lease + "/heartbeat");
@@ -118,7 +119,8 @@ Image decode_exr(const Farm& farm, const std::string& bytes) {
 }
 
 // The same pixels: EXR bytes themselves differ by the time they were written at.
-::testing::AssertionResult same_image(const Farm& farm, const std::string& a, const std::string& b) {
+::testing::AssertionResult same_image(const Farm& farm, const std::string& a,
+                                      const std::string& b) {
   return test::same_pixels(decode_exr(farm, a), decode_exr(farm, b));
 }
 
@@ -162,7 +164,8 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   EXPECT_GT(lease["expires_in_s"].get<double>(), 0);
   EXPECT_LE(lease["expires_in_s"].get<double>(), 30);
   // The scene a worker renders is the one submitted, fetched by its digest.
-  const HttpResult scene = http.request("GET", "/v1/scenes/" + lease["scene_digest"].get<std::string>());
+  const HttpResult scene =
+      http.request("GET", "/v1/scenes/" + lease["scene_digest"].get<std::string>());
   ASSERT_EQ(scene.status, 200);
   EXPECT_EQ(json::parse(scene.body), one_tile_scene());
   const json info = worker_info(farm, worker.id());
@@ -236,8 +239,9 @@ TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
   const auto index = [&](int i) { return std::to_string(tiles[static_cast<std::size_t>(i)]); };
 
   // Two tiles in one upload, each its own value.
-  const HttpResult first = worker.upload_tiles(lease_id, index(0) + "," + index(1),
-                                               tile_body(16, 16, 1.0f) + tile_body(16, 16, 2.0f), "10,20");
+  const HttpResult first =
+      worker.upload_tiles(lease_id, index(0) + "," + index(1),
+                          tile_body(16, 16, 1.0f) + tile_body(16, 16, 2.0f), "10,20");
   ASSERT_EQ(first.status, 200) << first.body;
   EXPECT_EQ(json::parse(first.body)["status"], "accepted");
   json job = farm.api().job(job_id);
@@ -253,20 +257,25 @@ TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
   // Refused, and nothing stored: a tile the lease does not hold, one named twice, a
   // missing ray count, the wrong size.
   const std::string before = exr_bytes(http, job_id);
-  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "0", tile_body(16, 16, 9.0f), "1"), 400, "wrong_tile"));
-  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2) + "," + index(2),
-                                           tile_body(16, 16, 9.0f) + tile_body(16, 16, 9.0f), "1,1"),
-                       400, "wrong_tile"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "0", tile_body(16, 16, 9.0f), "1"), 400,
+                       "wrong_tile"));
+  EXPECT_TRUE(
+      is_error(worker.upload_tiles(lease_id, index(2) + "," + index(2),
+                                   tile_body(16, 16, 9.0f) + tile_body(16, 16, 9.0f), "1,1"),
+               400, "wrong_tile"));
   EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2) + "," + index(3),
                                            tile_body(16, 16, 9.0f) + tile_body(16, 16, 9.0f), "1"),
                        400, "invalid_request"));
-  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2), tile_body(16, 8, 9.0f), "1"), 400, "wrong_size"));
-  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "x", tile_body(16, 16, 9.0f), "1"), 400, "invalid_request"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, index(2), tile_body(16, 8, 9.0f), "1"), 400,
+                       "wrong_size"));
+  EXPECT_TRUE(is_error(worker.upload_tiles(lease_id, "x", tile_body(16, 16, 9.0f), "1"), 400,
+                       "invalid_request"));
   EXPECT_TRUE(same_image(farm, exr_bytes(http, job_id), before));
 
   // A retried group beside a new tile: the repeat is ignored, the new tile stored.
-  const HttpResult mixed = worker.upload_tiles(lease_id, index(1) + "," + index(2),
-                                               tile_body(16, 16, 7.0f) + tile_body(16, 16, 3.0f), "20,30");
+  const HttpResult mixed =
+      worker.upload_tiles(lease_id, index(1) + "," + index(2),
+                          tile_body(16, 16, 7.0f) + tile_body(16, 16, 3.0f), "20,30");
   ASSERT_EQ(mixed.status, 200) << mixed.body;
   EXPECT_EQ(json::parse(mixed.body)["status"], "accepted");
   const HttpResult repeat = worker.upload_tiles(lease_id, index(2), tile_body(16, 16, 7.0f), "30");
@@ -335,7 +344,8 @@ TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
   const auto delivered_at = Clock::now();
   ASSERT_EQ(worker.upload(json::parse(claimed.body)["id"], tile_body(16, 16, 0.5f)).status, 200);
   const HttpResult finished = parked.get();
-  EXPECT_LT(Clock::now() - delivered_at, 5s) << "the status waited for its timeout instead of the job";
+  EXPECT_LT(Clock::now() - delivered_at, 5s)
+      << "the status waited for its timeout instead of the job";
   ASSERT_EQ(finished.status, 200) << finished.body;
   EXPECT_EQ(json::parse(finished.body)["state"], "completed");
   // A finished job answers at once.
@@ -449,7 +459,8 @@ RawAnswer send_head_only(int port, const std::string& head) {
     const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
     if (n <= 0) break;  // closed, or no answer within the timeout
     received.append(buffer, static_cast<std::size_t>(n));
-    if (header_end == std::string::npos && (header_end = received.find("\r\n\r\n")) != std::string::npos) {
+    if (header_end == std::string::npos &&
+        (header_end = received.find("\r\n\r\n")) != std::string::npos) {
       const std::string lower = [&] {
         std::string text = received.substr(0, header_end);
         for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -511,7 +522,8 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   EXPECT_EQ(submit(test::showcase(16, 16, 8, 16)).status, 201);
   const fs::path scene_file = farm.dir() / "over.json";
   test::write_text(scene_file, test::showcase(16, 16, 16, 16).dump());
-  const test::CliRun cli = test::run_cli(farm.dir(), {"--server", farm.url(), "submit", scene_file.string()});
+  const test::CliRun cli =
+      test::run_cli(farm.dir(), {"--server", farm.url(), "submit", scene_file.string()});
   EXPECT_EQ(cli.exit_code, 2) << cli.output;
   EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
 }
@@ -522,12 +534,14 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
 
   // 400
   EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", "{\"scene\": "), 400, "malformed_json"));
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", json{{"priority", 101}, {"scene", one_tile_scene()}}.dump()),
-                       400, "invalid_request"));
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers", "{\"threads\": 2}"), 400, "invalid_request"));
+  EXPECT_TRUE(is_error(
+      http.request("POST", "/v1/jobs", json{{"priority", 101}, {"scene", one_tile_scene()}}.dump()),
+      400, "invalid_request"));
+  EXPECT_TRUE(
+      is_error(http.request("POST", "/v1/workers", "{\"threads\": 2}"), 400, "invalid_request"));
   RawWorker worker(farm.url(), "errors");
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/" + worker.id() + "/claim?wait_s=soon"), 400,
-                       "invalid_request"));
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/" + worker.id() + "/claim?wait_s=soon"),
+                       400, "invalid_request"));
   EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs?state=sleeping"), 400, "invalid_request"));
 
   // 404
@@ -535,24 +549,30 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/j-missing"), 404, "not_found"));
   EXPECT_TRUE(is_error(http.request("DELETE", "/v1/jobs/j-missing"), 404, "not_found"));
   EXPECT_TRUE(is_error(http.request("GET", "/v1/scenes/0123abcd"), 404, "not_found"));
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/w-missing/claim?wait_s=0"), 404, "unknown_worker"));
+  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/w-missing/claim?wait_s=0"), 404,
+                       "unknown_worker"));
 
   // 405, naming what is allowed
   const HttpResult put_jobs = http.request("PUT", "/v1/jobs", "{}");
   EXPECT_TRUE(is_error(put_jobs, 405, "method_not_allowed"));
   ASSERT_TRUE(put_jobs.headers.contains("allow"));
-  EXPECT_NE(put_jobs.headers.at("allow").find("GET"), std::string::npos) << put_jobs.headers.at("allow");
-  EXPECT_NE(put_jobs.headers.at("allow").find("POST"), std::string::npos) << put_jobs.headers.at("allow");
+  EXPECT_NE(put_jobs.headers.at("allow").find("GET"), std::string::npos)
+      << put_jobs.headers.at("allow");
+  EXPECT_NE(put_jobs.headers.at("allow").find("POST"), std::string::npos)
+      << put_jobs.headers.at("allow");
   const HttpResult delete_health = http.request("DELETE", "/healthz");
   EXPECT_TRUE(is_error(delete_health, 405, "method_not_allowed"));
-  EXPECT_EQ(delete_health.headers.contains("allow") ? delete_health.headers.at("allow") : "", "GET");
+  EXPECT_EQ(delete_health.headers.contains("allow") ? delete_health.headers.at("allow") : "",
+            "GET");
 
   // 409: the state is wrong for the request
   const std::string job_id = farm.api().submit("queued", 50, one_tile_scene())["id"];
-  EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/" + job_id + "/image?format=png"), 409, "not_ready"));
+  EXPECT_TRUE(
+      is_error(http.request("GET", "/v1/jobs/" + job_id + "/image?format=png"), 409, "not_ready"));
   EXPECT_TRUE(is_error(http.request("DELETE", "/v1/jobs/" + job_id), 409, "not_finished"));
   ASSERT_EQ(http.request("POST", "/v1/jobs/" + job_id + "/cancel").status, 200);
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs/" + job_id + "/cancel"), 409, "already_finished"));
+  EXPECT_TRUE(
+      is_error(http.request("POST", "/v1/jobs/" + job_id + "/cancel"), 409, "already_finished"));
 
   // 410: no such lease (any more)
   EXPECT_TRUE(is_error(http.request("POST", "/v1/leases/l-missing/heartbeat"), 410, "lease_lost"));
@@ -573,11 +593,13 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
     EXPECT_TRUE(is_error(as_result, 413, "body_too_large"));
   }
   // Just over the job limit is refused too; the limit is 64 MiB, not some round number above it.
-  EXPECT_EQ(send_head_only(farm.port(),
-                           "POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
-                           "Content-Length: " + std::to_string((64 << 20) + 1) + "\r\n\r\n")
-                .status,
-            413);
+  EXPECT_EQ(
+      send_head_only(farm.port(),
+                     "POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
+                     "Content-Length: " +
+                         std::to_string((64 << 20) + 1) + "\r\n\r\n")
+          .status,
+      413);
 
   // After all of that the server is healthy and still takes work.
   HttpClient fresh(farm.url(), 10s);

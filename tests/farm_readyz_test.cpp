@@ -3,8 +3,8 @@
 // while /healthz still answers 200, so that a Kubernetes Service stops routing to a
 // draining coordinator without its liveness probe killing it. And the container image's
 // health check, deploy/docker/healthcheck.sh, against the same server.
-#include <csignal>
 #include <sys/wait.h>
+#include <csignal>
 
 #include <gtest/gtest.h>
 
@@ -92,9 +92,11 @@ TEST(FarmReadiness, ReadyWhileServingAndNotOnceShutdownHasBegun) {
   ::kill(workers[0], SIGSTOP);
   coordinator.process().signal(SIGTERM);
   HttpResult draining;
-  EXPECT_TRUE(test::eventually([&] { return (draining = coordinator.get("/readyz")).status == 503; }, 10s))
+  EXPECT_TRUE(
+      test::eventually([&] { return (draining = coordinator.get("/readyz")).status == 503; }, 10s))
       << "GET /readyz answered " << draining.status << " after SIGTERM";
-  EXPECT_EQ(nlohmann::json::parse(draining.body.empty() ? "{}" : draining.body)["error"]["code"], "shutting_down");
+  EXPECT_EQ(nlohmann::json::parse(draining.body.empty() ? "{}" : draining.body)["error"]["code"],
+            "shutting_down");
   EXPECT_EQ(coordinator.get("/healthz").status, 200) << "a draining coordinator is still alive";
   EXPECT_EQ(coordinator.get("/readyz").status, 503) << "readiness never comes back during shutdown";
 

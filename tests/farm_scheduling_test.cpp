@@ -49,15 +49,17 @@ TEST(FarmScheduling, TheHigherPriorityJobIsRenderedFirst) {
   // way, so the low job may start up to one tile before the high job is recorded finished.
   const std::int64_t high_start = epoch_ms(high_done["started_at"]);
   const std::int64_t high_end = epoch_ms(high_done["finished_at"]);
-  const std::int64_t one_tile = (high_end - high_start) / high_done["tiles"]["total"].get<int>() + 1;
+  const std::int64_t one_tile =
+      (high_end - high_start) / high_done["tiles"]["total"].get<int>() + 1;
   EXPECT_GE(epoch_ms(low_done["started_at"]), high_end - 2 * one_tile)
-      << "low started at " << low_done["started_at"] << ", high ran from " << high_done["started_at"]
-      << " to " << high_done["finished_at"];
+      << "low started at " << low_done["started_at"] << ", high ran from "
+      << high_done["started_at"] << " to " << high_done["finished_at"];
 }
 
 TEST(FarmScheduling, AWorkerJoiningMidJobGetsTiles) {
   Farm farm("sched-late", 1, {"--worker-threads", "1"});
-  const json scene = test::showcase(320, 240, 32, 16);  // 300 tiles, ~2 s for one thread: outlasts a worker's start
+  const json scene = test::showcase(
+      320, 240, 32, 16);  // 300 tiles, ~2 s for one thread: outlasts a worker's start
   const std::string id = farm.api().submit("late join", 50, scene)["id"];
   ASSERT_TRUE(test::eventually([&] { return farm.api().job(id)["tiles"]["done"] >= 5; }, 30s));
 
@@ -117,7 +119,8 @@ TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
   EXPECT_GE(after["tiles_rendered"].get<int>(), rendered_before + 1)
       << "the tile in progress at SIGTERM was not delivered; see " << (farm.dir() / "first.log");
   EXPECT_EQ(after["state"], "gone");
-  EXPECT_LT(farm.api().job(id)["tiles"]["done"].get<int>(), total) << "nothing left for a second worker";
+  EXPECT_LT(farm.api().job(id)["tiles"]["done"].get<int>(), total)
+      << "nothing left for a second worker";
 
   auto second = farm.start_worker("second", 1);
   const json done = farm.wait_finished(id, 40s);

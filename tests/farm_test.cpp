@@ -22,9 +22,7 @@ using test::farm_image;
 using test::small_showcase;
 
 TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
-  const struct {
-    int workers, tile_size;
-  } cases[] = {{1, 32}, {2, 8}, {3, 64}, {2, 32}};
+  const struct { int workers, tile_size; } cases[] = {{1, 32}, {2, 8}, {3, 64}, {2, 32}};
   for (const auto& c : cases) {
     const json scene = small_showcase(c.tile_size);
     const Image local = test::render_image(scene, 2);
@@ -34,10 +32,12 @@ TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
     ASSERT_EQ(done["state"], "completed") << done.dump();
     const Image image = farm_image(farm, job["id"]);
     ASSERT_EQ(image.pixels().size(), local.pixels().size());
-    EXPECT_EQ(std::memcmp(image.pixels().data(), local.pixels().data(), local.pixels().size_bytes()), 0)
+    EXPECT_EQ(
+        std::memcmp(image.pixels().data(), local.pixels().data(), local.pixels().size_bytes()), 0)
         << c.workers << " workers, tile size " << c.tile_size;
     // Every tile rendered once: a worker that renders a tile twice shows up as a duplicate.
-    EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("duplicate result"), std::string::npos)
+    EXPECT_EQ(test::read_text(farm.dir() / "server.log").find("duplicate result"),
+              std::string::npos)
         << c.workers << " workers, tile size " << c.tile_size;
   }
 }
@@ -96,9 +96,10 @@ TEST(Farm, CliSubmitWaitWritesTheImage) {
   const fs::path scene = farm.dir() / "scene.json";
   std::ofstream(scene) << small_showcase(32).dump();
   const fs::path out = farm.dir() / "out.png";
-  test::Process cli(TESSERA_CLI_BIN,
-                    {"--server", farm.url(), "submit", scene.string(), "--wait", "-o", out.string()},
-                    farm.dir() / "cli.log");
+  test::Process cli(
+      TESSERA_CLI_BIN,
+      {"--server", farm.url(), "submit", scene.string(), "--wait", "-o", out.string()},
+      farm.dir() / "cli.log");
   const auto status = cli.wait_for(60s);
   ASSERT_TRUE(status.has_value());
   EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
@@ -114,7 +115,8 @@ TEST(Farm, CliSubmitWaitWritesTheImage) {
 
 TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   const fs::path dir = test::fresh_dir("restart");
-  const json scene = test::showcase(160, 120, 96, 16);  // 80 tiles, ~1.5 s for one thread: far longer than a poll
+  const json scene =
+      test::showcase(160, 120, 96, 16);  // 80 tiles, ~1.5 s for one thread: far longer than a poll
   auto start_server = [&](const std::string& name) {
     fs::remove(dir / "port");
     auto server = std::make_unique<test::Process>(
@@ -130,7 +132,8 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   };
   auto start_worker = [&](const std::string& url, const std::string& name) {
     return std::make_unique<test::Process>(
-        TESSERA_WORKER_BIN, std::vector<std::string>{"--server", url, "--threads", "1", "--name", name},
+        TESSERA_WORKER_BIN,
+        std::vector<std::string>{"--server", url, "--threads", "1", "--name", name},
         dir / (name + ".log"));
   };
 
@@ -167,7 +170,8 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
 TEST(Farm, ALocalWorkerThatDiesIsReplaced) {
   Farm farm("respawn", 1);
   std::vector<pid_t> before;
-  ASSERT_TRUE(test::eventually([&] { return (before = test::children_of(farm.server().pid())).size() == 1; }, 20s));
+  ASSERT_TRUE(test::eventually(
+      [&] { return (before = test::children_of(farm.server().pid())).size() == 1; }, 20s));
   ::kill(before[0], SIGKILL);
   std::vector<pid_t> after;
   ASSERT_TRUE(test::eventually(

@@ -38,13 +38,14 @@ TEST(Geometry, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
   // it at z = -3 + √(4 - 1.44) with the normal (1.2, 0, √2.56) / 2.
   json scene = pinhole_scene({1.2, 0, 10}, {1.2, 0, 0});
   scene["lights"].push_back({{"type", "directional"}, {"direction", {0, 0, -1}}, {"intensity", 1}});
-  scene["objects"].push_back(
-      {{"type", "sphere"},
-       {"center", {0, 0, 0}},
-       {"radius", 1},
-       {"transform",
-        {{{"rotate", {{"axis", {1, 1, 0}}, {"degrees", 37}}}}, {{"scale", 2}}, {{"translate", {0, 0, -3}}}}},
-       {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
+  scene["objects"].push_back({{"type", "sphere"},
+                              {"center", {0, 0, 0}},
+                              {"radius", 1},
+                              {"transform",
+                               {{{"rotate", {{"axis", {1, 1, 0}}, {"degrees", 37}}}},
+                                {{"scale", 2}},
+                                {{"translate", {0, 0, -3}}}}},
+                              {"material", {{"ambient", 0}, {"diffuse", 0.5}}}});
   EXPECT_NEAR(render_pixel(scene).r, 0.5 * std::sqrt(4.0 - 1.44) / 2.0, 1e-6);
   // Just outside the radius, the ray passes by.
   scene["camera"]["eye"] = {2.001, 0, 10};
@@ -58,7 +59,8 @@ TEST(Geometry, TheNearestOfSeveralPlanesIsHit) {
   auto plane_at = [](double z, double emission, json material_extra = json::object()) {
     json material = {{"ambient", 0}, {"diffuse", 0}, {"emission", emission}};
     material.update(material_extra);
-    return json{{"type", "plane"}, {"point", {0, 0, z}}, {"normal", {0, 0, 1}}, {"material", material}};
+    return json{
+        {"type", "plane"}, {"point", {0, 0, z}}, {"normal", {0, 0, 1}}, {"material", material}};
   };
   json scene = pinhole_scene({0, 0, 10}, {0, 0, 0});
   scene["objects"] = {plane_at(-4, 0.25), plane_at(2, 0.5), plane_at(-1, 0.75)};

@@ -22,8 +22,8 @@
 #include <thread>
 #include <vector>
 
-#include <boost/asio/io_context.hpp>
 #include <gtest/gtest.h>
+#include <boost/asio/io_context.hpp>
 #include <nlohmann/json.hpp>
 
 #include "common/net/http_client.hpp"
@@ -150,7 +150,8 @@ class RawConnection {
   // False once the connection is closed or the deadline has passed.
   bool receive_some(Clock::time_point deadline) {
     if (closed_) return false;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left <= 0ms) return false;
     pollfd entry{fd_, POLLIN, 0};
     if (::poll(&entry, 1, static_cast<int>(left.count())) <= 0) return false;
@@ -200,22 +201,25 @@ class HttpTest : public ::testing::Test {
                                   {"query", request.query},
                                   {"path", request.path}}));
     });
-    router_.add("DELETE", "/v1/jobs/{id}",
-                [](HttpRequest&&, Respond respond) { respond(HttpResponse{204, "", "", {}}); });
+    router_.add("DELETE", "/v1/jobs/{id}", [](HttpRequest&&, Respond respond) {
+      respond(HttpResponse{204, "", "", {}});
+    });
     router_.add("GET", "/v1/jobs/stats", [](HttpRequest&&, Respond respond) {
       respond(json_response(200, {{"route", "stats"}}));
     });
-    router_.add("POST", "/upload", [](HttpRequest&& request, Respond respond) {
-      respond(json_response(200, {{"size", request.body.size()},
-                                  {"content_type", request.headers["content-type"]},
-                                  {"x_test", request.headers["x-test"]}}));
-    }, 16);
+    router_.add(
+        "POST", "/upload",
+        [](HttpRequest&& request, Respond respond) {
+          respond(json_response(200, {{"size", request.body.size()},
+                                      {"content_type", request.headers["content-type"]},
+                                      {"x_test", request.headers["x-test"]}}));
+        },
+        16);
     router_.add("GET", "/whoami", [](HttpRequest&& request, Respond respond) {
       respond(json_response(200, {{"remote", request.remote_address}}));
     });
-    router_.add("GET", "/wait", [this](HttpRequest&&, Respond respond) {
-      parking_.park(std::move(respond));
-    });
+    router_.add("GET", "/wait",
+                [this](HttpRequest&&, Respond respond) { parking_.park(std::move(respond)); });
     router_.add("GET", "/throw", [](HttpRequest&&, Respond) -> void {
       throw std::runtime_error("handler failure");
     });
@@ -295,9 +299,11 @@ TEST(RouterTest, MatchesLiteralsAndParameters) {
   // The resource is the most specific pattern: its methods only.
   EXPECT_EQ(router.match("DELETE", "/v1/jobs/stats").error.status, 405);
 
-  const std::vector<std::pair<std::string, std::string>> expected = {
-      {"GET", "/v1/jobs/{id}"}, {"GET", "/v1/jobs/{id}/image"}, {"GET", "/v1/jobs/stats"},
-      {"DELETE", "/v1/jobs/{id}"}, {"GET", "/"}};
+  const std::vector<std::pair<std::string, std::string>> expected = {{"GET", "/v1/jobs/{id}"},
+                                                                     {"GET", "/v1/jobs/{id}/image"},
+                                                                     {"GET", "/v1/jobs/stats"},
+                                                                     {"DELETE", "/v1/jobs/{id}"},
+                                                                     {"GET", "/"}};
   EXPECT_EQ(router.routes(), expected);
 }
 
@@ -327,11 +333,14 @@ TEST(RouterTest, ParsesQueryStrings) {
 }
 
 TEST(HttpTypesTest, ErrorBodies) {
-  const HttpResponse with_path = error_response(422, "invalid_scene", "bad radius", "/objects/0/radius");
+  const HttpResponse with_path =
+      error_response(422, "invalid_scene", "bad radius", "/objects/0/radius");
   EXPECT_EQ(with_path.status, 422);
   EXPECT_EQ(with_path.content_type, "application/json");
-  EXPECT_EQ(json::parse(with_path.body),
-            json({{"error", {{"code", "invalid_scene"}, {"message", "bad radius"}, {"path", "/objects/0/radius"}}}}));
+  EXPECT_EQ(json::parse(with_path.body), json({{"error",
+                                                {{"code", "invalid_scene"},
+                                                 {"message", "bad radius"},
+                                                 {"path", "/objects/0/radius"}}}}));
   EXPECT_FALSE(json::parse(error_response(404, "not_found", "no").body)["error"].contains("path"));
   // Invalid UTF-8 is replaced, not thrown on.
   EXPECT_NO_THROW(json_response(200, {{"x", std::string("\xff\xfe")}}));
@@ -360,9 +369,11 @@ TEST_F(HttpTest, RoutesWithParametersAndQuery) {
   EXPECT_TRUE(deleted.body.empty());
   EXPECT_FALSE(deleted.headers.contains("content-type"));
 
-  const HttpResult upload = client.request("POST", "/upload", "0123456789", "text/plain", {{"X-Test", "yes"}});
+  const HttpResult upload =
+      client.request("POST", "/upload", "0123456789", "text/plain", {{"X-Test", "yes"}});
   ASSERT_EQ(upload.status, 200);
-  EXPECT_EQ(json::parse(upload.body), json({{"size", 10}, {"content_type", "text/plain"}, {"x_test", "yes"}}));
+  EXPECT_EQ(json::parse(upload.body),
+            json({{"size", 10}, {"content_type", "text/plain"}, {"x_test", "yes"}}));
 }
 
 TEST_F(HttpTest, NotFoundAndMethodNotAllowedHaveJsonErrors) {
@@ -391,8 +402,9 @@ TEST_F(HttpTest, OversizedBodyIsRefusedBeforeItIsSent) {
   start();
   RawConnection raw(server_->port());
   // Only the header: the 413 must come without the server waiting for 10 GB.
-  raw.send("POST /upload HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\n"
-           "Content-Length: 10000000000\r\n\r\n");
+  raw.send(
+      "POST /upload HTTP/1.1\r\nHost: x\r\nContent-Type: application/octet-stream\r\n"
+      "Content-Length: 10000000000\r\n\r\n");
   const std::string response = raw.read_response();
   ASSERT_EQ(status_of(response), 413) << response;
   EXPECT_EQ(body_of(response)["error"]["code"], "body_too_large");
@@ -401,8 +413,9 @@ TEST_F(HttpTest, OversizedBodyIsRefusedBeforeItIsSent) {
 
   // A chunked body announces no size: it is cut off at the limit as it arrives.
   RawConnection chunked(server_->port());
-  chunked.send("POST /upload HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"
-               "10\r\n0123456789abcdef\r\n10\r\n0123456789abcdef\r\n0\r\n\r\n");
+  chunked.send(
+      "POST /upload HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"
+      "10\r\n0123456789abcdef\r\n10\r\n0123456789abcdef\r\n0\r\n\r\n");
   EXPECT_EQ(status_of(chunked.read_response()), 413);
 
   // The limit is the route's: 16 bytes pass, 17 do not; the default limit is untouched.
@@ -428,14 +441,20 @@ TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
   std::promise<void> let_go;
   std::shared_future<void> released = let_go.get_future().share();
   std::atomic<bool> holding{false};
-  router_.add("POST", "/hold", [&](HttpRequest&&, Respond respond) {
-    holding = true;
-    released.wait();
-    respond(HttpResponse{204, "", "", {}});
-  }, 1 << 20);
-  router_.add("POST", "/big", [](HttpRequest&& request, Respond respond) {
-    respond(json_response(200, {{"size", request.body.size()}}));
-  }, 1 << 20);
+  router_.add(
+      "POST", "/hold",
+      [&](HttpRequest&&, Respond respond) {
+        holding = true;
+        released.wait();
+        respond(HttpResponse{204, "", "", {}});
+      },
+      1 << 20);
+  router_.add(
+      "POST", "/big",
+      [](HttpRequest&& request, Respond respond) {
+        respond(json_response(200, {{"size", request.body.size()}}));
+      },
+      1 << 20);
   HttpServerOptions options;
   options.budgeted_body_bytes = 100;
   options.body_budget_bytes = 1000;
@@ -450,7 +469,9 @@ TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
     return HttpClient(url(), 20s).request("POST", "/big", std::string(800, 'b'));
   });
   // ...while a body under the budgeted size goes at once.
-  EXPECT_EQ(json::parse(HttpClient(url(), 10s).request("POST", "/big", std::string(50, 's')).body)["size"], 50);
+  EXPECT_EQ(json::parse(
+                HttpClient(url(), 10s).request("POST", "/big", std::string(50, 's')).body)["size"],
+            50);
   EXPECT_EQ(waiting.wait_for(300ms), std::future_status::timeout);
 
   let_go.set_value();
@@ -459,7 +480,10 @@ TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
   EXPECT_EQ(result.status, 200);
   EXPECT_EQ(json::parse(result.body)["size"], 800);
   // A body larger than the whole budget goes when nothing else is held.
-  EXPECT_EQ(json::parse(HttpClient(url(), 10s).request("POST", "/big", std::string(5000, 'x')).body)["size"], 5000);
+  EXPECT_EQ(
+      json::parse(
+          HttpClient(url(), 10s).request("POST", "/big", std::string(5000, 'x')).body)["size"],
+      5000);
 }
 
 TEST_F(HttpTest, LateAnswerFromAnotherThreadWhileOthersAreServed) {
@@ -472,7 +496,8 @@ TEST_F(HttpTest, LateAnswerFromAnotherThreadWhileOthersAreServed) {
 
   // Other connections are served while the long-poll is parked.
   HttpClient other(url(), 10s);
-  for (int i = 0; i < 5; ++i) EXPECT_EQ(other.request("GET", "/v1/jobs/" + std::to_string(i)).status, 200);
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(other.request("GET", "/v1/jobs/" + std::to_string(i)).status, 200);
   EXPECT_EQ(waiting.wait_for(0s), std::future_status::timeout);
 
   std::thread answerer([respond = parking_.take()] {
@@ -508,7 +533,8 @@ TEST_F(HttpTest, KeepAliveServesTwoRequestsOnOneConnection) {
 
   // Pipelined on a raw connection: both answered, in order.
   RawConnection raw(server_->port());
-  raw.send("GET /v1/jobs/p1 HTTP/1.1\r\nHost: x\r\n\r\nGET /v1/jobs/p2 HTTP/1.1\r\nHost: x\r\n\r\n");
+  raw.send(
+      "GET /v1/jobs/p1 HTTP/1.1\r\nHost: x\r\n\r\nGET /v1/jobs/p2 HTTP/1.1\r\nHost: x\r\n\r\n");
   EXPECT_EQ(body_of(raw.read_response())["id"], "p1");
   EXPECT_EQ(body_of(raw.read_response())["id"], "p2");
 }
@@ -527,7 +553,8 @@ TEST_F(HttpTest, MalformedRequestGets400AndClose) {
   EXPECT_EQ(status_of(bad_length.read_response()), 400);
 
   RawConnection huge_header(server_->port());
-  huge_header.send("GET /v1/jobs/1 HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(64 * 1024, 'a') + "\r\n\r\n");
+  huge_header.send("GET /v1/jobs/1 HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(64 * 1024, 'a') +
+                   "\r\n\r\n");
   EXPECT_EQ(status_of(huge_header.read_response()), 431);
 
   HttpClient client(url(), 10s);

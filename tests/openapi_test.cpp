@@ -9,8 +9,8 @@
 #include <regex>
 #include <set>
 
-#include <boost/asio/io_context.hpp>
 #include <gtest/gtest.h>
+#include <boost/asio/io_context.hpp>
 
 #include "server/api_routes.hpp"
 #include "tests/openapi_routes.hpp"
@@ -23,7 +23,8 @@ using test::openapi_routes;
 using test::Route;
 
 TEST(OpenApi, ServerRoutesAndTheContractAgree) {
-  const fs::path dir = fs::temp_directory_path() / ("tessera-openapi-" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("tessera-openapi-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   {
     Store store(dir);
@@ -45,13 +46,16 @@ TEST(OpenApi, ServerRoutesAndTheContractAgree) {
 
     EXPECT_GE(documented.size(), 10u) << "docs/openapi.yaml was not read";
     for (const Route& route : served)
-      EXPECT_TRUE(documented.contains(route)) << route.first << " " << route.second << " is not in the OpenAPI file";
+      EXPECT_TRUE(documented.contains(route))
+          << route.first << " " << route.second << " is not in the OpenAPI file";
     for (const auto& [route, role] : documented) {
-      EXPECT_TRUE(served.contains(route)) << route.first << " " << route.second << " is documented but not served";
+      EXPECT_TRUE(served.contains(route))
+          << route.first << " " << route.second << " is documented but not served";
       // The role the server checks is the one the contract names ("" is public).
       const auto served_role = router.role_of(route.first, route.second);
       if (served_role) {
-        EXPECT_EQ(served_role->empty() ? "public" : *served_role, role) << route.first << " " << route.second;
+        EXPECT_EQ(served_role->empty() ? "public" : *served_role, role)
+            << route.first << " " << route.second;
       }
     }
   }

@@ -93,12 +93,30 @@ TEST(SceneDocument, HugeLiteralIsAJsonError) {
 // simdjson parses first; whatever it accepts must be exactly what nlohmann makes of the
 // same text, and what it refuses goes to nlohmann, which words the error or accepts it.
 TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
-  const char* const texts[] = {
-      "0", "-0.0", "5", "-5", "1.5", "0.1e1", "1E+2", "1e-320", "2.2250738585072014e-308",
-      "0.30000000000000004", "9007199254740993", "18446744073709551615", "-9223372036854775808",
-      "true", "null", "\"\"", "\"\\u0000\"", "\"\\ud834\\udd1e\"", "\"\\/\\b\\f\\n\\r\\t\"",
-      "[\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\"]", " \t\r\n{ \"a\" : [ 1 , { } , [ ] ] } \n",
-      "{\"a\": 1, \"a\": 2}", "{\"b\": 1, \"a\": {\"a\": [null, false]}}", "[[1,2,3],[4,5,6]]"};
+  const char* const texts[] = {"0",
+                               "-0.0",
+                               "5",
+                               "-5",
+                               "1.5",
+                               "0.1e1",
+                               "1E+2",
+                               "1e-320",
+                               "2.2250738585072014e-308",
+                               "0.30000000000000004",
+                               "9007199254740993",
+                               "18446744073709551615",
+                               "-9223372036854775808",
+                               "true",
+                               "null",
+                               "\"\"",
+                               "\"\\u0000\"",
+                               "\"\\ud834\\udd1e\"",
+                               "\"\\/\\b\\f\\n\\r\\t\"",
+                               "[\"\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\"]",
+                               " \t\r\n{ \"a\" : [ 1 , { } , [ ] ] } \n",
+                               "{\"a\": 1, \"a\": 2}",
+                               "{\"b\": 1, \"a\": {\"a\": [null, false]}}",
+                               "[[1,2,3],[4,5,6]]"};
   for (const char* text : texts) {
     const auto fast = parse_json_fast(text, 64);
     ASSERT_TRUE(fast.has_value()) << text;
@@ -114,9 +132,22 @@ TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
   EXPECT_EQ(parse_json_fast("-0", 64).value(), json::parse("-0"));
 
   // Refused here; nlohmann accepts the first three and refuses the rest.
-  const char* const refused[] = {"18446744073709551616", "-9223372036854775809", "\xef\xbb\xbf{}",
-                                 "1e400", "", "{} x", "[1,]", "01", "1.", "-", "\"\\ud800\"",
-                                 "\"a\x01\"", "\"\xff\"", "{'a': 1}", "[NaN]", "+1"};
+  const char* const refused[] = {"18446744073709551616",
+                                 "-9223372036854775809",
+                                 "\xef\xbb\xbf{}",
+                                 "1e400",
+                                 "",
+                                 "{} x",
+                                 "[1,]",
+                                 "01",
+                                 "1.",
+                                 "-",
+                                 "\"\\ud800\"",
+                                 "\"a\x01\"",
+                                 "\"\xff\"",
+                                 "{'a': 1}",
+                                 "[NaN]",
+                                 "+1"};
   for (const char* text : refused) EXPECT_FALSE(parse_json_fast(text, 64).has_value()) << text;
   EXPECT_EQ(parse_json_text("18446744073709551616"), json(18446744073709551616.0));
   EXPECT_EQ(parse_json_text("\xef\xbb\xbf{}"), json::object());
@@ -457,16 +488,19 @@ TEST(SceneLimits, EachLimitIsNamedWithItsValue) {
   EXPECT_EQ(limit_broken(with(scene, "/render/samples_per_pixel", 9), tight),
             (Broken{"max_samples_per_pixel", 8}));
   EXPECT_EQ(limit_broken(with(scene, "/render/max_depth", 3), tight), (Broken{"max_depth", 2}));
-  EXPECT_EQ(limit_broken(with(scene, "/render/tile_size", 17), tight), (Broken{"max_tile_size", 16}));
+  EXPECT_EQ(limit_broken(with(scene, "/render/tile_size", 17), tight),
+            (Broken{"max_tile_size", 16}));
   EXPECT_EQ(limit_broken(with(scene, "/objects", json::array({sphere(), sphere()})), tight),
             (Broken{"max_objects", 1}));
   const json light = {{"type", "directional"}, {"direction", {0, -1, 0}}};
   EXPECT_EQ(limit_broken(with(scene, "/lights", json::array({light, light})), tight),
             (Broken{"max_lights", 1}));
   const json two_materials = {{"a", {{"diffuse", 0.5}}}, {"b", {{"diffuse", 0.5}}}};
-  EXPECT_EQ(limit_broken(with(scene, "/materials", two_materials), tight), (Broken{"max_materials", 1}));
+  EXPECT_EQ(limit_broken(with(scene, "/materials", two_materials), tight),
+            (Broken{"max_materials", 1}));
   const json box = {{"type", "box"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}};
-  EXPECT_EQ(limit_broken(with(scene, "/objects", json::array({box})), tight), (Broken{"max_triangles", 1}));
+  EXPECT_EQ(limit_broken(with(scene, "/objects", json::array({box})), tight),
+            (Broken{"max_triangles", 1}));
   // Other rules are not limits, even where a maximum is involved.
   EXPECT_EQ(limit_broken(with(scene, "/render/max_depth", -1), tight), (Broken{"", 0}));
   EXPECT_EQ(limit_broken(with(scene, "/image/width", "wide"), tight), (Broken{"", 0}));

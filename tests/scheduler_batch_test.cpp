@@ -57,7 +57,7 @@ TEST_F(SchedulerBatchTest, EveryWorkerIsCountedInTheShareAndMaxTilesCaps) {
   EXPECT_EQ(s().claim(w1, 100)->tiles.size(), 16u);  // 64 / (2 * 2)
   EXPECT_EQ(s().claim(w2, 5)->tiles.size(), 5u);
   const std::string w3 = worker("three");
-  s().worker_left(w3);  // a worker that left takes no share
+  s().worker_left(w3);                                          // a worker that left takes no share
   EXPECT_EQ(s().claim(worker("four"), 100)->tiles.size(), 7u);  // 43 / (2 * 3)
 }
 
@@ -267,7 +267,8 @@ TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   const Lease added = *s().extend(lease.id, 16);
   ASSERT_EQ(added.tiles.size(), 16u);
   const auto count = [&](const char* table) {
-    return SqliteDb(store_->data_dir() / "tessera.db").query_text(std::string("SELECT count(*) FROM ") + table);
+    return SqliteDb(store_->data_dir() / "tessera.db")
+        .query_text(std::string("SELECT count(*) FROM ") + table);
   };
   EXPECT_EQ(count("leases"), "1");
   EXPECT_EQ(count("results"), "0");
@@ -277,7 +278,8 @@ TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   std::vector<std::vector<float>> pixels;
   std::vector<TileResult> group;
   for (const LeaseTile& tile : lease.tiles) pixels.push_back(tile_pixels(tile.rect, 1.0f));
-  for (std::size_t i = 0; i < lease.tiles.size(); ++i) group.push_back({lease.tiles[i].index, pixels[i], 10});
+  for (std::size_t i = 0; i < lease.tiles.size(); ++i)
+    group.push_back({lease.tiles[i].index, pixels[i], 10});
   ASSERT_EQ(s().complete(lease.id, group), ResultOutcome::accepted);
   EXPECT_EQ(count("results"), "1");
   EXPECT_EQ(count("leases"), "1");
@@ -297,8 +299,10 @@ TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   finish(job, w);
   s().wait_for_images();
   Image expected(96, 96);
-  for (const TileRect& rect : split_into_tiles(96, 96, 8)) expected.paste(rect, tile_pixels(rect, 0.0f));
-  for (std::size_t i = 0; i < lease.tiles.size(); ++i) expected.paste(lease.tiles[i].rect, pixels[i]);
+  for (const TileRect& rect : split_into_tiles(96, 96, 8))
+    expected.paste(rect, tile_pixels(rect, 0.0f));
+  for (std::size_t i = 0; i < lease.tiles.size(); ++i)
+    expected.paste(lease.tiles[i].rect, pixels[i]);
   EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
 }

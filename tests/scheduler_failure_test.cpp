@@ -17,7 +17,8 @@ class SchedulerFailureTest : public SchedulerTest {
   // Attempts of each tile of the one job of 9 tiles, as the store has them.
   std::vector<int> attempts() {
     std::vector<int> result(9, 0);
-    for (const TileFailureRow& row : store_->load().failures) result.at(row.tile_index) = row.attempts;
+    for (const TileFailureRow& row : store_->load().failures)
+      result.at(row.tile_index) = row.attempts;
     return result;
   }
 };
@@ -38,7 +39,8 @@ TEST_F(SchedulerFailureTest, ATileThatKeepsFailingFailsItsJobNamingTheTileAndThe
   }
   const JobStatus failed = *s().job(job);
   EXPECT_EQ(failed.state, JobState::failed);
-  EXPECT_EQ(failed.error, "tile 4 at (32, 32) failed 3 times; the last error: out of memory, try 3");
+  EXPECT_EQ(failed.error,
+            "tile 4 at (32, 32) failed 3 times; the last error: out of memory, try 3");
   EXPECT_EQ(failed.finished_at_ms, clock_.now_ms());
   EXPECT_EQ(failed.tiles_rendering, 0);
   // The farm moves on to the next job.

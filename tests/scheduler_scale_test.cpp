@@ -58,10 +58,10 @@ TEST_F(SchedulerTest, TheBatchShareCountsWorkersThatLeaveComeBackAndSurviveARest
   const std::string three = worker("three");
   EXPECT_EQ(s().claim(one, 256)->tiles.size(), 42u);  // 256 / (2 * 3)
   s().worker_left(two);
-  s().worker_left(two);  // leaving twice counts once
+  s().worker_left(two);                                 // leaving twice counts once
   EXPECT_EQ(s().claim(three, 256)->tiles.size(), 53u);  // 214 / (2 * 2)
-  s().touch_worker(two);  // talking again: present again
-  EXPECT_EQ(s().claim(two, 256)->tiles.size(), 26u);  // 161 / (2 * 3)
+  s().touch_worker(two);                                // talking again: present again
+  EXPECT_EQ(s().claim(two, 256)->tiles.size(), 26u);    // 161 / (2 * 3)
 
   // A restart forgets every worker without a lease until it talks again: here all three
   // hold one, so they stay, and a fourth that left before stays gone.
@@ -155,7 +155,8 @@ TEST_F(SchedulerTest, ResultsAcceptedWhileTheCanvasIsMadeOutsideTheLockAreInTheI
   for (std::thread& thread : threads) thread.join();
   s().wait_for_images();
   Image expected(1024, 512);
-  for (const TileRect& rect : split_into_tiles(1024, 512, 16)) expected.paste(rect, tile_pixels(rect, 0.5f));
+  for (const TileRect& rect : split_into_tiles(1024, 512, 16))
+    expected.paste(rect, tile_pixels(rect, 0.5f));
   EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
 }

@@ -163,8 +163,8 @@ TEST_F(SchedulerTest, StaleResultIsRefusedAfterReassignment) {
   EXPECT_EQ(deliver(old_lease, 1.0f), ResultOutcome::stale);
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), tile_pixels(new_lease.tiles[0].rect, 2.0f)));
   s().wait_for_images();
-  EXPECT_TRUE(
-      same_bits(read_image(store_->image_path(job)).pixels(), tile_pixels(new_lease.tiles[0].rect, 2.0f)));
+  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(),
+                        tile_pixels(new_lease.tiles[0].rect, 2.0f)));
 }
 
 TEST_F(SchedulerTest, ExpiredLeaseNotYetReassignedIsStillAccepted) {

@@ -3,10 +3,10 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
-#include <span>
-#include <thread>
 #include <fstream>
 #include <memory>
+#include <span>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -59,19 +59,24 @@ CREATE TRIGGER tile_pixels_deleted AFTER DELETE ON tiles
   BEGIN DELETE FROM tile_pixels WHERE id = old.pixels_id; END;
 )sql");
   for (int i = 0; i < 4; ++i)
-    db.statement("INSERT INTO tiles (job_id, tile_index, x, y, w, h, state) VALUES (?, ?, ?, ?, 20, 20, 'pending')")
+    db.statement(
+          "INSERT INTO tiles (job_id, tile_index, x, y, w, h, state) VALUES (?, ?, ?, ?, 20, 20, "
+          "'pending')")
         ->bind(1, job_id)
         .bind(2, i)
         .bind(3, (i % 2) * 20)
         .bind(4, (i / 2) * 20)
         .run();
   db.exec("UPDATE tiles SET attempts = 1, last_error = 'it broke' WHERE tile_index = 0");
-  db.statement("INSERT INTO tile_pixels (id, pixels) VALUES (7, ?)")->bind_blob(1, std::as_bytes(pixels)).run();
+  db.statement("INSERT INTO tile_pixels (id, pixels) VALUES (7, ?)")
+      ->bind_blob(1, std::as_bytes(pixels))
+      .run();
   db.exec(
       "UPDATE tiles SET state = 'done', worker_id = 'w-2', rays = 77, result_lease_id = 'l-0', "
       "pixels_id = 7 WHERE tile_index = 1");
   db.exec(
-      "UPDATE tiles SET state = 'leased', lease_id = 'l-1', worker_id = 'w-1', lease_expires_ms = 5 "
+      "UPDATE tiles SET state = 'leased', lease_id = 'l-1', worker_id = 'w-1', lease_expires_ms = "
+      "5 "
       "WHERE tile_index >= 2");
   db.exec("PRAGMA user_version=3");
 }
@@ -79,7 +84,9 @@ CREATE TRIGGER tile_pixels_deleted AFTER DELETE ON tiles
 // Version 2 kept a done tile's pixels in its row.
 void make_version_2(SqliteDb& db) {
   db.exec("ALTER TABLE tiles ADD COLUMN pixels BLOB");
-  db.exec("UPDATE tiles SET pixels = (SELECT p.pixels FROM tile_pixels p WHERE p.id = tiles.pixels_id)");
+  db.exec(
+      "UPDATE tiles SET pixels = (SELECT p.pixels FROM tile_pixels p WHERE p.id = "
+      "tiles.pixels_id)");
   db.exec("DROP TRIGGER tile_pixels_replaced");
   db.exec("DROP TRIGGER tile_pixels_deleted");
   db.exec("DROP TABLE tile_pixels");
@@ -174,7 +181,9 @@ void expect_upgraded(Store& store, const std::filesystem::path& db_file,
                      const std::vector<float>& pixels, bool with_failure) {
   SqliteDb db(db_file);
   EXPECT_EQ(db.query_text("PRAGMA user_version"), "4");
-  EXPECT_EQ(db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"), "0");
+  EXPECT_EQ(
+      db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"),
+      "0");
   const StoredState state = store.load();
   ASSERT_EQ(state.jobs.size(), 1u);
   if (with_failure) {
@@ -290,12 +299,14 @@ TEST_F(StoreTest, PixelsThatEndEarlyAreAnErrorNamingTheJobAndTile) {
   const std::vector<float> short_pixels(20 * 20 * 3 + 5, 1.0f);
   const std::vector<std::span<const float>> tiles{short_pixels};
   store_->insert_result(result_row("j-1", {0, 1}), tiles);
-  EXPECT_EQ(store_->load().results[0].pixel_bytes, static_cast<std::int64_t>(short_pixels.size() * 4));
+  EXPECT_EQ(store_->load().results[0].pixel_bytes,
+            static_cast<std::int64_t>(short_pixels.size() * 4));
   try {
     stored_pixels(*store_);
     FAIL() << "read past the stored pixels";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("job j-1 end before tile 1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("job j-1 end before tile 1"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -304,7 +315,7 @@ TEST_F(StoreTest, ALeaseIsReplacedWholeAndDeleted) {
   store_->put_lease({"l-1", "j-1", "w-1", {3, 1}});
   store_->put_lease({"l-2", "j-1", "w-2", {0}});
   store_->put_lease({"l-1", "j-1", "w-1", {3, 1, 2}});  // extended
-  store_->delete_lease("l-2");                           // delivered or given back
+  store_->delete_lease("l-2");                          // delivered or given back
   reopen();
   const StoredState state = store_->load();
   ASSERT_EQ(state.leases.size(), 1u);
@@ -324,7 +335,8 @@ TEST_F(StoreTest, TheWalIsCheckpointedWhileTheStoreWrites) {
   for (int round = 0; round < 400; ++round) store_->insert_result(result_row("j-1", tiles), {});
   const auto db_size = [&] { return std::filesystem::file_size(dir_ / "tessera.db"); };
   const auto start = std::chrono::steady_clock::now();
-  while (db_size() < 4096 * 4 && std::chrono::steady_clock::now() - start < std::chrono::seconds(10))
+  while (db_size() < 4096 * 4 &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(10))
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_GE(db_size(), 4096u * 4) << "nothing was checkpointed into the database file";
   reopen();

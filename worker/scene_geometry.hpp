@@ -26,8 +26,8 @@ inline constexpr std::uint32_t kNoObject = 0xffffffffu;
 struct SurfaceHit {
   double t;
   Vec3 position;
-  Vec3 normal;          // geometric, unit: outward for solids, as built for thin shapes
-  Vec3 shading_normal;  // unit; interpolated on smooth meshes, else `normal`
+  Vec3 normal;           // geometric, unit: outward for solids, as built for thin shapes
+  Vec3 shading_normal;   // unit; interpolated on smooth meshes, else `normal`
   std::uint32_t object;  // index into Scene::objects
 };
 
@@ -215,10 +215,10 @@ class SceneGeometry {
   // Both of the above: `t_max` null for unbounded rays.
   void intersect(const RayPacket& packet, const float (*t_max)[kPacketSize], unsigned mask,
                  SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
-  void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object,
-                  unsigned mask);
+  void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_box(const Box& box, const Mat4& transform, std::uint32_t object, unsigned mask);
-  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object, bool transmissive);
+  void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
+                 bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
   void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
   // Lower and upper corners of the box around a sphere's, a box's or a mesh's record.
@@ -227,8 +227,8 @@ class SceneGeometry {
   // index in plane_sets_[0] and distance, or -1 if `mask` leaves them out or none is there.
   int nearest_opaque_plane(const Ray& ray, float t_max, unsigned mask, double& t) const;
   // `exact_t` is the callback's distance, for spheres and planes.
-  void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u,
-                  float v, double exact_t, SurfaceHit& hit) const;
+  void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u, float v,
+                  double exact_t, SurfaceHit& hit) const;
 
   const EmbreeDevice& device_;
   EmbreeScene scene_;

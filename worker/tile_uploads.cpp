@@ -78,8 +78,9 @@ std::vector<FinishedTile> TileUploads::take_group() {
   while (count < ready_.size() && count < max_group_tiles_ &&
          (count == 0 || bytes + ready_[count].pixels.size() * sizeof(float) <= max_group_bytes_))
     bytes += ready_[count++].pixels.size() * sizeof(float);
-  std::vector<FinishedTile> group(std::make_move_iterator(ready_.begin()),
-                                  std::make_move_iterator(ready_.begin() + static_cast<long>(count)));
+  std::vector<FinishedTile> group(
+      std::make_move_iterator(ready_.begin()),
+      std::make_move_iterator(ready_.begin() + static_cast<long>(count)));
   ready_.erase(ready_.begin(), ready_.begin() + static_cast<long>(count));
   ready_bytes_ -= bytes;
   return group;

@@ -24,9 +24,9 @@ namespace tessera {
 
 struct WorkerOptions {
   std::string server_url = "http://127.0.0.1:8640";
-  std::string name;     // default: the host name
-  std::string token;    // the coordinator's worker token; "" for none
-  int threads = 0;      // 0: one per core
+  std::string name;   // default: the host name
+  std::string token;  // the coordinator's worker token; "" for none
+  int threads = 0;    // 0: one per core
   double claim_wait_s = 10;
   // Fault injection for the test suite: "crash:N" aborts the process, "error:N" reports
   // a failure, whenever tile N of any job is about to be rendered ("error:N,M" for
@@ -100,7 +100,7 @@ class WorkerDaemon {
   std::mutex refusal_mutex_;
   std::optional<std::pair<int, std::string>> refusal_;  // set by the upload threads
   std::unique_ptr<LeaseHeartbeat> heartbeat_;           // made at registration, with its interval
-  std::string uploading_lease_;                // the lease uploads_ sends for
+  std::string uploading_lease_;                         // the lease uploads_ sends for
   std::unique_ptr<TileUploads> uploads_;
   double tile_thread_seconds_ = 0;  // recent time per tile on one thread; 0: none seen yet
   std::string timed_scene_;         // the scene whose tiles tile_thread_seconds_ measures

@@ -1,14 +1,14 @@
 // tessera-worker: renders tiles for a coordinator.
+#include <pthread.h>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <pthread.h>
 #include <thread>
 
-#include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 #include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include "common/huge_page_malloc.hpp"
 #include "common/secret.hpp"
@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
   app.add_option("--threads", options.threads, "Rendering threads (default: one per core)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--name", options.name, "Name shown in `tessera workers` (default: host name)");
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
   std::string token_file;
   app.add_option("--token", options.token,
                  "The coordinator's worker token (default: $TESSERA_WORKER_TOKEN; --token-file "
@@ -31,8 +32,8 @@ int main(int argc, char** argv) {
   app.add_option("--token-file", token_file, "Read the worker token from this file");
   CLI11_PARSE(app, argc, argv);
   try {
-    options.token = tessera::resolve_secret(options.token, token_file, "TESSERA_WORKER_TOKEN",
-                                            "worker token");
+    options.token =
+        tessera::resolve_secret(options.token, token_file, "TESSERA_WORKER_TOKEN", "worker token");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

@@ -18,9 +18,9 @@
 #include <memory>
 #include <optional>
 
+#include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
-#include <CLI/CLI.hpp>
 
 #include "bench/coordinator_load/load_run.hpp"
 #include "bench/coordinator_load/server_process.hpp"
@@ -66,8 +66,10 @@ int main(int argc, char** argv) {
   CLI::App app{"tessera_coordinator_load: simulated workers against one tessera-server"};
   auto* bin = app.add_option("--server-bin", server_bin,
                              "Start this tessera-server on a free loopback port and measure it");
-  app.add_option("--server", server_url, "Or load a running coordinator at this URL")->excludes(bin);
-  app.add_option("--server-pid", server_pid, "With --server: its process id, for the /proc figures");
+  app.add_option("--server", server_url, "Or load a running coordinator at this URL")
+      ->excludes(bin);
+  app.add_option("--server-pid", server_pid,
+                 "With --server: its process id, for the /proc figures");
   app.add_option("--data-dir", data_dir,
                  "With --server-bin: where it keeps its data (default: a fresh directory, removed "
                  "afterwards); with --server: its --data-dir, to wait for the image file");
@@ -77,21 +79,32 @@ int main(int argc, char** argv) {
   app.add_option("--server-arg", server_args, "One more argument for the started server (repeat)")
       ->allow_extra_args(false);
   app.add_option("--workers", options.workers, "Simulated workers, one connection each")
-      ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--width", options.width, "Image width")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--height", options.height, "Image height")->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--width", options.width, "Image width")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--height", options.height, "Image height")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--tile-size", options.tile_size, "Tile edge in pixels")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--max-tiles", options.max_tiles, "max_tiles of every claim (1 to 256)")
-      ->capture_default_str()->check(CLI::Range(1, 256));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
   app.add_option("--render-ms", options.render_ms,
                  "Milliseconds each lease is rendered before its upload (0: none, the most load)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--claim-wait", options.claim_wait_s, "wait_s of every claim")
-      ->capture_default_str()->check(CLI::Range(0, 60));
+      ->capture_default_str()
+      ->check(CLI::Range(0, 60));
   app.add_option("--timeout", options.timeout_s, "Seconds the whole run may take")
-      ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_flag("--no-image-wait", no_image_wait, "Stop at the last tile, not once the image file is written");
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--no-image-wait", no_image_wait,
+               "Stop at the last tile, not once the image file is written");
   app.add_option("--api-token", options.api_token, "Bearer token for the job routes");
   app.add_option("--worker-token", options.worker_token, "Bearer token for the worker routes");
   app.add_flag("--json", options.json, "Print the report as one JSON object");
@@ -118,14 +131,15 @@ int main(int argc, char** argv) {
                          ("tessera-coordinator-load-" + std::to_string(::getpid()));
         std::filesystem::remove_all(dir);
       }
-      std::vector<std::string> args{"--log-level", server_log_level,
-                                    "--max-width", std::to_string(options.width),
-                                    "--max-height", std::to_string(options.height),
-                                    "--max-pixels",
-                                    std::to_string(static_cast<long long>(options.width) * options.height),
-                                    "--max-tile-size", std::to_string(options.tile_size)};
+      std::vector<std::string> args{
+          "--log-level",     server_log_level,
+          "--max-width",     std::to_string(options.width),
+          "--max-height",    std::to_string(options.height),
+          "--max-pixels",    std::to_string(static_cast<long long>(options.width) * options.height),
+          "--max-tile-size", std::to_string(options.tile_size)};
       args.insert(args.end(), server_args.begin(), server_args.end());
-      if (!options.worker_token.empty()) args.insert(args.end(), {"--worker-token", options.worker_token});
+      if (!options.worker_token.empty())
+        args.insert(args.end(), {"--worker-token", options.worker_token});
       if (!options.api_token.empty()) args.insert(args.end(), {"--api-token", options.api_token});
       process = std::make_unique<tessera::load::ServerProcess>(server_bin, dir, args);
       server.endpoint = {boost::asio::ip::make_address("127.0.0.1"), process->port()};

@@ -5,7 +5,8 @@ namespace tessera::load {
 
 using error_code = boost::system::error_code;
 
-HeartbeatPool::HeartbeatPool(boost::asio::io_context& io, const boost::asio::ip::tcp::endpoint& server,
+HeartbeatPool::HeartbeatPool(boost::asio::io_context& io,
+                             const boost::asio::ip::tcp::endpoint& server,
                              const std::string& authorization, LoadState& state, int connections)
     : state_(state) {
   for (int i = 0; i < connections; ++i)
@@ -39,23 +40,24 @@ void HeartbeatPool::post(Link& link, bool retried) {
     });
     return;
   }
-  link.http.request("POST", link.target, "", {}, [this, &link, retried](const error_code& ec, int status,
-                                                                        std::string_view) {
-    if (state_.finished) return;
-    if (ec) {
-      // The coordinator closes a kept-alive connection that idles too long: once more on
-      // a new one.
-      if (retried) return state_.fail("heartbeat: " + ec.message());
-      link.http.close();
-      link.connected = false;
-      return post(link, true);
-    }
-    ++state_.heartbeats;
-    // 410: the lease was lost; its upload will be refused and counted there. A lease that
-    // ended between the heartbeat being queued and sent is lost too, harmlessly.
-    if (status != 200) ++state_.heartbeats_lost;
-    next(link);
-  });
+  link.http.request("POST", link.target, "", {},
+                    [this, &link, retried](const error_code& ec, int status, std::string_view) {
+                      if (state_.finished) return;
+                      if (ec) {
+                        // The coordinator closes a kept-alive connection that idles too long: once
+                        // more on a new one.
+                        if (retried) return state_.fail("heartbeat: " + ec.message());
+                        link.http.close();
+                        link.connected = false;
+                        return post(link, true);
+                      }
+                      ++state_.heartbeats;
+                      // 410: the lease was lost; its upload will be refused and counted there. A
+                      // lease that ended between the heartbeat being queued and sent is lost too,
+                      // harmlessly.
+                      if (status != 200) ++state_.heartbeats_lost;
+                      next(link);
+                    });
 }
 
 void HeartbeatPool::stop() {

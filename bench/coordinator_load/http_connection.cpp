@@ -52,13 +52,15 @@ void HttpConnection::connect(std::function<void(const error_code&)> done) {
 }
 
 void HttpConnection::request(std::string_view method, std::string_view target,
-                             std::string_view extra_headers, std::span<const char> body, Done done) {
+                             std::string_view extra_headers, std::span<const char> body,
+                             Done done) {
   done_ = std::move(done);
   head_.clear();
   head_.append(method).append(" ").append(target).append(" HTTP/1.1\r\nHost: tessera\r\n");
   head_.append(authorization_).append(extra_headers);
   head_.append("Content-Length: ").append(std::to_string(body.size())).append("\r\n\r\n");
-  const std::array<net::const_buffer, 2> buffers{net::buffer(head_), net::buffer(body.data(), body.size())};
+  const std::array<net::const_buffer, 2> buffers{net::buffer(head_),
+                                                 net::buffer(body.data(), body.size())};
   net::async_write(socket_, buffers, [this](const error_code& ec, std::size_t) {
     if (ec) return finish(ec, 0, 0, 0);
     read_header();
@@ -66,22 +68,24 @@ void HttpConnection::request(std::string_view method, std::string_view target,
 }
 
 void HttpConnection::read_header() {
-  net::async_read_until(socket_, net::dynamic_buffer(in_), "\r\n\r\n",
-                        [this](const error_code& ec, std::size_t header_bytes) {
-    if (ec) return finish(ec, 0, 0, 0);
-    const std::string_view header(in_.data(), header_bytes);
-    int status = 0;
-    if (header.size() < 12 ||
-        std::from_chars(header.data() + 9, header.data() + 12, status).ec != std::errc())
-      return finish(net::error::invalid_argument, 0, 0, 0);
-    std::size_t length = 0;
-    if (status >= 200 && status != 204 && status != 304) {
-      const std::string_view text = header_value(header, "content-length:");
-      if (text.empty() || std::from_chars(text.data(), text.data() + text.size(), length).ec != std::errc())
-        return finish(net::error::invalid_argument, status, 0, 0);
-    }
-    read_body(header_bytes, status, length);
-  });
+  net::async_read_until(
+      socket_, net::dynamic_buffer(in_), "\r\n\r\n",
+      [this](const error_code& ec, std::size_t header_bytes) {
+        if (ec) return finish(ec, 0, 0, 0);
+        const std::string_view header(in_.data(), header_bytes);
+        int status = 0;
+        if (header.size() < 12 ||
+            std::from_chars(header.data() + 9, header.data() + 12, status).ec != std::errc())
+          return finish(net::error::invalid_argument, 0, 0, 0);
+        std::size_t length = 0;
+        if (status >= 200 && status != 204 && status != 304) {
+          const std::string_view text = header_value(header, "content-length:");
+          if (text.empty() ||
+              std::from_chars(text.data(), text.data() + text.size(), length).ec != std::errc())
+            return finish(net::error::invalid_argument, status, 0, 0);
+        }
+        read_body(header_bytes, status, length);
+      });
 }
 
 void HttpConnection::read_body(std::size_t header_bytes, int status, std::size_t body_bytes) {

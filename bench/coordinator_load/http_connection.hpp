@@ -19,7 +19,8 @@ namespace tessera::load {
 class HttpConnection {
  public:
   // The answer's body is valid during the call only.
-  using Done = std::function<void(const boost::system::error_code&, int status, std::string_view body)>;
+  using Done =
+      std::function<void(const boost::system::error_code&, int status, std::string_view body)>;
 
   // `authorization` is a whole "Authorization: ...\r\n" line, or "".
   HttpConnection(boost::asio::io_context& io, boost::asio::ip::tcp::endpoint server,

@@ -47,7 +47,7 @@ double own_cpu_seconds() {
 // The q-quantile (0..1) of sorted values; 0 for none.
 double quantile(const std::vector<float>& sorted, double q) {
   if (sorted.empty()) return 0;
-  const auto at = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size()))) ;
+  const auto at = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
   return sorted[std::clamp<std::size_t>(at, 1, sorted.size()) - 1];
 }
 
@@ -67,10 +67,13 @@ class LoadRun {
   LoadRun(const LoadOptions& options, const ServerUnderTest& server)
       : options_(options),
         server_(server),
-        client_(io_, server.endpoint,
-                options.api_token.empty() ? "" : "Authorization: Bearer " + options.api_token + "\r\n"),
+        client_(
+            io_, server.endpoint,
+            options.api_token.empty() ? "" : "Authorization: Bearer " + options.api_token + "\r\n"),
         heartbeats_(io_, server.endpoint,
-                    options.worker_token.empty() ? "" : "Authorization: Bearer " + options.worker_token + "\r\n",
+                    options.worker_token.empty()
+                        ? ""
+                        : "Authorization: Bearer " + options.worker_token + "\r\n",
                     state_, 8),
         settle_timer_(io_),
         sample_timer_(io_),
@@ -81,14 +84,16 @@ class LoadRun {
     const std::size_t largest_tile =
         static_cast<std::size_t>(options.tile_size) * options.tile_size * 3 * sizeof(float);
     // 0.5 in every channel: any float would do, the coordinator only checks the size.
-    const std::vector<float> half(std::max(state_.max_upload_bytes, largest_tile) / sizeof(float), 0.5f);
+    const std::vector<float> half(std::max(state_.max_upload_bytes, largest_tile) / sizeof(float),
+                                  0.5f);
     state_.pixels.assign(reinterpret_cast<const char*>(half.data()),
                          reinterpret_cast<const char*>(half.data() + half.size()));
   }
 
   int run() {
-    const std::string worker_auth =
-        options_.worker_token.empty() ? "" : "Authorization: Bearer " + options_.worker_token + "\r\n";
+    const std::string worker_auth = options_.worker_token.empty()
+                                        ? ""
+                                        : "Authorization: Bearer " + options_.worker_token + "\r\n";
     rss_empty_kib_ = rss();
     state_.on_parked = [this] {
       if (++parked_ == options_.workers) settle();
@@ -101,7 +106,8 @@ class LoadRun {
     state_.heartbeat = [this](const std::string& lease_id) { heartbeats_.send(lease_id); };
     workers_.reserve(static_cast<std::size_t>(options_.workers));
     for (int i = 0; i < options_.workers; ++i) {
-      workers_.push_back(std::make_unique<SimulatedWorker>(io_, server_.endpoint, worker_auth, state_, i));
+      workers_.push_back(
+          std::make_unique<SimulatedWorker>(io_, server_.endpoint, worker_auth, state_, i));
       workers_.back()->start();
     }
     deadline_.expires_after(std::chrono::duration_cast<steady::duration>(
@@ -115,7 +121,8 @@ class LoadRun {
     });
     sample();
     io_.run();
-    if (state_.errors == 0 && options_.wait_for_image && !server_.images_dir.empty()) wait_for_image();
+    if (state_.errors == 0 && options_.wait_for_image && !server_.images_dir.empty())
+      wait_for_image();
     if (server_.pid) hwm_kib_ = process_status_kib(server_.pid, "VmHWM");
     if (state_.errors == 0)
       for (const std::string& format : options_.downloads) download(format);
@@ -246,8 +253,9 @@ class LoadRun {
   // sampled every 20 ms while it is answered.
   void download(const std::string& format) {
     net::io_context io(1);
-    HttpConnection http(io, server_.endpoint,
-                        options_.api_token.empty() ? "" : "Authorization: Bearer " + options_.api_token + "\r\n");
+    HttpConnection http(
+        io, server_.endpoint,
+        options_.api_token.empty() ? "" : "Authorization: Bearer " + options_.api_token + "\r\n");
     net::steady_timer sampler(io);
     Download result{format};
     const std::int64_t before = rss();
@@ -268,14 +276,16 @@ class LoadRun {
         sampler.cancel();
         return;
       }
-      http.request("GET", target, "", {}, [&](const error_code& e, int status, std::string_view body) {
-        result.seconds = seconds_between(start, steady::now());
-        result.bytes = body.size();
-        if (e || status != 200)
-          state_.record_error("download " + format + ": " + (e ? e.message() : std::to_string(status)));
-        sampler.cancel();
-        http.close();
-      });
+      http.request("GET", target, "", {},
+                   [&](const error_code& e, int status, std::string_view body) {
+                     result.seconds = seconds_between(start, steady::now());
+                     result.bytes = body.size();
+                     if (e || status != 200)
+                       state_.record_error("download " + format + ": " +
+                                           (e ? e.message() : std::to_string(status)));
+                     sampler.cancel();
+                     http.close();
+                   });
     });
     sample();
     io.run();
@@ -307,7 +317,9 @@ class LoadRun {
     const double server_cpu = cpu_at_done_ - cpu_at_accept_;
     const double own_cpu = own_cpu_at_done_ - own_cpu_at_accept_;
     const double idle_per_worker =
-        options_.workers > 0 ? static_cast<double>(rss_idle_kib_ - rss_empty_kib_) / options_.workers : 0;
+        options_.workers > 0
+            ? static_cast<double>(rss_idle_kib_ - rss_empty_kib_) / options_.workers
+            : 0;
     nlohmann::json r = {
         {"workers", options_.workers},
         {"width", options_.width},
@@ -328,7 +340,8 @@ class LoadRun {
         {"server_disk_written_mib", mib(io_at_done_.write_bytes - io_at_accept_.write_bytes)},
         {"errors", state_.errors},
         {"accept_s", submitted_ != steady::time_point{} && accepted_ != steady::time_point{}
-                         ? seconds_between(submitted_, accepted_) : 0.0},
+                         ? seconds_between(submitted_, accepted_)
+                         : 0.0},
         {"run_s", run_s},
         {"tiles_per_s", run_s > 0 ? static_cast<double>(tiles_total_) / run_s : 0.0},
         {"claim_p50_ms", quantile(latency, 0.50)},
@@ -339,9 +352,12 @@ class LoadRun {
         {"server_cpu_percent", run_s > 0 ? 100 * server_cpu / run_s : 0.0},
         {"load_cpu_s", own_cpu},
         {"load_cpu_percent", run_s > 0 ? 100 * own_cpu / run_s : 0.0},
-        {"machine_busy_percent", run_s > 0 ? 100 * (machine_at_done_.busy - machine_at_accept_.busy) / run_s : 0.0},
-        {"machine_steal_percent", run_s > 0 ? 100 * (machine_at_done_.steal - machine_at_accept_.steal) / run_s : 0.0},
-        {"machine_iowait_percent", run_s > 0 ? 100 * (machine_at_done_.iowait - machine_at_accept_.iowait) / run_s : 0.0},
+        {"machine_busy_percent",
+         run_s > 0 ? 100 * (machine_at_done_.busy - machine_at_accept_.busy) / run_s : 0.0},
+        {"machine_steal_percent",
+         run_s > 0 ? 100 * (machine_at_done_.steal - machine_at_accept_.steal) / run_s : 0.0},
+        {"machine_iowait_percent",
+         run_s > 0 ? 100 * (machine_at_done_.iowait - machine_at_accept_.iowait) / run_s : 0.0},
         {"cpus", std::thread::hardware_concurrency()},
         {"rss_no_workers_kib", rss_empty_kib_},
         {"rss_idle_workers_kib", rss_idle_kib_},
@@ -366,59 +382,72 @@ class LoadRun {
       std::cout << r.dump() << '\n';
       return;
     }
-    const double image_gib = static_cast<double>(options_.width) * options_.height * 12 / (1u << 30);
-    std::printf("coordinator load: %d workers, %dx%d in %d-pixel tiles (%lld tiles), max_tiles %d, "
-                "%d ms per lease\n",
-                options_.workers, options_.width, options_.height, options_.tile_size,
-                static_cast<long long>(tiles_total_), options_.max_tiles, options_.render_ms);
-    std::printf("idle: coordinator RSS %lld KiB with no workers, %lld KiB with %d parked on a claim: "
-                "%.1f KiB per idle worker\n",
-                static_cast<long long>(rss_empty_kib_), static_cast<long long>(rss_idle_kib_),
-                options_.workers, idle_per_worker);
+    const double image_gib =
+        static_cast<double>(options_.width) * options_.height * 12 / (1u << 30);
+    std::printf(
+        "coordinator load: %d workers, %dx%d in %d-pixel tiles (%lld tiles), max_tiles %d, "
+        "%d ms per lease\n",
+        options_.workers, options_.width, options_.height, options_.tile_size,
+        static_cast<long long>(tiles_total_), options_.max_tiles, options_.render_ms);
+    std::printf(
+        "idle: coordinator RSS %lld KiB with no workers, %lld KiB with %d parked on a claim: "
+        "%.1f KiB per idle worker\n",
+        static_cast<long long>(rss_empty_kib_), static_cast<long long>(rss_idle_kib_),
+        options_.workers, idle_per_worker);
     std::printf("accept: POST /v1/jobs answered in %.3f s\n", r["accept_s"].get<double>());
     if (!done_) {
       std::printf("run: did not finish: %llu of %lld tiles accepted\n",
-                  static_cast<unsigned long long>(state_.tiles_accepted), static_cast<long long>(tiles_total_));
+                  static_cast<unsigned long long>(state_.tiles_accepted),
+                  static_cast<long long>(tiles_total_));
       std::printf("errors: %llu; the first: %s\n", static_cast<unsigned long long>(state_.errors),
                   state_.first_error.c_str());
       return;
     }
-    std::printf("run: %llu tiles in %.3f s: %.0f tiles/s; %llu leases (%.1f tiles each), %llu uploads, "
-                "%llu empty claims\n",
-                static_cast<unsigned long long>(state_.tiles_accepted), run_s,
-                r["tiles_per_s"].get<double>(), static_cast<unsigned long long>(state_.leases),
-                state_.leases ? static_cast<double>(state_.tiles_accepted) / state_.leases : 0.0,
-                static_cast<unsigned long long>(state_.uploads),
-                static_cast<unsigned long long>(state_.empty_claims));
-    std::printf("heartbeats: %llu (%llu found the lease ended, its last upload served first)\n", static_cast<unsigned long long>(state_.heartbeats),
+    std::printf(
+        "run: %llu tiles in %.3f s: %.0f tiles/s; %llu leases (%.1f tiles each), %llu uploads, "
+        "%llu empty claims\n",
+        static_cast<unsigned long long>(state_.tiles_accepted), run_s,
+        r["tiles_per_s"].get<double>(), static_cast<unsigned long long>(state_.leases),
+        state_.leases ? static_cast<double>(state_.tiles_accepted) / state_.leases : 0.0,
+        static_cast<unsigned long long>(state_.uploads),
+        static_cast<unsigned long long>(state_.empty_claims));
+    std::printf("heartbeats: %llu (%llu found the lease ended, its last upload served first)\n",
+                static_cast<unsigned long long>(state_.heartbeats),
                 static_cast<unsigned long long>(state_.heartbeats_lost));
-    std::printf("coordinator I/O over the run: %.0f MiB read and %.0f MiB written through system calls "
-                "(sockets and files), %.0f MiB read from and %.0f MiB written to the disk\n",
-                r["server_bytes_read_mib"].get<double>(), r["server_bytes_written_mib"].get<double>(),
-                r["server_disk_read_mib"].get<double>(), r["server_disk_written_mib"].get<double>());
-    std::printf("claim latency (claims answered with a lease): p50 %.2f ms, p99 %.2f ms, max %.2f ms "
-                "(%zu claims)\n",
-                quantile(latency, 0.5), quantile(latency, 0.99), r["claim_max_ms"].get<double>(),
-                latency.size());
-    std::printf("CPU over the run: coordinator %.2f s (%.0f%% of one core), load program %.2f s (%.0f%%)\n",
-                server_cpu, r["server_cpu_percent"].get<double>(), own_cpu,
-                r["load_cpu_percent"].get<double>());
-    std::printf("machine over the run: %.0f%% busy of %u00%% (the coordinator and this program included), "
-                "%.0f%% stolen by the hypervisor, %.0f%% idle waiting for the disk\n",
-                r["machine_busy_percent"].get<double>(), std::thread::hardware_concurrency(),
-                r["machine_steal_percent"].get<double>(), r["machine_iowait_percent"].get<double>());
-    std::printf("coordinator RSS: %lld KiB at completion, peak sampled %lld KiB during the run, "
-                "%lld KiB while writing the image; VmHWM %lld KiB (the float image is %.2f GiB)\n",
-                static_cast<long long>(rss_done_kib_), static_cast<long long>(rss_run_peak_kib_),
-                static_cast<long long>(rss_image_peak_kib_), static_cast<long long>(hwm_kib_),
-                image_gib);
+    std::printf(
+        "coordinator I/O over the run: %.0f MiB read and %.0f MiB written through system calls "
+        "(sockets and files), %.0f MiB read from and %.0f MiB written to the disk\n",
+        r["server_bytes_read_mib"].get<double>(), r["server_bytes_written_mib"].get<double>(),
+        r["server_disk_read_mib"].get<double>(), r["server_disk_written_mib"].get<double>());
+    std::printf(
+        "claim latency (claims answered with a lease): p50 %.2f ms, p99 %.2f ms, max %.2f ms "
+        "(%zu claims)\n",
+        quantile(latency, 0.5), quantile(latency, 0.99), r["claim_max_ms"].get<double>(),
+        latency.size());
+    std::printf(
+        "CPU over the run: coordinator %.2f s (%.0f%% of one core), load program %.2f s (%.0f%%)\n",
+        server_cpu, r["server_cpu_percent"].get<double>(), own_cpu,
+        r["load_cpu_percent"].get<double>());
+    std::printf(
+        "machine over the run: %.0f%% busy of %u00%% (the coordinator and this program included), "
+        "%.0f%% stolen by the hypervisor, %.0f%% idle waiting for the disk\n",
+        r["machine_busy_percent"].get<double>(), std::thread::hardware_concurrency(),
+        r["machine_steal_percent"].get<double>(), r["machine_iowait_percent"].get<double>());
+    std::printf(
+        "coordinator RSS: %lld KiB at completion, peak sampled %lld KiB during the run, "
+        "%lld KiB while writing the image; VmHWM %lld KiB (the float image is %.2f GiB)\n",
+        static_cast<long long>(rss_done_kib_), static_cast<long long>(rss_run_peak_kib_),
+        static_cast<long long>(rss_image_peak_kib_), static_cast<long long>(hwm_kib_), image_gib);
     if (image_written_)
       std::printf("image: %llu bytes written %.3f s after the last tile\n",
-                  static_cast<unsigned long long>(image_bytes_), r["image_s_after_completion"].get<double>());
+                  static_cast<unsigned long long>(image_bytes_),
+                  r["image_s_after_completion"].get<double>());
     for (const Download& d : downloads_)
-      std::printf("download %s: %zu bytes in %.3f s; coordinator RSS %lld KiB before, peak sampled %lld KiB\n",
-                  d.format.c_str(), d.bytes, d.seconds, static_cast<long long>(d.rss_before_kib),
-                  static_cast<long long>(d.rss_peak_kib));
+      std::printf(
+          "download %s: %zu bytes in %.3f s; coordinator RSS %lld KiB before, peak sampled %lld "
+          "KiB\n",
+          d.format.c_str(), d.bytes, d.seconds, static_cast<long long>(d.rss_before_kib),
+          static_cast<long long>(d.rss_peak_kib));
     std::printf("job: %s\n", final_state_.empty() ? "(unknown)" : final_state_.c_str());
     if (state_.errors)
       std::printf("errors: %llu; the first: %s\n", static_cast<unsigned long long>(state_.errors),

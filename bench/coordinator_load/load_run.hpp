@@ -22,7 +22,7 @@ struct LoadOptions {
   int tile_size = 16;
   int max_tiles = 256;
   int claim_wait_s = 20;
-  int render_ms = 0;  // per lease, before its upload
+  int render_ms = 0;           // per lease, before its upload
   double timeout_s = 600;      // for the whole run, the image included
   bool wait_for_image = true;  // needs images_dir
   std::string api_token;
@@ -35,8 +35,8 @@ struct LoadOptions {
 
 struct ServerUnderTest {
   boost::asio::ip::tcp::endpoint endpoint;
-  pid_t pid = 0;                      // 0: unknown, no /proc figures
-  std::filesystem::path images_dir;   // "": unknown, the image is not waited for
+  pid_t pid = 0;                     // 0: unknown, no /proc figures
+  std::filesystem::path images_dir;  // "": unknown, the image is not waited for
 };
 
 // Runs the load and prints its report; returns the exit status (0: the job completed with

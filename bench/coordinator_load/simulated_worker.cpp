@@ -69,10 +69,10 @@ void SimulatedWorker::do_claim() {
   claim_sent_ = std::chrono::steady_clock::now();
   http_.request("POST", claim_target_, "", {},
                 [this](const error_code& ec, int status, std::string_view body) {
-    if (state_.finished) return;
-    if (ec) return state_.fail(name_ + ": claim: " + ec.message());
-    on_claim(status, body);
-  });
+                  if (state_.finished) return;
+                  if (ec) return state_.fail(name_ + ": claim: " + ec.message());
+                  on_claim(status, body);
+                });
   if (!parked_once_) {
     parked_once_ = true;
     if (state_.on_parked) state_.on_parked();
@@ -87,7 +87,8 @@ void SimulatedWorker::on_claim(int status, std::string_view body) {
   if (status != 200) return state_.fail(name_ + ": claim answered " + std::to_string(status));
   if (timed_)
     state_.claim_latency_ms.push_back(
-        std::chrono::duration<float, std::milli>(std::chrono::steady_clock::now() - claim_sent_).count());
+        std::chrono::duration<float, std::milli>(std::chrono::steady_clock::now() - claim_sent_)
+            .count());
   ++state_.leases;
   protocol::Lease lease;
   try {
@@ -130,8 +131,9 @@ void SimulatedWorker::do_upload() {
   std::size_t bytes = 0;
   std::vector<std::uint64_t> indexes;
   group_end_ = next_tile_;
-  while (group_end_ < tiles_.size() &&
-         (group_end_ == next_tile_ || bytes + tiles_[group_end_].bytes <= state_.max_upload_bytes)) {
+  while (
+      group_end_ < tiles_.size() &&
+      (group_end_ == next_tile_ || bytes + tiles_[group_end_].bytes <= state_.max_upload_bytes)) {
     bytes += tiles_[group_end_].bytes;
     indexes.push_back(static_cast<std::uint64_t>(tiles_[group_end_].index));
     ++group_end_;
@@ -144,23 +146,24 @@ void SimulatedWorker::do_upload() {
   const std::span<const char> body(state_.pixels.data(), std::min(bytes, state_.pixels.size()));
   http_.request("PUT", lease_target_, upload_headers_, body,
                 [this](const error_code& ec, int status, std::string_view answer) {
-    if (state_.finished) return;
-    if (ec) return state_.fail(name_ + ": upload: " + ec.message());
-    bool accepted = false;
-    try {
-      accepted = status == 200 && protocol::read_body<protocol::ResultAnswer>(answer).status ==
-                                      protocol::ResultStatus::accepted;
-    } catch (const protocol::ProtocolError&) {
-    }
-    if (!accepted)
-      return state_.fail(name_ + ": upload answered " + std::to_string(status) + ": " +
-                         std::string(answer));
-    ++state_.uploads;
-    state_.tiles_accepted += group_end_ - next_tile_;
-    next_tile_ = group_end_;
-    if (state_.on_uploaded) state_.on_uploaded();
-    do_upload();
-  });
+                  if (state_.finished) return;
+                  if (ec) return state_.fail(name_ + ": upload: " + ec.message());
+                  bool accepted = false;
+                  try {
+                    accepted = status == 200 &&
+                               protocol::read_body<protocol::ResultAnswer>(answer).status ==
+                                   protocol::ResultStatus::accepted;
+                  } catch (const protocol::ProtocolError&) {
+                  }
+                  if (!accepted)
+                    return state_.fail(name_ + ": upload answered " + std::to_string(status) +
+                                       ": " + std::string(answer));
+                  ++state_.uploads;
+                  state_.tiles_accepted += group_end_ - next_tile_;
+                  next_tile_ = group_end_;
+                  if (state_.on_uploaded) state_.on_uploaded();
+                  do_upload();
+                });
 }
 
 }  // namespace tessera::load

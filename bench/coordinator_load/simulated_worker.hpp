@@ -39,11 +39,11 @@ struct LoadState {
   std::string first_error;
   std::vector<float> claim_latency_ms;  // timed claims answered with a lease
 
-  std::chrono::milliseconds heartbeat_interval{5000};  // from the registration's answer
+  std::chrono::milliseconds heartbeat_interval{5000};          // from the registration's answer
   std::function<void(const std::string& lease_id)> heartbeat;  // sends one
-  std::function<void()> on_parked;    // a worker has sent its first claim
-  std::function<void()> on_uploaded;  // tiles_accepted grew
-  std::function<void()> on_error;     // the first error: the run stops
+  std::function<void()> on_parked;                             // a worker has sent its first claim
+  std::function<void()> on_uploaded;                           // tiles_accepted grew
+  std::function<void()> on_error;                              // the first error: the run stops
   // Counts an error, unless the run has already stopped (its aborted requests fail too).
   void fail(const std::string& what);
   // Counts an error whatever the phase.

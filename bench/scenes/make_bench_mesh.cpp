@@ -64,8 +64,8 @@ struct Mesh {
 
 // The tube's radius, rippled along and around.
 double tube_radius(double u, double v) {
-  return kTubeRadius *
-         (1.0 + 0.07 * std::sin(9.0 * u) * std::cos(6.0 * v) + 0.025 * std::sin(31.0 * u + 3.0 * v));
+  return kTubeRadius * (1.0 + 0.07 * std::sin(9.0 * u) * std::cos(6.0 * v) +
+                        0.025 * std::sin(31.0 * u + 3.0 * v));
 }
 
 Mesh make_torus(int along, int around) {
@@ -94,8 +94,7 @@ Mesh make_torus(int along, int around) {
   for (int i = 0; i < along; ++i)
     for (int j = 0; j < around; ++j) {
       // Counter-clockwise seen from outside: (u, v) -> (u, v+1) -> (u+1, v+1).
-      const int a = index(i, j), b = index(i, j + 1), c = index(i + 1, j + 1),
-                d = index(i + 1, j);
+      const int a = index(i, j), b = index(i, j + 1), c = index(i + 1, j + 1), d = index(i + 1, j);
       mesh.triangles.push_back({a, b, c});
       mesh.triangles.push_back({a, c, d});
     }
@@ -135,9 +134,7 @@ struct File {
   }
 };
 
-void json_vec(std::FILE* f, const Vec& v) {
-  std::fprintf(f, "[%.9g,%.9g,%.9g]", v[0], v[1], v[2]);
-}
+void json_vec(std::FILE* f, const Vec& v) { std::fprintf(f, "[%.9g,%.9g,%.9g]", v[0], v[1], v[2]); }
 void json_vec5(std::FILE* f, const Vec& v) {
   std::fprintf(f, "[%.5f,%.5f,%.5f]", v[0], v[1], v[2]);
 }
@@ -176,8 +173,7 @@ void write_json(const std::string& path, const Mesh& mesh) {
   json_vec(f, kAmbientLight);
   std::fprintf(f, ",\"materials\":{\"floor\":{");
   json_ambient_diffuse(f, kFloorA);
-  std::fprintf(f, ",\"specular\":0,\"reflection\":%.9g,\"checker\":{\"size\":1,",
-               kFloorReflection);
+  std::fprintf(f, ",\"specular\":0,\"reflection\":%.9g,\"checker\":{\"size\":1,", kFloorReflection);
   json_ambient_diffuse(f, kFloorB);
   std::fprintf(f, "}},\"copper\":{");
   json_ambient_diffuse(f, kCopper);
@@ -208,7 +204,9 @@ void write_json(const std::string& path, const Mesh& mesh) {
   std::fprintf(f, "]}]}\n");
 }
 
-void pov_vec(std::FILE* f, const Vec& v) { std::fprintf(f, "<%.9g, %.9g, %.9g>", v[0], v[1], v[2]); }
+void pov_vec(std::FILE* f, const Vec& v) {
+  std::fprintf(f, "<%.9g, %.9g, %.9g>", v[0], v[1], v[2]);
+}
 
 void write_pov(const std::string& path, const Mesh& mesh) {
   File out(path);
