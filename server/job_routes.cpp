@@ -100,20 +100,6 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
       *wait, [answer] { return answer(true); }, [answer] { answer(false); });
 }
 
-// Only "render" is kept while parsing: a mesh scene's vertex arrays need not be built to
-// read one setting.
-OutputTransfer transfer_of(const std::string& scene_json) {
-  const json scene =
-      json::parse(scene_json, [](int depth, json::parse_event_t event, json& parsed) {
-        return !(depth == 1 && event == json::parse_event_t::key && parsed != "render");
-      });
-  const auto render = scene.find("render");
-  if (render != scene.end() && render->contains("output_transfer") &&
-      (*render)["output_transfer"] == "linear")
-    return OutputTransfer::linear;
-  return OutputTransfer::srgb;
-}
-
 HttpResponse image(ApiContext& context, const HttpRequest& request) {
   const std::string& id = request.params.at("id");
   const auto query_value = [&](std::string_view key, const char* fallback) {
@@ -142,15 +128,14 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
     }
   }
   const auto assembled = context.scheduler.assemble(id);
-  const auto scene_json = context.scheduler.scene_json(job->scene_digest);
-  if (!assembled || !scene_json) return not_found(id);
+  if (!assembled) return not_found(id);
 
   // OpenImageIO writes files; encode into a private temporary one, which is sent from the
   // disk and removed once opened.
   std::filesystem::create_directories(context.temp_dir);
   const auto path = context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) +
                                         std::string(format->extension));
-  write_image(*assembled, path, transfer_of(*scene_json));
+  write_image(*assembled, path, job->output_transfer);
   response.file = path.string();
   response.file_is_temporary = true;
   return response;

@@ -71,6 +71,7 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
     s.tile_size = scene.render.tile_size;
     s.created_at_ms = clock_.now_ms();
     s.scene_digest = digest;
+    s.output_transfer = scene.render.output_transfer;
 
     job->tiles.resize(rects.size());
     for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];

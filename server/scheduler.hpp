@@ -80,6 +80,7 @@ struct JobStatus {
   std::string error;                // set when failed
   std::uint64_t rays = 0;           // summed over the tiles done
   std::string scene_digest;         // hex SHA-256 of the scene JSON as stored
+  OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
   JobHealth health;                 // in memory; only the Scheduler changes it, in place
 };
 

@@ -45,10 +45,20 @@ WorkerEntry& StagedChange::worker(WorkerEntry& entry) {
 }
 
 JobRow job_row(const JobStatus& s) {
-  return {
-      s.id,        s.name,         s.priority,      to_string(s.state), s.width,          s.height,
-      s.tile_size, s.scene_digest, s.created_at_ms, s.started_at_ms,    s.finished_at_ms, s.error,
-      s.rays};
+  return {s.id,
+          s.name,
+          s.priority,
+          to_string(s.state),
+          s.width,
+          s.height,
+          s.tile_size,
+          s.scene_digest,
+          s.created_at_ms,
+          s.started_at_ms,
+          s.finished_at_ms,
+          s.error,
+          s.rays,
+          s.output_transfer == OutputTransfer::linear ? "linear" : "srgb"};
 }
 
 WorkerRow worker_row(const WorkerEntry& w) {

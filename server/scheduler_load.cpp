@@ -58,6 +58,8 @@ void Scheduler::load_and_reconcile() {
     s.error = std::move(row.error);
     s.rays = row.rays;
     s.scene_digest = std::move(row.scene_digest);
+    s.output_transfer =
+        row.output_transfer == "linear" ? OutputTransfer::linear : OutputTransfer::srgb;
     jobs_.emplace(row.id, std::move(job));
   }
 

@@ -25,7 +25,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little);
 static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559);
 
-constexpr int schema_version = 4;
+constexpr int schema_version = 5;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -45,7 +45,8 @@ CREATE TABLE jobs (
   started_at_ms INTEGER NOT NULL DEFAULT 0,
   finished_at_ms INTEGER NOT NULL DEFAULT 0,
   error TEXT NOT NULL DEFAULT '',
-  rays INTEGER NOT NULL DEFAULT 0
+  rays INTEGER NOT NULL DEFAULT 0,
+  output_transfer TEXT NOT NULL DEFAULT 'srgb'  -- the scene's render.output_transfer
 );
 CREATE INDEX jobs_by_scene ON jobs(scene_digest);
 CREATE TABLE workers (
@@ -185,6 +186,14 @@ void Store::create_schema() {
     db_.exec("ALTER TABLE tiles DROP COLUMN pixels");
   }
   if (version >= 1 && version <= 3) migrate_tile_rows();
+  if (version >= 1 && version <= 4) {  // before jobs kept their scene's output transfer
+    db_.exec("ALTER TABLE jobs ADD COLUMN output_transfer TEXT NOT NULL DEFAULT 'srgb'");
+    // Read once, here, from each job's scene (SQLite's JSON functions are built in).
+    db_.exec(
+        "UPDATE jobs SET output_transfer = 'linear' WHERE (SELECT json_extract(s.json, "
+        "'$.render.output_transfer') FROM scenes s WHERE s.digest = jobs.scene_digest) = "
+        "'linear'");
+  }
   db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
   tx.commit();
 }
@@ -250,7 +259,7 @@ StoredState Store::load() {
   {
     auto s = db_.statement(
         "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
-        "created_at_ms, started_at_ms, finished_at_ms, error, rays FROM jobs");
+        "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer FROM jobs");
     while (s->step()) {
       JobRow& job = state.jobs.emplace_back();
       job.id = s->column_text(0);
@@ -266,6 +275,7 @@ StoredState Store::load() {
       job.finished_at_ms = s->column_int64(10);
       job.error = s->column_text(11);
       job.rays = static_cast<std::uint64_t>(s->column_int64(12));
+      job.output_transfer = s->column_text(13);
     }
   }
   {
@@ -346,8 +356,8 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
       .run();
   db_.statement(
          "INSERT INTO jobs (id, name, priority, state, width, height, tile_size, scene_digest, "
-         "created_at_ms, started_at_ms, finished_at_ms, error, rays) "
-         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)")
+         "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer) "
+         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)")
       ->bind(1, job.id)
       .bind(2, job.name)
       .bind(3, job.priority)
@@ -361,6 +371,7 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
       .bind(11, job.finished_at_ms)
       .bind(12, job.error)
       .bind(13, static_cast<std::int64_t>(job.rays))
+      .bind(14, job.output_transfer)
       .run();
   tx.commit();
 }

@@ -31,6 +31,9 @@ struct JobRow {
   std::int64_t finished_at_ms = 0;
   std::string error;
   std::uint64_t rays = 0;
+  // Facts of the scene that later requests need, kept at submit so that no request parses
+  // the scene again: how its 8- and 16-bit images are encoded ("srgb" or "linear").
+  std::string output_transfer = "srgb";
 };
 
 // A live lease: the tiles it still owes. Its expiry is not stored: a restart gives every

@@ -42,6 +42,23 @@ TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
   }
 }
 
+// The job keeps its scene's output transfer from submission (the job row), so its PNG is
+// encoded as the local render's is, each way.
+TEST(Farm, APngDownloadIsEncodedWithTheScenesOutputTransfer) {
+  Farm farm("transfer", 1);
+  for (const char* transfer : {"linear", "srgb"}) {
+    json scene = small_showcase(32);
+    scene["render"]["output_transfer"] = transfer;
+    const Image local = test::render_image(scene, 2);
+    const auto local_png = farm.dir() / (std::string("local-") + transfer + ".png");
+    write_image(local, local_png, std::string(transfer) == "linear" ? OutputTransfer::linear
+                                                                   : OutputTransfer::srgb);
+    const std::string id = farm.api().submit(transfer, 50, scene)["id"];
+    ASSERT_EQ(farm.wait_finished(id)["state"], "completed");
+    EXPECT_EQ(farm.api().image(id, "png", false), test::read_text(local_png)) << transfer;
+  }
+}
+
 TEST(Farm, InvalidSceneIsRefusedWithItsPointerAndTheServerKeepsServing) {
   Farm farm("invalid", 0);
   json scene = small_showcase(32);

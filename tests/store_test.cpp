@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <span>
 #include <thread>
@@ -29,10 +30,17 @@ JobRow job_row(const std::string& id, const std::string& digest) {
   return job;
 }
 
+// Version 4 kept no facts of the scene on the job row.
+void make_version_4(SqliteDb& db) {
+  db.exec("ALTER TABLE jobs DROP COLUMN output_transfer");
+  db.exec("PRAGMA user_version=4");
+}
+
 // Turns a new database into what version 3 wrote: jobs with a row per tile, done tiles'
 // pixels in a table of their own. Tile 0 failed once, tile 1 is done (its pixels given),
 // tiles 2 and 3 are leased to worker w-1 under lease l-1.
 void make_version_3(SqliteDb& db, const std::string& job_id, std::span<const float> pixels) {
+  make_version_4(db);
   db.exec("DROP TABLE leases; DROP TABLE results; DROP TABLE tile_failures");
   db.exec(R"sql(
 CREATE TABLE tiles (
@@ -161,7 +169,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "images"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "4");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "5");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -180,7 +188,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
 void expect_upgraded(Store& store, const std::filesystem::path& db_file,
                      const std::vector<float>& pixels, bool with_failure) {
   SqliteDb db(db_file);
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "4");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "5");
   EXPECT_EQ(
       db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"),
       "0");
@@ -249,6 +257,32 @@ TEST_F(StoreTest, UpgradesAVersion1DatabaseWhoseTilesHadNoErrors) {
   const StoredState state = store_->load();
   ASSERT_EQ(state.failures.size(), 1u);  // attempts were kept, with no error to say
   EXPECT_EQ(state.failures[0].last_error, "");
+}
+
+TEST_F(StoreTest, UpgradesAVersion4DatabaseReadingEachJobsOutputTransferFromItsScene) {
+  store_->insert_job(square_job("j-1", "d1"), R"({"render": {"output_transfer": "linear"}})");
+  store_->insert_job(square_job("j-2", "d2"), R"({"render": {"output_transfer": "srgb"}})");
+  store_->insert_job(square_job("j-3", "d3"), "{}");
+  store_.reset();
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_4(db);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "5");
+  std::map<std::string, std::string> transfers;
+  for (const JobRow& job : store_->load().jobs) transfers[job.id] = job.output_transfer;
+  EXPECT_EQ(transfers, (std::map<std::string, std::string>{
+                           {"j-1", "linear"}, {"j-2", "srgb"}, {"j-3", "srgb"}}));
+}
+
+TEST_F(StoreTest, AJobKeepsItsOutputTransfer) {
+  JobRow job = square_job("j-1", "d1");
+  job.output_transfer = "linear";
+  store_->insert_job(job, "{}");
+  reopen();
+  ASSERT_EQ(store_->load().jobs.size(), 1u);
+  EXPECT_EQ(store_->load().jobs[0].output_transfer, "linear");
 }
 
 TEST_F(StoreTest, AnUploadIsOneRowHoweverManyTilesItHolds) {
