@@ -18,7 +18,7 @@
 namespace tessera {
 
 Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
-    : store_(store), clock_(clock), config_(config) {
+    : store_(store), images_(store.data_dir()), clock_(clock), config_(config) {
   {
     std::lock_guard lock(mutex_);
     load_and_reconcile();
@@ -135,6 +135,9 @@ RemoveOutcome Scheduler::remove(const std::string& id) {
   if (!job) return RemoveOutcome::not_found;
   if (!is_finished(job->status.state)) return RemoveOutcome::not_finished;
   store_.delete_job(id);
+  // After the job's rows: a file left behind by a failure here is pruned on the next start,
+  // while a row without its image would be a completed job that cannot be served.
+  images_.remove(id);
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);
   jobs_.erase(id);
@@ -161,9 +164,8 @@ std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id
   const JobEntry* job = find_job(id);
   // The file appears whole (it is written beside its place and renamed), so once it is
   // there it can be sent.
-  if (!job || job->status.state != JobState::completed || !store_.has_image(id))
-    return std::nullopt;
-  return store_.image_path(id);
+  if (!job || job->status.state != JobState::completed || !images_.has(id)) return std::nullopt;
+  return images_.path(id);
 }
 
 void Scheduler::make_canvas(std::unique_lock<std::mutex>& lock, const std::string& id) {
@@ -241,7 +243,7 @@ void Scheduler::write_images() {
           job->canvas ? job->canvas : std::make_shared<const Image>(assemble_locked(*job));
       // Encoding takes a while and touches no shared state: workers and clients go on.
       lock.unlock();
-      store_.write_image(id, *image);
+      images_.write(id, *image);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -250,7 +252,7 @@ void Scheduler::write_images() {
     images_changed_.notify_all();
     JobEntry* still = find_job(id);
     if (!still) {
-      store_.remove_image(id);  // removed while it was being written
+      images_.remove(id);  // removed while it was being written
       continue;
     }
     still->canvas.reset();  // the file (or the store) serves it from now on

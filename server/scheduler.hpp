@@ -26,6 +26,7 @@
 #include "common/protocol/limits.hpp"
 #include "common/scene.hpp"
 #include "server/clock.hpp"
+#include "server/image_files.hpp"
 #include "server/store.hpp"
 
 namespace tessera {
@@ -75,13 +76,13 @@ struct JobStatus {
   int tiles_done = 0;
   int tiles_rendering = 0;  // tiles under a live lease
   std::int64_t created_at_ms = 0;
-  std::int64_t started_at_ms = 0;   // 0: not started
-  std::int64_t finished_at_ms = 0;  // 0: not finished
-  std::string error;                // set when failed
-  std::uint64_t rays = 0;           // summed over the tiles done
-  std::string scene_digest;         // hex SHA-256 of the scene JSON as stored
+  std::int64_t started_at_ms = 0;                         // 0: not started
+  std::int64_t finished_at_ms = 0;                        // 0: not finished
+  std::string error;                                      // set when failed
+  std::uint64_t rays = 0;                                 // summed over the tiles done
+  std::string scene_digest;                               // hex SHA-256 of the scene JSON as stored
   OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
-  JobHealth health;                 // in memory; only the Scheduler changes it, in place
+  JobHealth health;  // in memory; only the Scheduler changes it, in place
 };
 
 struct WorkerInfo {
@@ -306,6 +307,7 @@ class Scheduler {
   void note_seen(WorkerEntry& worker, std::int64_t now);
 
   Store& store_;
+  ImageFiles images_;  // beside the store: the finished images
   const Clock& clock_;
   SchedulerConfig config_;
   mutable std::mutex mutex_;

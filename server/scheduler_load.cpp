@@ -213,7 +213,7 @@ void Scheduler::load_and_reconcile() {
         s.state = JobState::running;
         s.finished_at_ms = 0;
         if (s.started_at_ms == 0) s.started_at_ms = now;
-      } else if (!store_.has_image(id)) {
+      } else if (!images_.has(id)) {
         needs_image.push_back(&job);  // the process stopped between commit and write
       }
     }
@@ -224,7 +224,7 @@ void Scheduler::load_and_reconcile() {
   for (JobEntry* job : needs_image)
     if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
   store_.prune_pixels([this](const std::string& job_id) { return find_job(job_id) != nullptr; });
-  store_.prune_images([this](const std::string& job_id) {
+  images_.prune([this](const std::string& job_id) {
     const JobEntry* job = find_job(job_id);
     return job && job->status.state == JobState::completed;
   });

@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "common/image_io.hpp"
+#include "server/packed_blobs.hpp"
 
 namespace tessera {
 namespace {
@@ -25,86 +25,6 @@ namespace {
 static_assert(std::endian::native == std::endian::little);
 static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559);
 
-constexpr int schema_version = 5;
-
-constexpr const char* schema_sql = R"sql(
-CREATE TABLE scenes (
-  digest TEXT PRIMARY KEY,
-  json TEXT NOT NULL
-);
-CREATE TABLE jobs (
-  id TEXT PRIMARY KEY,
-  name TEXT NOT NULL,
-  priority INTEGER NOT NULL,
-  state TEXT NOT NULL,
-  width INTEGER NOT NULL,
-  height INTEGER NOT NULL,
-  tile_size INTEGER NOT NULL,
-  scene_digest TEXT NOT NULL REFERENCES scenes(digest),
-  created_at_ms INTEGER NOT NULL,
-  started_at_ms INTEGER NOT NULL DEFAULT 0,
-  finished_at_ms INTEGER NOT NULL DEFAULT 0,
-  error TEXT NOT NULL DEFAULT '',
-  rays INTEGER NOT NULL DEFAULT 0,
-  output_transfer TEXT NOT NULL DEFAULT 'srgb'  -- the scene's render.output_transfer
-);
-CREATE INDEX jobs_by_scene ON jobs(scene_digest);
-CREATE TABLE workers (
-  id TEXT PRIMARY KEY,
-  name TEXT NOT NULL,
-  host TEXT NOT NULL,
-  threads INTEGER NOT NULL,
-  state TEXT NOT NULL,
-  tiles_rendered INTEGER NOT NULL DEFAULT 0,
-  last_seen_ms INTEGER NOT NULL
-);
-)sql";
-
-// What is kept of tiles (schema version 4): a row per live lease, per accepted upload and
-// per failed tile, and the pixels of each job's uploads appended to a file of its own
-// (pixel_path()). Version 3 kept a row per tile, written when the tile was submitted,
-// leased and delivered, with a row of pixels each: at 8-pixel tiles that per-tile work was
-// most of the coordinator's, and took the CPU that the workers on the same machine needed.
-// Pixels left SQLite too: storing 200 KB as a blob cost about 1.2 ms here (2.2 ms with the
-// checkpoint that copies it again), one write of the same bytes to a file 0.03 ms. Tile
-// index lists are int32 and rays int64, little-endian, packed in blobs.
-constexpr const char* tile_tables_sql = R"sql(
-CREATE TABLE leases (
-  id TEXT PRIMARY KEY,
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  worker_id TEXT NOT NULL,
-  tiles BLOB NOT NULL
-);
-CREATE INDEX leases_by_job ON leases(job_id);
-CREATE TABLE results (
-  id INTEGER PRIMARY KEY,
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  lease_id TEXT NOT NULL,
-  worker_id TEXT NOT NULL,
-  tiles BLOB NOT NULL,
-  rays BLOB NOT NULL,
-  pixels_at INTEGER NOT NULL,  -- where its pixels start in the job's pixel file, in bytes
-  pixel_bytes INTEGER NOT NULL
-);
-CREATE INDEX results_by_job ON results(job_id);
-CREATE TABLE tile_failures (
-  job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
-  tile_index INTEGER NOT NULL,
-  attempts INTEGER NOT NULL,
-  last_error TEXT NOT NULL,
-  PRIMARY KEY (job_id, tile_index)
-);
-)sql";
-
-// The tile rows of versions 1 to 3, for upgrading them: version 3 kept a done tile's pixels
-// in a table of their own, pointed to by the tile row.
-constexpr const char* v3_pixels_table_sql = R"sql(
-CREATE TABLE tile_pixels (
-  id INTEGER PRIMARY KEY,
-  pixels BLOB NOT NULL
-);
-)sql";
-
 // The SQLite page cache, at most (a negative cache_size is KiB). The tiles being handed
 // out and delivered stay in it; the default 2 MiB read them back from the file again and
 // again on a big job.
@@ -112,39 +32,8 @@ constexpr int cache_kib = 32 * 1024;
 
 // Creates the directories before the database file is opened in them.
 std::filesystem::path prepare_data_dir(const std::filesystem::path& data_dir) {
-  std::filesystem::create_directories(data_dir / "images");
   std::filesystem::create_directories(data_dir / "pixels");
   return data_dir / "tessera.db";
-}
-
-// Deletes the files of `dir` named JOB`extension` whose job is not kept, and those whose
-// name starts with a dot: write_image's temporary files, one left over being a crashed write.
-void prune_files(const std::filesystem::path& dir, const char* extension,
-                 const std::function<bool(const std::string& job_id)>& keep) {
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
-    const std::filesystem::path& path = entry.path();
-    if (path.extension() != extension) continue;
-    const std::string stem = path.stem().string();
-    if (stem.starts_with(".") || !keep(stem)) {
-      std::error_code ignored;
-      std::filesystem::remove(path, ignored);
-    }
-  }
-}
-
-template <typename T>
-std::span<const std::byte> bytes_of(const std::vector<T>& values) {
-  return std::as_bytes(std::span(values));
-}
-
-// Unpacks a blob of packed little-endian values; trailing bytes short of a whole value are
-// dropped (load()'s caller then finds the counts do not match).
-template <typename T>
-std::vector<T> unpack(std::span<const std::byte> bytes) {
-  std::vector<T> values(bytes.size() / sizeof(T));
-  if (!values.empty()) std::memcpy(values.data(), bytes.data(), values.size() * sizeof(T));
-  return values;
 }
 
 }  // namespace
@@ -159,98 +48,6 @@ Store::Store(const std::filesystem::path& data_dir)
   db_.exec("PRAGMA cache_size=-" + std::to_string(cache_kib));
   create_schema();
   db_.checkpoint_in_background();
-}
-
-void Store::create_schema() {
-  const int version = std::stoi(db_.query_text("PRAGMA user_version"));
-  if (version == schema_version) return;
-  if (version < 0 || version > schema_version)
-    throw std::runtime_error("store: " + (data_dir_ / "tessera.db").string() +
-                             " has schema version " + std::to_string(version) +
-                             "; this build knows version " + std::to_string(schema_version));
-  Transaction tx(db_);
-  if (version == 0) {
-    db_.exec(schema_sql);
-    db_.exec(tile_tables_sql);
-  }
-  if (version == 1)  // before tiles remembered why they failed
-    db_.exec("ALTER TABLE tiles ADD COLUMN last_error TEXT NOT NULL DEFAULT ''");
-  if (version == 1 || version == 2) {  // before pixels had a table of their own
-    db_.exec("ALTER TABLE tiles ADD COLUMN pixels_id INTEGER");
-    db_.exec(v3_pixels_table_sql);
-    // The tile rows' own rowids are unique, so they serve as the new keys.
-    db_.exec(
-        "INSERT INTO tile_pixels (id, pixels) SELECT rowid, pixels FROM tiles WHERE pixels IS NOT "
-        "NULL");
-    db_.exec("UPDATE tiles SET pixels_id = rowid WHERE pixels IS NOT NULL");
-    db_.exec("ALTER TABLE tiles DROP COLUMN pixels");
-  }
-  if (version >= 1 && version <= 3) migrate_tile_rows();
-  if (version >= 1 && version <= 4) {  // before jobs kept their scene's output transfer
-    db_.exec("ALTER TABLE jobs ADD COLUMN output_transfer TEXT NOT NULL DEFAULT 'srgb'");
-    // Read once, here, from each job's scene (SQLite's JSON functions are built in).
-    db_.exec(
-        "UPDATE jobs SET output_transfer = 'linear' WHERE (SELECT json_extract(s.json, "
-        "'$.render.output_transfer') FROM scenes s WHERE s.digest = jobs.scene_digest) = "
-        "'linear'");
-  }
-  db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
-  tx.commit();
-}
-
-void Store::migrate_tile_rows() {
-  db_.exec(tile_tables_sql);
-  db_.exec(
-      "INSERT INTO tile_failures (job_id, tile_index, attempts, last_error) "
-      "SELECT job_id, tile_index, attempts, last_error FROM tiles "
-      "WHERE attempts > 0 OR last_error != ''");
-  // A done tile without its pixels renders again, and its rays are no longer the job's.
-  db_.exec(
-      "UPDATE jobs SET rays = max(0, rays - (SELECT ifnull(sum(t.rays), 0) FROM tiles t "
-      "WHERE t.job_id = jobs.id AND t.state = 'done' AND t.pixels_id IS NULL))");
-  {  // each done tile becomes a result of its own
-    auto s = db_.statement(
-        "SELECT t.job_id, t.tile_index, t.rays, t.result_lease_id, t.worker_id, p.pixels "
-        "FROM tiles t JOIN tile_pixels p ON p.id = t.pixels_id WHERE t.state = 'done'");
-    while (s->step()) {
-      ResultRow result;
-      result.job_id = s->column_text(0);
-      result.tiles = {s->column_int(1)};
-      result.rays = {static_cast<std::uint64_t>(s->column_int64(2))};
-      result.lease_id = s->column_text(3);
-      result.worker_id = s->column_text(4);
-      const std::span<const std::byte> pixels = s->column_blob(5);
-      insert_result_at(result, append_pixels(result.job_id, {&pixels, 1}), pixels.size());
-    }
-  }
-  {  // the live leases, one row each
-    std::map<std::string, LeaseRow> leases;
-    auto s = db_.statement(
-        "SELECT lease_id, job_id, worker_id, tile_index FROM tiles "
-        "WHERE state = 'leased' AND lease_id != ''");
-    while (s->step()) {
-      LeaseRow& lease = leases[s->column_text(0)];
-      lease.job_id = s->column_text(1);
-      lease.worker_id = s->column_text(2);
-      lease.tiles.push_back(s->column_int(3));
-    }
-    for (auto& [id, lease] : leases) {
-      lease.id = id;
-      put_lease(lease);
-    }
-  }
-  db_.exec("DROP TRIGGER IF EXISTS tile_pixels_replaced");
-  db_.exec("DROP TRIGGER IF EXISTS tile_pixels_deleted");
-  db_.exec("DROP TABLE tiles");
-  db_.exec("DROP TABLE tile_pixels");
-}
-
-std::filesystem::path Store::pixel_path(const std::string& job_id) const {
-  return data_dir_ / "pixels" / (job_id + ".f32");
-}
-
-std::filesystem::path Store::image_path(const std::string& job_id) const {
-  return data_dir_ / "images" / (job_id + ".exr");
 }
 
 StoredState Store::load() {
@@ -411,8 +208,7 @@ void Store::delete_job(const std::string& job_id) {
       .run();
   tx.commit();
   // After the commit: a file left behind by a failure here is pruned on the next start,
-  // while a row without its image would be a completed job that cannot be served.
-  remove_image(job_id);
+  // while a row without its pixels would be results that cannot be read.
   std::error_code ignored;
   std::filesystem::remove(pixel_path(job_id), ignored);
 }
@@ -451,54 +247,6 @@ std::int64_t Store::insert_result(const ResultRow& result,
   return insert_result_at(result, append_pixels(result.job_id, bytes), total);
 }
 
-std::int64_t Store::append_pixels(const std::string& job_id,
-                                  std::span<const std::span<const std::byte>> parts) {
-  const std::filesystem::path path = pixel_path(job_id);
-  const auto fail = [&](const char* what, int error) -> std::runtime_error {
-    // SQLite says "database or disk is full" for its own; the same words for ours.
-    const std::string why = error == ENOSPC || error == EDQUOT
-                                ? "the disk is full (" + std::string(std::strerror(error)) + ")"
-                                : std::string(std::strerror(error));
-    return std::runtime_error("store: cannot " + std::string(what) + " " + path.string() + ": " +
-                              why);
-  };
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) throw fail("open", errno);
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
-  struct stat status {};
-  if (::fstat(fd, &status) != 0) throw fail("read the size of", errno);
-  // Appended after whatever is there, also the bytes of a result whose transaction was
-  // rolled back: nothing points to those.
-  const std::int64_t start = status.st_size;
-  std::int64_t at = start;
-  std::vector<iovec> pending;
-  for (const std::span<const std::byte> part : parts)
-    if (!part.empty()) pending.push_back({const_cast<std::byte*>(part.data()), part.size()});
-  std::size_t first = 0;
-  while (first < pending.size()) {
-    const int count = static_cast<int>(std::min<std::size_t>(pending.size() - first, IOV_MAX));
-    const ssize_t written = ::pwritev(fd, &pending[first], count, at);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      throw fail("write the pixels to", errno);
-    }
-    if (written == 0) throw fail("write the pixels to", ENOSPC);
-    at += written;
-    // Past what was written whole; into the part written in part.
-    auto left = static_cast<std::size_t>(written);
-    while (first < pending.size() && left >= pending[first].iov_len)
-      left -= pending[first++].iov_len;
-    if (left > 0) {
-      pending[first].iov_base = static_cast<std::byte*>(pending[first].iov_base) + left;
-      pending[first].iov_len -= left;
-    }
-  }
-  return start;
-}
-
 std::int64_t Store::insert_result_at(const ResultRow& result, std::int64_t pixels_at,
                                      std::size_t pixel_bytes) {
   auto s = db_.statement(
@@ -533,52 +281,6 @@ void Store::put_tile_failure(const TileFailureRow& failure) {
       .run();
 }
 
-void Store::for_each_tile_pixels(
-    const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
-    const std::function<void(int tile_index, std::span<const float>)>& visit) {
-  auto s = db_.statement(
-      "SELECT tiles, pixels_at, pixel_bytes FROM results WHERE job_id = ? ORDER BY id");
-  s->bind(1, job_id);
-  const std::filesystem::path path = pixel_path(job_id);
-  int fd = -1;
-  struct Closer {
-    int& fd;
-    ~Closer() {
-      if (fd >= 0) ::close(fd);
-    }
-  } closer{fd};
-  std::vector<float> floats;
-  while (s->step()) {
-    const std::vector<int> tiles = unpack<int>(s->column_blob(0));
-    const std::int64_t at = s->column_int64(1);
-    const auto bytes = static_cast<std::size_t>(s->column_int64(2));
-    if (fd < 0 && (fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC)) < 0)
-      throw std::runtime_error("store: cannot open " + path.string() + ": " + std::strerror(errno));
-    floats.resize(bytes / sizeof(float));
-    std::size_t got = 0;
-    while (got < floats.size() * sizeof(float)) {
-      const ssize_t n =
-          ::pread(fd, reinterpret_cast<char*>(floats.data()) + got,
-                  floats.size() * sizeof(float) - got, at + static_cast<std::int64_t>(got));
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0)
-        throw std::runtime_error("store: cannot read " + path.string() + ": " +
-                                 std::strerror(errno));
-      if (n == 0) break;  // the file ends early: the check below names the tile
-      got += static_cast<std::size_t>(n);
-    }
-    std::size_t offset = 0;
-    for (const int index : tiles) {
-      const std::size_t size = floats_of(index);
-      if ((offset + size) * sizeof(float) > got)
-        throw std::runtime_error("store: the stored pixels of job " + job_id + " end before tile " +
-                                 std::to_string(index));
-      visit(index, std::span<const float>(floats).subspan(offset, size));
-      offset += size;
-    }
-  }
-}
-
 void Store::upsert_worker(const WorkerRow& worker) {
   db_.statement(
          "INSERT INTO workers (id, name, host, threads, state, tiles_rendered, last_seen_ms) "
@@ -600,28 +302,6 @@ void Store::update_worker_seen(const std::string& worker_id, std::int64_t last_s
       ->bind(1, last_seen_ms)
       .bind(2, worker_id)
       .run();
-}
-
-void Store::write_image(const std::string& job_id, const Image& image) {
-  tessera::write_image(image, image_path(job_id), OutputTransfer::linear);
-}
-
-void Store::remove_image(const std::string& job_id) {
-  std::error_code ignored;
-  std::filesystem::remove(image_path(job_id), ignored);
-}
-
-bool Store::has_image(const std::string& job_id) const {
-  std::error_code ignored;
-  return std::filesystem::is_regular_file(image_path(job_id), ignored);
-}
-
-void Store::prune_images(const std::function<bool(const std::string& job_id)>& keep) {
-  prune_files(data_dir_ / "images", ".exr", keep);
-}
-
-void Store::prune_pixels(const std::function<bool(const std::string& job_id)>& keep) {
-  prune_files(data_dir_ / "pixels", ".f32", keep);
 }
 
 }  // namespace tessera

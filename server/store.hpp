@@ -95,7 +95,6 @@ class Store {
   explicit Store(const std::filesystem::path& data_dir);
 
   const std::filesystem::path& data_dir() const { return data_dir_; }
-  std::filesystem::path image_path(const std::string& job_id) const;
   // data_dir/pixels/<job_id>.f32: the pixels of the job's results, each appended as it
   // is accepted, float32 RGB little-endian, tile after tile. Append-only, so that a backup
   // of the database taken before a copy of these files finds every pixel it points to.
@@ -112,7 +111,7 @@ class Store {
   void insert_job(const JobRow& job, const std::string& scene_json);
   void update_job(const JobRow& job);
   // Deletes the job, its leases, results and failures, its scene when no other job uses
-  // it, and its image.
+  // it, and its pixel file (not its image: ImageFiles keeps those).
   void delete_job(const std::string& job_id);
   std::optional<std::string> scene_json(const std::string& digest);
 
@@ -139,13 +138,6 @@ class Store {
   void upsert_worker(const WorkerRow& worker);
   void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);
 
-  // Writes data_dir/images/<job_id>.exr (linear, atomically replaced). Touches no database
-  // state, so it may run beside the other calls.
-  void write_image(const std::string& job_id, const Image& image);
-  void remove_image(const std::string& job_id);
-  bool has_image(const std::string& job_id) const;
-  // Deletes image files (and leftovers of interrupted writes) whose job is not kept.
-  void prune_images(const std::function<bool(const std::string& job_id)>& keep);
   // Deletes pixel files whose job is not kept (left by a removal that stopped half-way).
   void prune_pixels(const std::function<bool(const std::string& job_id)>& keep);
 

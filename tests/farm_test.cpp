@@ -51,8 +51,8 @@ TEST(Farm, APngDownloadIsEncodedWithTheScenesOutputTransfer) {
     scene["render"]["output_transfer"] = transfer;
     const Image local = test::render_image(scene, 2);
     const auto local_png = farm.dir() / (std::string("local-") + transfer + ".png");
-    write_image(local, local_png, std::string(transfer) == "linear" ? OutputTransfer::linear
-                                                                   : OutputTransfer::srgb);
+    write_image(local, local_png,
+                std::string(transfer) == "linear" ? OutputTransfer::linear : OutputTransfer::srgb);
     const std::string id = farm.api().submit(transfer, 50, scene)["id"];
     ASSERT_EQ(farm.wait_finished(id)["state"], "completed");
     EXPECT_EQ(farm.api().image(id, "png", false), test::read_text(local_png)) << transfer;

@@ -303,7 +303,8 @@ TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
     expected.paste(rect, tile_pixels(rect, 0.0f));
   for (std::size_t i = 0; i < lease.tiles.size(); ++i)
     expected.paste(lease.tiles[i].rect, pixels[i]);
-  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
+  EXPECT_TRUE(
+      same_bits(read_image(ImageFiles(store_->data_dir()).path(job)).pixels(), expected.pixels()));
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
 }
 
@@ -337,7 +338,8 @@ TEST_F(SchedulerBatchTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRender
   Image expected(96, 96);
   for (const TileRect& rect : split_into_tiles(96, 96, 32))
     expected.paste(rect, tile_pixels(rect, 0.0f));
-  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
+  EXPECT_TRUE(
+      same_bits(read_image(ImageFiles(store_->data_dir()).path(job)).pixels(), expected.pixels()));
 }
 
 }  // namespace

@@ -157,7 +157,8 @@ TEST_F(SchedulerTest, ResultsAcceptedWhileTheCanvasIsMadeOutsideTheLockAreInTheI
   Image expected(1024, 512);
   for (const TileRect& rect : split_into_tiles(1024, 512, 16))
     expected.paste(rect, tile_pixels(rect, 0.5f));
-  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
+  EXPECT_TRUE(
+      same_bits(read_image(ImageFiles(store_->data_dir()).path(job)).pixels(), expected.pixels()));
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
 }
 

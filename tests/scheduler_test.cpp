@@ -163,7 +163,7 @@ TEST_F(SchedulerTest, StaleResultIsRefusedAfterReassignment) {
   EXPECT_EQ(deliver(old_lease, 1.0f), ResultOutcome::stale);
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), tile_pixels(new_lease.tiles[0].rect, 2.0f)));
   s().wait_for_images();
-  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(),
+  EXPECT_TRUE(same_bits(read_image(ImageFiles(store_->data_dir()).path(job)).pixels(),
                         tile_pixels(new_lease.tiles[0].rect, 2.0f)));
 }
 
@@ -232,10 +232,10 @@ TEST_F(SchedulerTest, RemoveOnlyFinishedJobs) {
   const std::string w = worker();
   finish(running.id, w);
   s().wait_for_images();
-  ASSERT_TRUE(std::filesystem::exists(store_->image_path(running.id)));
+  ASSERT_TRUE(std::filesystem::exists(ImageFiles(store_->data_dir()).path(running.id)));
   EXPECT_EQ(s().remove(running.id), RemoveOutcome::removed);
   EXPECT_FALSE(s().job(running.id));
-  EXPECT_FALSE(std::filesystem::exists(store_->image_path(running.id)));
+  EXPECT_FALSE(std::filesystem::exists(ImageFiles(store_->data_dir()).path(running.id)));
   EXPECT_TRUE(s().scene_json(sharing.scene_digest));  // still used by `sharing`
 
   ASSERT_EQ(s().cancel(own.id), CancelOutcome::canceled);
@@ -289,7 +289,8 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   for (const TileRect& rect : split_into_tiles(96, 96, 32))
     expected.paste(rect, tile_pixels(rect, 0.0f));
   s().wait_for_images();
-  EXPECT_TRUE(same_bits(read_image(store_->image_path(job)).pixels(), expected.pixels()));
+  EXPECT_TRUE(
+      same_bits(read_image(ImageFiles(store_->data_dir()).path(job)).pixels(), expected.pixels()));
   reopen();
   EXPECT_EQ(s().job(job)->state, JobState::completed);
   EXPECT_EQ(s().job(canceled)->state, JobState::canceled);
@@ -318,16 +319,16 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
   row.started_at_ms = job.created_at_ms;
   store_->update_job(row);
   s().wait_for_images();
-  std::filesystem::remove(store_->image_path(job.id));
+  std::filesystem::remove(ImageFiles(store_->data_dir()).path(job.id));
   clock_.advance_ms(100);
   reopen();
   const JobStatus after = *s().job(job.id);
   EXPECT_EQ(after.state, JobState::completed);
   EXPECT_EQ(after.finished_at_ms, clock_.now_ms());
   s().wait_for_images();
-  ASSERT_TRUE(std::filesystem::exists(store_->image_path(job.id)));
-  EXPECT_TRUE(
-      same_bits(read_image(store_->image_path(job.id)).pixels(), s().assemble(job.id)->pixels()));
+  ASSERT_TRUE(std::filesystem::exists(ImageFiles(store_->data_dir()).path(job.id)));
+  EXPECT_TRUE(same_bits(read_image(ImageFiles(store_->data_dir()).path(job.id)).pixels(),
+                        s().assemble(job.id)->pixels()));
 }
 
 TEST_F(SchedulerTest, ReconcileStartsAQueuedJobWithDoneTiles) {

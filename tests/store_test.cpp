@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/image_files.hpp"
 #include "server/sqlite_db.hpp"
 
 namespace tessera {
@@ -166,7 +167,7 @@ bool same_bits(const std::vector<float>& a, std::span<const float> b) {
 TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_EQ(store_->data_dir(), dir_);
   EXPECT_TRUE(std::filesystem::exists(dir_ / "tessera.db"));
-  EXPECT_TRUE(std::filesystem::is_directory(dir_ / "images"));
+  EXPECT_TRUE(std::filesystem::is_directory(dir_ / "pixels"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
   EXPECT_EQ(db.query_text("PRAGMA user_version"), "5");
@@ -485,7 +486,7 @@ TEST_F(StoreTest, JobsFailuresScenesAndWorkersSurviveAReopen) {
   EXPECT_FALSE(store_->scene_json("d2"));
 }
 
-TEST_F(StoreTest, DeleteJobTakesItsRowsImageAndOrphanedSceneOnly) {
+TEST_F(StoreTest, DeleteJobTakesItsRowsPixelsAndOrphanedSceneOnly) {
   const std::vector<float> pixels(20 * 20 * 3, 1.0f);
   const std::vector<std::span<const float>> tiles{pixels};
   for (const char* id : {"j-1", "j-2"}) {
@@ -495,11 +496,11 @@ TEST_F(StoreTest, DeleteJobTakesItsRowsImageAndOrphanedSceneOnly) {
     store_->put_tile_failure({id, 2, 1, "broke"});
   }
   store_->insert_job(square_job("j-3", "own"), "{}");
-  store_->write_image("j-1", Image(4, 4));
-  EXPECT_TRUE(store_->has_image("j-1"));
+  ASSERT_TRUE(std::filesystem::exists(store_->pixel_path("j-1")));
 
   store_->delete_job("j-1");
-  EXPECT_FALSE(store_->has_image("j-1"));
+  EXPECT_FALSE(std::filesystem::exists(store_->pixel_path("j-1")));
+  EXPECT_TRUE(std::filesystem::exists(store_->pixel_path("j-2")));
   EXPECT_TRUE(store_->scene_json("shared"));
   store_->delete_job("j-3");
   EXPECT_FALSE(store_->scene_json("own"));
@@ -543,14 +544,17 @@ TEST_F(StoreTest, FailuresNameTheOperationAndSqlitesMessage) {
   EXPECT_EQ(store_->load().jobs.size(), 1u);
   store_->update_job(job_row("j-1", "d1"));
 }
-TEST_F(StoreTest, PruneImagesDeletesUnkeptImagesAndLeftovers) {
-  store_->write_image("j-keep", Image(2, 2));
-  store_->write_image("j-drop", Image(2, 2));
+
+TEST_F(StoreTest, ImageFilesBesideTheStorePruneUnkeptImagesAndLeftovers) {
+  const ImageFiles images(dir_);
+  images.write("j-keep", Image(2, 2));
+  images.write("j-drop", Image(2, 2));
+  EXPECT_EQ(images.path("j-keep"), dir_ / "images" / "j-keep.exr");
   std::ofstream(dir_ / "images" / ".j-keep.tmp123.exr") << "partial";
   std::ofstream(dir_ / "images" / "notes.txt") << "not ours";
-  store_->prune_images([](const std::string& id) { return id == "j-keep"; });
-  EXPECT_TRUE(store_->has_image("j-keep"));
-  EXPECT_FALSE(store_->has_image("j-drop"));
+  images.prune([](const std::string& id) { return id == "j-keep"; });
+  EXPECT_TRUE(images.has("j-keep"));
+  EXPECT_FALSE(images.has("j-drop"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "images" / ".j-keep.tmp123.exr"));
   EXPECT_TRUE(std::filesystem::exists(dir_ / "images" / "notes.txt"));
 }

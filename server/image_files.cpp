@@ -1,0 +1,36 @@
+#include "server/image_files.hpp"
+
+#include <system_error>
+
+#include "common/image_io.hpp"
+#include "server/prune_files.hpp"
+
+namespace tessera {
+
+ImageFiles::ImageFiles(const std::filesystem::path& data_dir) : dir_(data_dir / "images") {
+  std::filesystem::create_directories(dir_);
+}
+
+std::filesystem::path ImageFiles::path(const std::string& job_id) const {
+  return dir_ / (job_id + ".exr");
+}
+
+void ImageFiles::write(const std::string& job_id, const Image& image) const {
+  write_image(image, path(job_id), OutputTransfer::linear);
+}
+
+void ImageFiles::remove(const std::string& job_id) const {
+  std::error_code ignored;
+  std::filesystem::remove(path(job_id), ignored);
+}
+
+bool ImageFiles::has(const std::string& job_id) const {
+  std::error_code ignored;
+  return std::filesystem::is_regular_file(path(job_id), ignored);
+}
+
+void ImageFiles::prune(const std::function<bool(const std::string& job_id)>& keep) const {
+  prune_files(dir_, ".exr", keep);
+}
+
+}  // namespace tessera
