@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <span>
 
 #include <spdlog/spdlog.h>
@@ -87,18 +88,14 @@ HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
     if (!sizes)
       return error_response(409, "lease_lost",
                             "lease " + id + " is no longer held; the result was refused");
-    std::vector<TileResult> results;
-    std::size_t offset = 0;
-    for (std::size_t i = 0; i < tiles->size(); ++i) {
-      const std::size_t floats = (*sizes)[i] * 3;
-      if (offset + floats > pixels.size()) break;
-      results.push_back({static_cast<int>((*tiles)[i]),
-                         std::span<const float>(pixels).subspan(offset, floats), rays[i]});
-      offset += floats;
-    }
-    outcome = results.size() != tiles->size() || offset != pixels.size()
-                  ? ResultOutcome::wrong_size
-                  : context.scheduler.complete(id, results);
+    // An index past an int names no tile of any job: the lease refuses it as not its own.
+    std::vector<int> indexes;
+    for (const std::uint64_t index : *tiles)
+      indexes.push_back(index > static_cast<std::uint64_t>(std::numeric_limits<int>::max())
+                            ? -1
+                            : static_cast<int>(index));
+    const auto results = slice_upload(pixels, indexes, *sizes, rays);
+    outcome = results ? context.scheduler.complete(id, *results) : ResultOutcome::wrong_size;
   } else {
     if (rays.size() != 1)
       return error_response(400, "invalid_request",

@@ -19,6 +19,7 @@
 #include <thread>
 #include <tuple>
 #include <unordered_map>
+#include <variant>
 #include <vector>
 
 #include "common/image.hpp"
@@ -121,6 +122,14 @@ struct TileResult {
   std::span<const float> pixels;  // float32 RGB, rows from the top
   std::uint64_t rays = 0;
 };
+
+// An upload's body cut into its tiles, in order: pixel_counts[i] pixels of tiles[i], which
+// took rays[i] rays. Nothing when the pixels are not exactly those tiles. The one place an
+// upload is sliced, whether it names its tiles or sends every tile its lease owes.
+std::optional<std::vector<TileResult>> slice_upload(std::span<const float> pixels,
+                                                    std::span<const int> tiles,
+                                                    std::span<const std::size_t> pixel_counts,
+                                                    std::span<const std::uint64_t> rays);
 
 enum class ResultOutcome {
   accepted,    // stored; the tiles are done (some may have been delivered already)
@@ -234,6 +243,21 @@ class Scheduler {
 
   // Everything below runs with mutex_ held.
   void load_and_reconcile();
+  // The steps of load_and_reconcile() (scheduler_load.cpp), in its order.
+  void load_workers(std::vector<WorkerRow>& rows);
+  // Returns the jobs whose stored state this build does not know.
+  std::set<std::string> load_jobs(std::vector<JobRow>& rows);
+  // A tile named by a stored row; nothing for a job or an index that does not exist.
+  TileSlot* stored_tile(const std::string& job_id, int index);
+  // Marks the tiles of usable results done; stages the others' forgetting.
+  void load_results(const std::vector<ResultRow>& rows, StagedChange& change);
+  void recount_health(std::int64_t now);
+  // Keeps each worker's one live lease, with a fresh timeout, and sends the others' tiles
+  // back to the queue; a worker without a lease is gone until it talks again.
+  void stage_leases_kept(StagedChange& change, std::int64_t now);
+  // Brings each job's state in line with its tiles; returns the completed jobs whose image
+  // file is still to be written.
+  std::vector<JobEntry*> stage_job_states(StagedChange& change, std::int64_t now);
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
   Image assemble_locked(const JobEntry& job) const;
@@ -281,6 +305,16 @@ class Scheduler {
   // Counts one more hand-out of a tile, staged (claim(), extend()) or in place (a lease
   // given back on a reconnect); a tile that goes out again is shown on its job.
   void count_handout(JobEntry& job, TileSlot& tile);
+  // The results an upload under `lease_id` delivers for the first time (naming each tile
+  // in `named`), or the outcome that refuses the whole upload (scheduler_results.cpp).
+  std::variant<ResultOutcome, std::vector<const TileResult*>> fresh_results(
+      const JobEntry& job, const std::string& lease_id, const std::vector<int>& live,
+      std::span<const TileResult> results, std::set<int>& named) const;
+  // Stages the fresh results' tiles as done, with the job's rays and the worker's next
+  // tile; true when they are the job's last.
+  bool stage_results(StagedChange& change, JobEntry& job, const std::string& lease_id,
+                     const std::vector<const TileResult*>& fresh, const std::vector<int>& live,
+                     const std::set<int>& named);
   // Stages the job's failure with `error`, withdrawing its other tiles from their workers;
   // nothing when it has finished already.
   void stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error);

@@ -24,8 +24,46 @@ void clear_lease(TileSlot& tile) {
 void Scheduler::load_and_reconcile() {
   StoredState stored = store_.load();
   const std::int64_t now = clock_.now_ms();
+  load_workers(stored.workers);
+  const std::set<std::string> unknown_state = load_jobs(stored.jobs);
+  for (TileFailureRow& row : stored.failures) {
+    if (TileSlot* tile = stored_tile(row.job_id, row.tile_index)) {
+      tile->attempts = row.attempts;
+      tile->last_error = std::move(row.last_error);
+    }
+  }
+  StagedChange change;
+  load_results(stored.results, change);
+  for (const LeaseRow& row : stored.leases) {
+    for (const int index : row.tiles) {
+      TileSlot* tile = stored_tile(row.job_id, index);
+      if (!tile || tile->state == TileState::done) continue;  // delivered after all
+      tile->state = TileState::leased;
+      tile->lease_id = row.id;
+      tile->worker_id = row.worker_id;
+    }
+  }
+  for (auto& [id, job] : jobs_) index_tiles(*job);
+  recount_health(now);
 
-  for (WorkerRow& row : stored.workers) {
+  for (const std::string& id : unknown_state)
+    change.job(*find_job(id)).error = "unknown state in the database";
+  stage_leases_kept(change, now);
+  const std::vector<JobEntry*> needs_image = stage_job_states(change, now);
+  if (!change.empty()) commit(change);
+
+  // Written by the image thread, once it starts.
+  for (JobEntry* job : needs_image)
+    if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
+  store_.prune_pixels([this](const std::string& job_id) { return find_job(job_id) != nullptr; });
+  images_.prune([this](const std::string& job_id) {
+    const JobEntry* job = find_job(job_id);
+    return job && job->status.state == JobState::completed;
+  });
+}
+
+void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
+  for (WorkerRow& row : rows) {
     auto worker = std::make_unique<WorkerEntry>();
     worker->info.id = row.id;
     worker->info.name = std::move(row.name);
@@ -38,9 +76,11 @@ void Scheduler::load_and_reconcile() {
     present_workers_ += worker->info.state != worker_gone;
     workers_.emplace(row.id, std::move(worker));
   }
+}
 
+std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
   std::set<std::string> unknown_state;
-  for (JobRow& row : stored.jobs) {
+  for (JobRow& row : rows) {
     auto job = std::make_unique<JobEntry>();
     JobStatus& s = job->status;
     s.id = row.id;
@@ -70,28 +110,27 @@ void Scheduler::load_and_reconcile() {
     for (const TileRect& rect : split_into_tiles(s.width, s.height, s.tile_size))
       job->tiles.emplace_back().rect = rect;
   }
-  const auto tile_of = [&](const std::string& job_id, int index) -> TileSlot* {
-    JobEntry* job = find_job(job_id);  // the foreign keys rule out a row of no job
-    if (!job || index < 0 || index >= static_cast<int>(job->tiles.size())) return nullptr;
-    return &job->tiles[index];
-  };
-  for (TileFailureRow& row : stored.failures) {
-    if (TileSlot* tile = tile_of(row.job_id, row.tile_index)) {
-      tile->attempts = row.attempts;
-      tile->last_error = std::move(row.last_error);
-    }
-  }
+  return unknown_state;
+}
+
+TileSlot* Scheduler::stored_tile(const std::string& job_id, int index) {
+  JobEntry* job = find_job(job_id);  // the foreign keys rule out a row of no job
+  if (!job || index < 0 || index >= static_cast<int>(job->tiles.size())) return nullptr;
+  return &job->tiles[index];
+}
+
+void Scheduler::load_results(const std::vector<ResultRow>& rows, StagedChange& change) {
   // A result whose pixels are cut short, or that names a tile the job lacks or another
   // result delivered, cannot be assembled: it is forgotten, and its tiles render again.
   std::set<JobEntry*> rays_changed;
   std::vector<std::int64_t> forgotten_results;
-  for (const ResultRow& row : stored.results) {
+  for (const ResultRow& row : rows) {
     JobEntry* job = find_job(row.job_id);
     std::int64_t bytes = 0;
     bool usable = job && !row.tiles.empty() && row.tiles.size() == row.rays.size();
     std::set<int> named;
     for (std::size_t i = 0; usable && i < row.tiles.size(); ++i) {
-      const TileSlot* tile = tile_of(row.job_id, row.tiles[i]);
+      const TileSlot* tile = stored_tile(row.job_id, row.tiles[i]);
       usable = tile && tile->state != TileState::done && named.insert(row.tiles[i]).second;
       if (usable) bytes += static_cast<std::int64_t>(tile->rect.pixel_count() * 3 * sizeof(float));
     }
@@ -113,18 +152,14 @@ void Scheduler::load_and_reconcile() {
       tile.result_lease_id = row.lease_id;
     }
   }
-  for (const LeaseRow& row : stored.leases) {
-    for (const int index : row.tiles) {
-      TileSlot* tile = tile_of(row.job_id, index);
-      if (!tile || tile->state == TileState::done) continue;  // delivered after all
-      tile->state = TileState::leased;
-      tile->lease_id = row.id;
-      tile->worker_id = row.worker_id;
-    }
-  }
+  // Forgotten together with the rays they counted, in the one transaction of what follows.
+  change.forgotten_results = std::move(forgotten_results);
+  for (JobEntry* job : rays_changed) change.job(*job);
+}
+
+void Scheduler::recount_health(std::int64_t now) {
+  // What the store keeps of a job's health: its tiles' failures and their last errors.
   for (auto& [id, job] : jobs_) {
-    index_tiles(*job);
-    // What the store keeps of a job's health: its tiles' failures and their last errors.
     JobHealth& health = job->status.health;
     for (std::size_t index = 0; index < job->tiles.size(); ++index) {
       const TileSlot& tile = job->tiles[index];
@@ -134,15 +169,12 @@ void Scheduler::load_and_reconcile() {
     }
     health.progress_at_ms = now;  // the stall clock starts again with the process
   }
+}
 
-  StagedChange change;
-  // Forgotten together with the rays they counted, in the one transaction of what follows.
-  change.forgotten_results = std::move(forgotten_results);
-  for (JobEntry* job : rays_changed) change.job(*job);
+void Scheduler::stage_leases_kept(StagedChange& change, std::int64_t now) {
   std::map<WorkerEntry*, std::string> holders;  // worker -> the one lease it keeps
   for (auto& [id, job_ptr] : jobs_) {
     JobEntry& job = *job_ptr;
-    if (unknown_state.contains(id)) change.job(job).error = "unknown state in the database";
     for (int index = 0; index < job.status.tiles_total; ++index) {
       const TileSlot& tile = job.tiles[index];
       if (tile.state != TileState::leased) {
@@ -177,7 +209,9 @@ void Scheduler::load_and_reconcile() {
   for (auto& [id, worker] : workers_)
     if (!holders.contains(worker.get()) && worker->info.state != worker_gone)
       change.worker(*worker).info.state = worker_gone;
+}
 
+std::vector<JobEntry*> Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {
   std::vector<JobEntry*> needs_image;
   for (auto& [id, job_ptr] : jobs_) {
     JobEntry& job = *job_ptr;
@@ -218,16 +252,7 @@ void Scheduler::load_and_reconcile() {
       }
     }
   }
-  if (!change.empty()) commit(change);
-
-  // Written by the image thread, once it starts.
-  for (JobEntry* job : needs_image)
-    if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
-  store_.prune_pixels([this](const std::string& job_id) { return find_job(job_id) != nullptr; });
-  images_.prune([this](const std::string& job_id) {
-    const JobEntry* job = find_job(job_id);
-    return job && job->status.state == JobState::completed;
-  });
+  return needs_image;
 }
 
 }  // namespace tessera

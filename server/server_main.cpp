@@ -82,9 +82,9 @@ void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& sched
   });
 }
 
-int run(const ServerOptions& options) {
+// The tokens, and the refusal to listen beyond this machine without them.
+tessera::AccessTokens checked_tokens(const ServerOptions& options, const std::string& host) {
   using namespace tessera;
-  const auto [host, port] = split_listen(options.listen);
   const AccessTokens tokens{
       resolve_secret(options.api_token, options.api_token_file, "TESSERA_API_TOKEN", "API token"),
       resolve_secret(options.worker_token, options.worker_token_file, "TESSERA_WORKER_TOKEN",
@@ -101,19 +101,51 @@ int run(const ServerOptions& options) {
                  tokens.client.empty() && tokens.worker.empty() ? "every route"
                  : tokens.client.empty()                        ? "the client routes"
                                                                 : "the worker routes");
+  return tokens;
+}
+
+tessera::SchedulerConfig scheduler_config(const ServerOptions& options) {
+  tessera::SchedulerConfig config;
+  config.lease_timeout_ms = static_cast<std::int64_t>(options.lease_timeout_s * 1000);
+  config.heartbeat_interval_ms = static_cast<std::int64_t>(options.heartbeat_interval_s * 1000);
+  config.max_tile_attempts = options.max_tile_attempts;
+  config.max_tile_handouts = options.max_tile_handouts;
+  config.stall_timeout_ms = static_cast<std::int64_t>(options.stall_timeout_s * 1000);
+  return config;
+}
+
+// Written whole, then renamed: a reader never sees a half-written port.
+void write_port_file(const std::string& port_file, unsigned port) {
+  const std::filesystem::path temp = port_file + ".tmp";
+  std::ofstream(temp) << port << '\n';
+  std::filesystem::rename(temp, port_file);
+}
+
+std::unique_ptr<tessera::LocalWorkers> start_local_workers(const ServerOptions& options,
+                                                           const tessera::AccessTokens& tokens,
+                                                           const std::string& host, unsigned port) {
+  // Local workers take the worker token from the environment they inherit, never from
+  // their command line, which anyone on the machine can read.
+  if (!tokens.worker.empty()) ::setenv("TESSERA_WORKER_TOKEN", tokens.worker.c_str(), 1);
+  if (options.local_workers <= 0) return nullptr;
+  return std::make_unique<tessera::LocalWorkers>(
+      tessera::sibling_worker_binary(),
+      "http://" + std::string(host == "0.0.0.0" || host == "::" ? "127.0.0.1" : host) + ":" +
+          std::to_string(port),
+      options.local_workers, options.worker_threads, options.log_level);
+}
+
+int run(const ServerOptions& options) {
+  using namespace tessera;
+  const auto [host, port] = split_listen(options.listen);
+  const AccessTokens tokens = checked_tokens(options, host);
   // The cores belong to the local workers and the requests; an image file is written by
   // one low-priority thread, not by a pool of OpenEXR threads competing with them.
   encode_images_on_calling_thread();
 
   Store store(options.data_dir);
   SystemClock clock;
-  SchedulerConfig config;
-  config.lease_timeout_ms = static_cast<std::int64_t>(options.lease_timeout_s * 1000);
-  config.heartbeat_interval_ms = static_cast<std::int64_t>(options.heartbeat_interval_s * 1000);
-  config.max_tile_attempts = options.max_tile_attempts;
-  config.max_tile_handouts = options.max_tile_handouts;
-  config.stall_timeout_ms = static_cast<std::int64_t>(options.stall_timeout_s * 1000);
-  Scheduler scheduler(store, clock, config);
+  Scheduler scheduler(store, clock, scheduler_config(options));
 
   boost::asio::io_context io;
   LongPolls claims(io);
@@ -145,23 +177,9 @@ int run(const ServerOptions& options) {
   };
   HttpServer server(io, router, http);
   spdlog::info("listening on http://{}:{} with data in {}", host, server.port(), options.data_dir);
-  if (!options.port_file.empty()) {
-    // Written whole, then renamed: a reader never sees a half-written port.
-    const std::filesystem::path temp = options.port_file + ".tmp";
-    std::ofstream(temp) << server.port() << '\n';
-    std::filesystem::rename(temp, options.port_file);
-  }
-
-  std::unique_ptr<LocalWorkers> workers;
-  // Local workers take the worker token from the environment they inherit, never from
-  // their command line, which anyone on the machine can read.
-  if (!tokens.worker.empty()) ::setenv("TESSERA_WORKER_TOKEN", tokens.worker.c_str(), 1);
-  if (options.local_workers > 0)
-    workers = std::make_unique<LocalWorkers>(
-        sibling_worker_binary(),
-        "http://" + std::string(host == "0.0.0.0" || host == "::" ? "127.0.0.1" : host) + ":" +
-            std::to_string(server.port()),
-        options.local_workers, options.worker_threads, options.log_level);
+  if (!options.port_file.empty()) write_port_file(options.port_file, server.port());
+  const std::unique_ptr<LocalWorkers> workers =
+      start_local_workers(options, tokens, host, server.port());
   boost::asio::steady_timer expiry(io);
   schedule_upkeep(expiry, scheduler, workers.get());
   // The Store is open and the Scheduler has reconciled it (its constructor): /readyz says so.
@@ -197,9 +215,9 @@ int run(const ServerOptions& options) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  ServerOptions options;
-  CLI::App app{"tessera-server: the Tessera coordinator"};
+namespace {
+
+void add_farm_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--listen", options.listen, "HOST:PORT to serve on")->capture_default_str();
   app.add_option("--data-dir", options.data_dir, "Where jobs, tiles and images are kept")
       ->capture_default_str();
@@ -236,6 +254,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,
                  "Write the bound port here once listening (useful with --listen HOST:0)");
+}
+
+void add_limit_options(CLI::App& app, ServerOptions& options) {
   // What one job may cost; a scene over a limit is refused with 422 naming it.
   tessera::Limits& limits = options.limits;
   app.add_option("--max-width", limits.max_width, "Largest image width")
@@ -265,6 +286,9 @@ int main(int argc, char** argv) {
                  "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+}
+
+void add_token_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--api-token", options.api_token,
                  "Secret clients must send (Authorization: Bearer); also $TESSERA_API_TOKEN");
   app.add_option("--api-token-file", options.api_token_file, "Read the API token from this file");
@@ -273,6 +297,16 @@ int main(int argc, char** argv) {
   app.add_option("--worker-token-file", options.worker_token_file,
                  "Read the worker token from this file");
   app.add_flag("--insecure", options.insecure, "Allow a non-loopback --listen without both tokens");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ServerOptions options;
+  CLI::App app{"tessera-server: the Tessera coordinator"};
+  add_farm_options(app, options);
+  add_limit_options(app, options);
+  add_token_options(app, options);
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(options.log_level));
   try {

@@ -1,0 +1,105 @@
+// Failures: of a tile (an error reported, a lease expired), of a job (at a tile's limit,
+// stalled, or unstorable), and the workers kept off a job they failed on.
+#include <spdlog/spdlog.h>
+
+#include "server/scheduler.hpp"
+#include "server/scheduler_entries.hpp"
+
+namespace tessera {
+
+void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int index,
+                                   const WorkerEntry* worker, const std::string& error) {
+  TileSlot& tile = change.tile(job, index);
+  tile.attempts += 1;
+  tile.last_error = error;
+  // Not staged: a count kept in memory only, and harmless should the commit fail.
+  if (worker) job.failures_by_worker[worker->key()] += 1;
+  job.status.health.tile_failures += 1;
+  job.status.health.last_problem = "tile " + std::to_string(index) + ": " + error;
+  spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index,
+               tile.attempts, config_.max_tile_attempts, error);
+  if (tile.attempts < config_.max_tile_attempts) return;
+  stage_job_failure(change, job,
+                    "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
+                        std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
+                        " times; the last error: " + error);
+}
+
+void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error) {
+  JobStatus& status = change.job(job);
+  if (is_finished(status.state)) return;
+  status.state = JobState::failed;
+  status.finished_at_ms = clock_.now_ms();
+  status.error = error;
+  // Its other tiles are withdrawn from their workers, as for a cancel.
+  for (const auto& [lease_id, entry] : leases_)
+    if (entry.job_id == job.status.id && !entry.live.empty())
+      stage_lease_end(change, lease_id, false);
+}
+
+void Scheduler::fail_stalled_locked(std::int64_t now, StagedChange& change) {
+  if (config_.stall_timeout_ms <= 0) return;
+  for (const auto& key : active_) {
+    JobEntry& job = *jobs_.at(std::get<2>(key));
+    const JobHealth& health = job.status.health;
+    if (job.status.state != JobState::running || job.status.tiles_rendering == 0 ||
+        health.progress_at_ms <= 0 || now - health.progress_at_ms < config_.stall_timeout_ms)
+      continue;
+    std::string error = "no tile was delivered for " +
+                        std::to_string((now - health.progress_at_ms) / 1000) +
+                        " s while its tiles were being rendered";
+    if (health.repeated_handouts > 0)
+      error += "; tiles went out again " + std::to_string(health.repeated_handouts) + " times";
+    if (!health.last_problem.empty()) error += "; the last problem: " + health.last_problem;
+    stage_job_failure(change, job, error);
+  }
+}
+
+void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {
+  spdlog::error("job {}: {}", job.status.id, error);
+  if (is_finished(job.status.state)) return;
+  StagedChange change;
+  stage_job_failure(change, job, error);
+  try {
+    write(change);
+  } catch (const std::exception& e) {
+    spdlog::error("job {}: the failure could not be stored either ({}); it is kept in memory",
+                  job.status.id, e.what());
+  }
+  apply(change);
+}
+
+bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {
+  const auto failed_too_often = [&](const WorkerEntry& w) {
+    const auto it = job.failures_by_worker.find(w.key());
+    return it != job.failures_by_worker.end() && it->second >= config_.worker_failures_per_job;
+  };
+  if (!failed_too_often(worker)) return false;
+  // Only while another worker could take the tiles: with nobody else, trying again is the
+  // way to the attempt limit, which ends the job instead of leaving it waiting forever.
+  for (const auto& [id, other] : workers_)
+    if (other.get() != &worker && other->info.state != worker_gone && !failed_too_often(*other))
+      return true;
+  return false;
+}
+
+void Scheduler::fail_tile(const std::string& lease_id, int tile_index, const std::string& error) {
+  Callbacks notify;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = leases_.find(lease_id);
+    if (it == leases_.end()) return;
+    const std::vector<int>& live = it->second.live;
+    if (std::find(live.begin(), live.end(), tile_index) == live.end()) return;
+    JobEntry& job = *jobs_.at(it->second.job_id);
+    const WorkerEntry* worker = find_worker(job.tiles[tile_index].worker_id);
+    StagedChange change;
+    stage_lease_end(change, lease_id, false);
+    stage_tile_failure(change, job, tile_index, worker, error);
+    commit(change);
+    notify = callbacks_;
+  }
+  for (const auto& callback : notify) callback();
+}
+
+}  // namespace tessera

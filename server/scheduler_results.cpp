@@ -1,0 +1,179 @@
+// Results: an upload's tiles checked against their lease (fencing), stored, and pasted
+// into the job's canvas.
+#include <set>
+#include <variant>
+
+#include <spdlog/spdlog.h>
+
+#include "server/scheduler.hpp"
+#include "server/scheduler_entries.hpp"
+
+namespace tessera {
+
+std::optional<std::vector<TileResult>> slice_upload(std::span<const float> pixels,
+                                                    std::span<const int> tiles,
+                                                    std::span<const std::size_t> pixel_counts,
+                                                    std::span<const std::uint64_t> rays) {
+  std::vector<TileResult> results;
+  results.reserve(tiles.size());
+  std::size_t offset = 0;
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    const std::size_t floats = pixel_counts[i] * 3;
+    if (offset + floats > pixels.size()) return std::nullopt;
+    results.push_back({tiles[i], pixels.subspan(offset, floats), rays[i]});
+    offset += floats;
+  }
+  if (offset != pixels.size()) return std::nullopt;
+  return results;
+}
+
+ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const float> pixels,
+                                  std::uint64_t rays) {
+  std::vector<TileResult> results;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = leases_.find(lease_id);
+    if (it == leases_.end()) return ResultOutcome::stale;
+    if (it->second.live.empty())
+      return it->second.delivered == 0 ? ResultOutcome::stale : ResultOutcome::duplicate;
+    std::vector<int> tiles;
+    std::vector<std::size_t> counts;
+    for (const LeaseTile& tile : lease_of(lease_id).tiles) {
+      tiles.push_back(tile.index);
+      counts.push_back(tile.rect.pixel_count());
+    }
+    std::vector<std::uint64_t> rays_each(tiles.size(), 0);
+    rays_each.front() = rays;  // the count is the whole upload's, kept on its first tile
+    auto sliced = slice_upload(pixels, tiles, counts, rays_each);
+    if (!sliced) return ResultOutcome::wrong_size;
+    results = std::move(*sliced);
+  }
+  // Checked again under the lock: the lease may have moved on in between.
+  return complete(lease_id, results);
+}
+
+ResultOutcome Scheduler::complete(const std::string& lease_id,
+                                  std::span<const TileResult> results) {
+  std::unique_lock lock(mutex_);
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return ResultOutcome::stale;
+  const std::vector<int> live = it->second.live;  // commit() rewrites the index
+  JobEntry& job = *jobs_.at(it->second.job_id);
+
+  std::set<int> named;
+  const auto checked = fresh_results(job, lease_id, live, results, named);
+  if (const auto* refused = std::get_if<ResultOutcome>(&checked)) return *refused;
+  const auto& fresh = std::get<std::vector<const TileResult*>>(checked);
+
+  StagedChange change;
+  const bool job_done = stage_results(change, job, lease_id, fresh, live, named);
+  try {
+    write(change);
+  } catch (const std::exception& e) {
+    fail_unstorable(job, "cannot store the result of tile " +
+                             std::to_string(fresh.front()->tile_index) + ": " + e.what());
+    return ResultOutcome::unstored;
+  }
+  apply(change);
+  // Without a canvas (the job's first result, or the first since a restart), these tiles
+  // are only stored: the canvas, made next, starts from the store.
+  if (job.canvas)
+    for (const TileResult* result : fresh)
+      job.canvas->paste(job.tiles[result->tile_index].rect, result->pixels);
+  // Should the write fail or the process die, the tiles are stored and a restart writes
+  // the image again.
+  if (job_done) {
+    images_to_write_.push_back(job.status.id);
+    images_changed_.notify_all();
+  }
+  // The job's last result needs none: the image thread assembles from the store.
+  if (!job.canvas && !job_done) make_canvas(lock, job.status.id);
+  return ResultOutcome::accepted;
+}
+
+std::variant<ResultOutcome, std::vector<const TileResult*>> Scheduler::fresh_results(
+    const JobEntry& job, const std::string& lease_id, const std::vector<int>& live,
+    std::span<const TileResult> results, std::set<int>& named) const {
+  std::vector<const TileResult*> fresh;
+  for (const TileResult& result : results) {
+    if (!named.insert(result.tile_index).second) return ResultOutcome::wrong_tile;
+    if (result.tile_index < 0 || result.tile_index >= static_cast<int>(job.tiles.size()))
+      return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    const TileSlot& tile = job.tiles[result.tile_index];
+    if (tile.result_lease_id == lease_id) continue;  // a repeat: ignored
+    // A live lease gives up tiles only by delivering them, so a tile it neither holds nor
+    // delivered was never its own; a lease with no live tile left has ended.
+    if (tile.lease_id != lease_id)
+      return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
+    if (result.pixels.size() != tile.rect.pixel_count() * 3) return ResultOutcome::wrong_size;
+    fresh.push_back(&result);
+  }
+  if (fresh.empty()) return results.empty() ? ResultOutcome::wrong_size : ResultOutcome::duplicate;
+  return fresh;
+}
+
+bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::string& lease_id,
+                              const std::vector<const TileResult*>& fresh,
+                              const std::vector<int>& live, const std::set<int>& named) {
+  const std::int64_t now = clock_.now_ms();
+  JobStatus& status = change.job(job);
+  for (const TileResult* result : fresh) {
+    TileSlot& tile = change.tile(job, result->tile_index);
+    tile.state = TileState::done;
+    tile.lease_id.clear();
+    tile.lease_expires_ms = 0;
+    tile.rays = result->rays;
+    tile.result_lease_id = lease_id;  // worker_id stays: who rendered it
+    change.pixels[{&job, result->tile_index}] = result->pixels;
+    status.rays += result->rays;
+  }
+  job.status.health.progress_at_ms = now;
+  const bool job_done =
+      job.status.tiles_done + static_cast<int>(fresh.size()) == job.status.tiles_total;
+  if (job_done) {
+    status.state = JobState::completed;
+    status.finished_at_ms = now;
+  }
+  if (WorkerEntry* worker = find_worker(job.tiles[fresh.front()->tile_index].worker_id)) {
+    WorkerEntry& staged = change.worker(*worker);
+    staged.info.tiles_rendered += fresh.size();
+    staged.info.last_seen_ms = now;
+    if (staged.lease_id == lease_id) {
+      // The lease's next tile in hand-out order, if any is left.
+      int next = -1;
+      for (const int index : live)
+        if (!named.contains(index) && (next < 0 || job.rank[index] < job.rank[next])) next = index;
+      staged.info.current_tile = next;
+      if (next < 0) {
+        staged.lease_id.clear();
+        staged.info.current_job.clear();
+        staged.info.state = worker_idle;
+      }
+    }
+  }
+  return job_done;
+}
+
+std::optional<std::vector<std::size_t>> Scheduler::tile_pixel_counts(
+    const std::string& lease_id, std::span<const std::uint64_t> tile_indexes) const {
+  std::lock_guard lock(mutex_);
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return std::nullopt;
+  const JobEntry& job = *jobs_.at(it->second.job_id);
+  std::vector<std::size_t> counts;
+  counts.reserve(tile_indexes.size());
+  for (const std::uint64_t index : tile_indexes)
+    counts.push_back(index < job.tiles.size() ? job.tiles[index].rect.pixel_count() : 0);
+  return counts;
+}
+
+void Scheduler::note_refused_result(const std::string& lease_id, const std::string& why) {
+  std::lock_guard lock(mutex_);
+  const auto it = leases_.find(lease_id);
+  if (it == leases_.end()) return;
+  JobEntry& job = *jobs_.at(it->second.job_id);
+  job.status.health.refused_results += 1;
+  job.status.health.last_problem = "a result was refused: " + why;
+}
+
+}  // namespace tessera
