@@ -213,100 +213,101 @@ int run(const std::function<int(CoordinatorClient&)>& command, const Options& op
   }
 }
 
-}  // namespace
+using SharedOptions = std::shared_ptr<Options>;
+using Command = std::function<int(const Options&, CoordinatorClient&)>;
 
-void add_job_commands(CLI::App& app) {
-  auto options = std::make_shared<Options>();
-  app.add_option("--server", options->server,
-                 "Coordinator URL (default: $TESSERA_SERVER or http://127.0.0.1:8640)");
-  app.add_flag("--json", options->json_output, "Print the server's JSON");
-  app.add_option("--token", options->token,
-                 "The server's API token (default: $TESSERA_API_TOKEN; --token-file keeps it "
-                 "out of the process list)");
-  app.add_option("--token-file", options->token_file, "Read the API token from this file");
+// A subcommand that runs `command` with the options parsed, and exits with its code.
+CLI::App* on(CLI::App& app, const SharedOptions& options, const char* name, const char* help,
+             Command command) {
+  CLI::App* sub = app.add_subcommand(name, help);
+  sub->final_callback([options, command] {
+    const int code = run([&](CoordinatorClient& api) { return command(*options, api); }, *options);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+  return sub;
+}
 
-  auto on = [&app, options](const char* name, const char* help,
-                            std::function<int(const Options&, CoordinatorClient&)> command) {
-    CLI::App* sub = app.add_subcommand(name, help);
-    sub->final_callback([options, command] {
-      const int code =
-          run([&](CoordinatorClient& api) { return command(*options, api); }, *options);
-      if (code != 0) throw CLI::RuntimeError(code);
-    });
-    return sub;
-  };
-
-  CLI::App* submit_cmd = on("submit", "Submit a scene as a render job", submit);
+void add_submit_command(CLI::App& app, const SharedOptions& options) {
+  CLI::App* submit_cmd = on(app, options, "submit", "Submit a scene as a render job", submit);
   submit_cmd->add_option("scene", options->scene_path, "Scene file (JSON)")->required();
   submit_cmd->add_option("--name", options->name, "Job name (default: the file's name)");
   submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
       ->check(CLI::Range(0, 100));
   submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
   submit_cmd->add_option("-o,--output", options->output, "With --wait: save the image here");
+}
 
-  CLI::App* status_cmd =
-      on("status", "Show a job's status", [](const Options& o, CoordinatorClient& api) {
-        const protocol::JobStatus job = api.job(o.job);
+// status, watch, list and get: they read what the coordinator has.
+void add_job_queries(CLI::App& app, const SharedOptions& options) {
+  CLI::App* status_cmd = on(app, options, "status", "Show a job's status",
+                            [](const Options& o, CoordinatorClient& api) {
+                              const protocol::JobStatus job = api.job(o.job);
+                              if (o.json_output)
+                                print_json(protocol::to_json(job));
+                              else
+                                print_status(job);
+                              return kExitOk;
+                            });
+  status_cmd->add_option("job", options->job, "Job id")->required();
+
+  CLI::App* watch_cmd =
+      on(app, options, "watch", "Follow a job's progress until it finishes",
+         [](const Options& o, CoordinatorClient& api) { return job_exit_code(watch(api, o.job)); });
+  watch_cmd->add_option("job", options->job, "Job id")->required();
+
+  CLI::App* list_cmd =
+      on(app, options, "list", "List jobs, newest first",
+         [](const Options& o, CoordinatorClient& api) {
+           std::optional<JobState> state;
+           if (!o.state.empty()) {
+             state = job_state_from_string(o.state);
+             if (!state)
+               fail(kExitUsage, "--state must be " + protocol::names_of(protocol::kJobStateNames));
+           }
+           const protocol::JobList reply = api.jobs(state, o.limit);
+           if (o.json_output) {
+             print_json(protocol::to_json(reply));
+           } else {
+             for (const protocol::JobStatus& job : reply.jobs) print_status(job);
+           }
+           return kExitOk;
+         });
+  list_cmd->add_option("--state", options->state, "Only jobs in this state");
+  list_cmd->add_option("--limit", options->limit, "At most this many")->check(CLI::Range(1, 1000));
+
+  CLI::App* get_cmd = on(app, options, "get", "Download a job's image",
+                         [](const Options& o, CoordinatorClient& api) {
+                           save_image(api, o.job, o.output, o.partial);
+                           return kExitOk;
+                         });
+  get_cmd->add_option("job", options->job, "Job id")->required();
+  get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
+  get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
+}
+
+void add_job_changes(CLI::App& app, const SharedOptions& options) {
+  CLI::App* cancel_cmd =
+      on(app, options, "cancel", "Cancel a job", [](const Options& o, CoordinatorClient& api) {
+        const protocol::JobStatus job = api.cancel(o.job);
         if (o.json_output)
           print_json(protocol::to_json(job));
         else
           print_status(job);
         return kExitOk;
       });
-  status_cmd->add_option("job", options->job, "Job id")->required();
-
-  CLI::App* watch_cmd =
-      on("watch", "Follow a job's progress until it finishes",
-         [](const Options& o, CoordinatorClient& api) { return job_exit_code(watch(api, o.job)); });
-  watch_cmd->add_option("job", options->job, "Job id")->required();
-
-  CLI::App* list_cmd =
-      on("list", "List jobs, newest first", [](const Options& o, CoordinatorClient& api) {
-        std::optional<JobState> state;
-        if (!o.state.empty()) {
-          state = job_state_from_string(o.state);
-          if (!state)
-            fail(kExitUsage, "--state must be " + protocol::names_of(protocol::kJobStateNames));
-        }
-        const protocol::JobList reply = api.jobs(state, o.limit);
-        if (o.json_output) {
-          print_json(protocol::to_json(reply));
-        } else {
-          for (const protocol::JobStatus& job : reply.jobs) print_status(job);
-        }
-        return kExitOk;
-      });
-  list_cmd->add_option("--state", options->state, "Only jobs in this state");
-  list_cmd->add_option("--limit", options->limit, "At most this many")->check(CLI::Range(1, 1000));
-
-  CLI::App* get_cmd =
-      on("get", "Download a job's image", [](const Options& o, CoordinatorClient& api) {
-        save_image(api, o.job, o.output, o.partial);
-        return kExitOk;
-      });
-  get_cmd->add_option("job", options->job, "Job id")->required();
-  get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
-  get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
-
-  CLI::App* cancel_cmd = on("cancel", "Cancel a job", [](const Options& o, CoordinatorClient& api) {
-    const protocol::JobStatus job = api.cancel(o.job);
-    if (o.json_output)
-      print_json(protocol::to_json(job));
-    else
-      print_status(job);
-    return kExitOk;
-  });
   cancel_cmd->add_option("job", options->job, "Job id")->required();
 
-  CLI::App* rm_cmd =
-      on("rm", "Remove a finished job and its files", [](const Options& o, CoordinatorClient& api) {
-        api.remove(o.job);
-        if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
-        return kExitOk;
-      });
+  CLI::App* rm_cmd = on(app, options, "rm", "Remove a finished job and its files",
+                        [](const Options& o, CoordinatorClient& api) {
+                          api.remove(o.job);
+                          if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
+                          return kExitOk;
+                        });
   rm_cmd->add_option("job", options->job, "Job id")->required();
+}
 
-  on("workers", "List the workers", [](const Options& o, CoordinatorClient& api) {
+void add_workers_command(CLI::App& app, const SharedOptions& options) {
+  on(app, options, "workers", "List the workers", [](const Options& o, CoordinatorClient& api) {
     const protocol::WorkerList reply = api.workers();
     if (o.json_output) {
       print_json(protocol::to_json(reply));
@@ -319,6 +320,24 @@ void add_job_commands(CLI::App& app) {
           static_cast<unsigned long long>(w.tiles_rendered), w.current_job.value_or("").c_str());
     return kExitOk;
   });
+}
+
+}  // namespace
+
+void add_job_commands(CLI::App& app) {
+  auto options = std::make_shared<Options>();
+  app.add_option("--server", options->server,
+                 "Coordinator URL (default: $TESSERA_SERVER or http://127.0.0.1:8640)");
+  app.add_flag("--json", options->json_output, "Print the server's JSON");
+  app.add_option("--token", options->token,
+                 "The server's API token (default: $TESSERA_API_TOKEN; --token-file keeps it "
+                 "out of the process list)");
+  app.add_option("--token-file", options->token_file, "Read the API token from this file");
+
+  add_submit_command(app, options);
+  add_job_queries(app, options);
+  add_job_changes(app, options);
+  add_workers_command(app, options);
 }
 
 }  // namespace tessera

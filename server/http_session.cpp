@@ -1,10 +1,6 @@
 #include "server/http_session.hpp"
 
-#include "common/protocol/limits.hpp"
-
-#include <algorithm>
 #include <array>
-#include <cctype>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -16,11 +12,13 @@
 
 #include <spdlog/spdlog.h>
 #include <boost/asio/dispatch.hpp>
-#include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
+#include "server/http_errors.hpp"
+#include "server/listener.hpp"
+#include "server/pending_response.hpp"
 #include "server/router.hpp"
 
 namespace tessera {
@@ -36,21 +34,6 @@ namespace {
 // After a response that ends the connection, how long unread request bytes are drained
 // so that closing does not reset the connection before the client has read the answer.
 constexpr std::chrono::seconds kLingerTime{2};
-
-bool has_no_body(int status) { return status < 200 || status == 204 || status == 304; }
-
-std::string lower(beast::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
-
-std::string format_endpoint(const tcp::endpoint& endpoint) {
-  const auto address = endpoint.address();
-  const std::string ip = address.is_v6() ? "[" + address.to_string() + "]" : address.to_string();
-  return ip + ":" + std::to_string(endpoint.port());
-}
 
 }  // namespace
 
@@ -221,29 +204,20 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void on_read_error(error_code ec, const char* what) {
     if (ec == http::error::header_limit)
-      return send(error_response(431, "header_too_large",
-                                 "the request header exceeds " +
-                                     std::to_string(shared_->options.max_header_bytes) + " bytes"),
-                  true);
+      return send(header_too_large(shared_->options.max_header_bytes), true);
     // A message that does not parse: say so, then close, since where the next one would
     // begin is unknown. Anything else (timeouts, resets, end of stream) leaves no one to tell.
     if (ec.category() == http::make_error_code(http::error::end_of_stream).category() &&
         ec != http::error::end_of_stream && ec != http::error::partial_message)
-      return send(error_response(400, "bad_request", "malformed HTTP request: " + ec.message()),
-                  true);
+      return send(malformed_request(ec.message()), true);
     spdlog::debug("http {}: reading the {} failed: {}", remote_address_, what, ec.message());
     close();
   }
 
-  // Names the limit and, when the request announced it, the body's size: a worker over a
-  // limit must be told by how much, not only that it is.
   HttpResponse too_large(std::size_t limit) const {
     const auto announced = parser_ ? parser_->content_length() : boost::none;
-    return error_response(
-        413, "body_too_large",
-        "the request body " +
-            (announced ? "of " + with_thousands(*announced) + " bytes " : std::string()) +
-            "exceeds this route's limit of " + with_thousands(limit) + " bytes");
+    return body_too_large(announced ? std::optional<std::uint64_t>(*announced) : std::nullopt,
+                          limit);
   }
 
   void dispatch();
@@ -371,41 +345,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   RouteMatch route_;
 };
 
-namespace {
-
-// A request's answer-to-be, shared by every copy of its Respond. It keeps the io_context
-// running while a handler works elsewhere (a long-poll must not let io.run() return), and
-// answers 500 if the last copy disappears unanswered, so a buggy handler cannot leave a
-// client waiting forever.
-class PendingResponse {
- public:
-  PendingResponse(std::shared_ptr<HttpSession> session, net::io_context& io)
-      : session_(std::move(session)), work_(net::make_work_guard(io)) {}
-
-  ~PendingResponse() {
-    if (!answered_.exchange(true))
-      session_->deliver(error_response(500, "internal_error", "the request was never answered"));
-  }
-
-  PendingResponse(const PendingResponse&) = delete;
-  PendingResponse& operator=(const PendingResponse&) = delete;
-
-  void answer(HttpResponse response) {
-    if (answered_.exchange(true)) {
-      spdlog::warn("a request was answered twice; the second answer is dropped");
-      return;
-    }
-    session_->deliver(std::move(response));
-  }
-
- private:
-  std::shared_ptr<HttpSession> session_;
-  net::executor_work_guard<net::io_context::executor_type> work_;
-  std::atomic<bool> answered_{false};
-};
-
-}  // namespace
-
 void HttpSession::dispatch() {
   phase_ = Phase::handler;
   auto& message = parser_->get();
@@ -415,7 +354,8 @@ void HttpSession::dispatch() {
   request.query = std::move(query_);
   request.params = std::move(route_.params);
   for (const auto& field : message) {
-    auto [it, inserted] = request.headers.try_emplace(lower(field.name_string()), field.value());
+    auto [it, inserted] = request.headers.try_emplace(
+        lower_ascii({field.name_string().data(), field.name_string().size()}), field.value());
     if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
   }
   request.body = std::move(message.body());
@@ -426,7 +366,9 @@ void HttpSession::dispatch() {
   // given back; the next request's first read allocates a small one again.
   if (buffer_.size() == 0) buffer_.shrink_to_fit();
 
-  auto pending = std::make_shared<PendingResponse>(shared_from_this(), shared_->io);
+  auto pending = std::make_shared<PendingResponse>(
+      [self = shared_from_this()](HttpResponse response) { self->deliver(std::move(response)); },
+      shared_->io);
   Respond respond = [pending](HttpResponse response) { pending->answer(std::move(response)); };
   try {
     (*route_.handler)(std::move(request), std::move(respond));

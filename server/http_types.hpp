@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -42,6 +43,14 @@ struct HttpResponse {
   std::string file;
   bool file_is_temporary = false;
 };
+
+// "Content-Type" -> "content-type": header names are kept so, being case-insensitive.
+inline std::string lower_ascii(std::string_view text) {
+  std::string out(text);
+  for (char& c : out)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return out;
+}
 
 // Answers a request. May be called later and from any thread, but exactly once: a second
 // call is ignored, and dropping every copy without calling it answers 500.

@@ -51,10 +51,7 @@ HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
   // The request's headers are kept under lower-case names.
   const auto header = [&](std::string_view name) -> const std::string* {
-    std::string lower(name);
-    std::transform(lower.begin(), lower.end(), lower.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const auto it = request.headers.find(lower);
+    const auto it = request.headers.find(lower_ascii(name));
     return it == request.headers.end() ? nullptr : &it->second;
   };
   std::vector<std::uint64_t> rays{0};

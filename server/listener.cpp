@@ -64,4 +64,10 @@ void Listener::on_accept(const boost::system::error_code& ec, tcp::socket socket
   do_accept();
 }
 
+std::string format_endpoint(const tcp::endpoint& endpoint) {
+  const auto address = endpoint.address();
+  const std::string ip = address.is_v6() ? "[" + address.to_string() + "]" : address.to_string();
+  return ip + ":" + std::to_string(endpoint.port());
+}
+
 }  // namespace tessera

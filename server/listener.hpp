@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
@@ -36,5 +37,8 @@ class Listener : public std::enable_shared_from_this<Listener> {
   std::shared_ptr<ServerShared> shared_;
   std::uint16_t port_ = 0;
 };
+
+// "10.0.0.7:51234", "[::1]:51234": how a peer is named in logs and requests.
+std::string format_endpoint(const boost::asio::ip::tcp::endpoint& endpoint);
 
 }  // namespace tessera

@@ -51,98 +51,113 @@ Store::Store(const std::filesystem::path& data_dir)
 }
 
 StoredState Store::load() {
-  StoredState state;
   Transaction tx(db_);  // one snapshot for every table
-  {
-    auto s = db_.statement(
-        "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
-        "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer FROM jobs");
-    while (s->step()) {
-      JobRow& job = state.jobs.emplace_back();
-      job.id = s->column_text(0);
-      job.name = s->column_text(1);
-      job.priority = s->column_int(2);
-      job.state = s->column_text(3);
-      job.width = s->column_int(4);
-      job.height = s->column_int(5);
-      job.tile_size = s->column_int(6);
-      job.scene_digest = s->column_text(7);
-      job.created_at_ms = s->column_int64(8);
-      job.started_at_ms = s->column_int64(9);
-      job.finished_at_ms = s->column_int64(10);
-      job.error = s->column_text(11);
-      job.rays = static_cast<std::uint64_t>(s->column_int64(12));
-      job.output_transfer = s->column_text(13);
-    }
-  }
-  {
-    auto s = db_.statement("SELECT id, job_id, worker_id, tiles FROM leases");
-    while (s->step()) {
-      LeaseRow& lease = state.leases.emplace_back();
-      lease.id = s->column_text(0);
-      lease.job_id = s->column_text(1);
-      lease.worker_id = s->column_text(2);
-      lease.tiles = unpack<int>(s->column_blob(3));
-    }
-  }
-  {
-    // What each job's pixel file holds: a result whose pixels it does not hold whole (the
-    // machine lost power before they reached the disk) is reported with the bytes there are.
-    std::map<std::string, std::int64_t> file_bytes;
-    const auto bytes_in_file = [&](const std::string& job_id) {
-      auto it = file_bytes.find(job_id);
-      if (it == file_bytes.end()) {
-        std::error_code error;
-        const auto size = std::filesystem::file_size(pixel_path(job_id), error);
-        it = file_bytes.emplace(job_id, error ? 0 : static_cast<std::int64_t>(size)).first;
-      }
-      return it->second;
-    };
-    auto s = db_.statement(
-        "SELECT id, job_id, lease_id, worker_id, tiles, rays, pixels_at, pixel_bytes FROM results "
-        "ORDER BY id");
-    while (s->step()) {
-      ResultRow& result = state.results.emplace_back();
-      result.id = s->column_int64(0);
-      result.job_id = s->column_text(1);
-      result.lease_id = s->column_text(2);
-      result.worker_id = s->column_text(3);
-      result.tiles = unpack<int>(s->column_blob(4));
-      result.rays = unpack<std::uint64_t>(s->column_blob(5));
-      const std::int64_t at = s->column_int64(6);
-      const std::int64_t stored = std::max<std::int64_t>(s->column_int64(7), 0);
-      // A row that says its pixels start before the file does is no better than one whose
-      // pixels the file lacks: both are reported as short, and forgotten.
-      result.pixel_bytes =
-          at < 0 ? 0 : std::clamp<std::int64_t>(bytes_in_file(result.job_id) - at, 0, stored);
-    }
-  }
-  {
-    auto s = db_.statement("SELECT job_id, tile_index, attempts, last_error FROM tile_failures");
-    while (s->step()) {
-      TileFailureRow& failure = state.failures.emplace_back();
-      failure.job_id = s->column_text(0);
-      failure.tile_index = s->column_int(1);
-      failure.attempts = s->column_int(2);
-      failure.last_error = s->column_text(3);
-    }
-  }
-  {
-    auto s = db_.statement(
-        "SELECT id, name, host, threads, state, tiles_rendered, last_seen_ms FROM workers");
-    while (s->step()) {
-      WorkerRow& worker = state.workers.emplace_back();
-      worker.id = s->column_text(0);
-      worker.name = s->column_text(1);
-      worker.host = s->column_text(2);
-      worker.threads = s->column_int(3);
-      worker.state = s->column_text(4);
-      worker.tiles_rendered = static_cast<std::uint64_t>(s->column_int64(5));
-      worker.last_seen_ms = s->column_int64(6);
-    }
-  }
+  StoredState state{job_rows(), lease_rows(), result_rows(), failure_rows(), worker_rows()};
   tx.commit();
   return state;
+}
+
+std::vector<JobRow> Store::job_rows() {
+  std::vector<JobRow> rows;
+  auto s = db_.statement(
+      "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
+      "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer FROM jobs");
+  while (s->step()) {
+    JobRow& job = rows.emplace_back();
+    job.id = s->column_text(0);
+    job.name = s->column_text(1);
+    job.priority = s->column_int(2);
+    job.state = s->column_text(3);
+    job.width = s->column_int(4);
+    job.height = s->column_int(5);
+    job.tile_size = s->column_int(6);
+    job.scene_digest = s->column_text(7);
+    job.created_at_ms = s->column_int64(8);
+    job.started_at_ms = s->column_int64(9);
+    job.finished_at_ms = s->column_int64(10);
+    job.error = s->column_text(11);
+    job.rays = static_cast<std::uint64_t>(s->column_int64(12));
+    job.output_transfer = s->column_text(13);
+  }
+  return rows;
+}
+
+std::vector<LeaseRow> Store::lease_rows() {
+  std::vector<LeaseRow> rows;
+  auto s = db_.statement("SELECT id, job_id, worker_id, tiles FROM leases");
+  while (s->step()) {
+    LeaseRow& lease = rows.emplace_back();
+    lease.id = s->column_text(0);
+    lease.job_id = s->column_text(1);
+    lease.worker_id = s->column_text(2);
+    lease.tiles = unpack<int>(s->column_blob(3));
+  }
+  return rows;
+}
+
+std::vector<ResultRow> Store::result_rows() {
+  std::vector<ResultRow> rows;
+  // What each job's pixel file holds: a result whose pixels it does not hold whole (the
+  // machine lost power before they reached the disk) is reported with the bytes there are.
+  std::map<std::string, std::int64_t> file_bytes;
+  const auto bytes_in_file = [&](const std::string& job_id) {
+    auto it = file_bytes.find(job_id);
+    if (it == file_bytes.end()) {
+      std::error_code error;
+      const auto size = std::filesystem::file_size(pixel_path(job_id), error);
+      it = file_bytes.emplace(job_id, error ? 0 : static_cast<std::int64_t>(size)).first;
+    }
+    return it->second;
+  };
+  auto s = db_.statement(
+      "SELECT id, job_id, lease_id, worker_id, tiles, rays, pixels_at, pixel_bytes FROM results "
+      "ORDER BY id");
+  while (s->step()) {
+    ResultRow& result = rows.emplace_back();
+    result.id = s->column_int64(0);
+    result.job_id = s->column_text(1);
+    result.lease_id = s->column_text(2);
+    result.worker_id = s->column_text(3);
+    result.tiles = unpack<int>(s->column_blob(4));
+    result.rays = unpack<std::uint64_t>(s->column_blob(5));
+    const std::int64_t at = s->column_int64(6);
+    const std::int64_t stored = std::max<std::int64_t>(s->column_int64(7), 0);
+    // A row that says its pixels start before the file does is no better than one whose
+    // pixels the file lacks: both are reported as short, and forgotten.
+    result.pixel_bytes =
+        at < 0 ? 0 : std::clamp<std::int64_t>(bytes_in_file(result.job_id) - at, 0, stored);
+  }
+  return rows;
+}
+
+std::vector<TileFailureRow> Store::failure_rows() {
+  std::vector<TileFailureRow> rows;
+  auto s = db_.statement("SELECT job_id, tile_index, attempts, last_error FROM tile_failures");
+  while (s->step()) {
+    TileFailureRow& failure = rows.emplace_back();
+    failure.job_id = s->column_text(0);
+    failure.tile_index = s->column_int(1);
+    failure.attempts = s->column_int(2);
+    failure.last_error = s->column_text(3);
+  }
+  return rows;
+}
+
+std::vector<WorkerRow> Store::worker_rows() {
+  std::vector<WorkerRow> rows;
+  auto s = db_.statement(
+      "SELECT id, name, host, threads, state, tiles_rendered, last_seen_ms FROM workers");
+  while (s->step()) {
+    WorkerRow& worker = rows.emplace_back();
+    worker.id = s->column_text(0);
+    worker.name = s->column_text(1);
+    worker.host = s->column_text(2);
+    worker.threads = s->column_int(3);
+    worker.state = s->column_text(4);
+    worker.tiles_rendered = static_cast<std::uint64_t>(s->column_int64(5));
+    worker.last_seen_ms = s->column_int64(6);
+  }
+  return rows;
 }
 
 void Store::insert_job(const JobRow& job, const std::string& scene_json) {

@@ -142,6 +142,13 @@ class Store {
   void prune_pixels(const std::function<bool(const std::string& job_id)>& keep);
 
  private:
+  // The tables of load(), each read in load()'s transaction.
+  std::vector<JobRow> job_rows();
+  std::vector<LeaseRow> lease_rows();
+  // With each result's pixel_bytes cut to what its job's pixel file holds.
+  std::vector<ResultRow> result_rows();
+  std::vector<TileFailureRow> failure_rows();
+  std::vector<WorkerRow> worker_rows();
   void create_schema();
   // Version 3 kept a row per tile; version 4 keeps leases, results and failures.
   void migrate_tile_rows();
