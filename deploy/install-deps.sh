@@ -11,7 +11,7 @@ packages=(
   libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev
   clang libclang-rt-14-dev  # the scene parser's libFuzzer test (tests/fuzz/run.sh)
-  iproute2  # `ip netns`: the multi-host farm test (tests/farm_netns_test.cpp)
+  iproute2  # `ip netns`: the multi-host farm test (tests/farm/farm_netns_test.cpp)
   libyaml-cpp-dev shellcheck  # the checks of deploy/ and the protocol's contract with docs/openapi.yaml
   clang-format  # tests/format_check.sh: every C++ file as .clang-format writes it
 )

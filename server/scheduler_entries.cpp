@@ -61,6 +61,26 @@ JobRow job_row(const JobStatus& s) {
           s.output_transfer == OutputTransfer::linear ? "linear" : "srgb"};
 }
 
+bool status_from_row(JobRow&& row, JobStatus& s) {
+  s.id = std::move(row.id);
+  s.name = std::move(row.name);
+  const std::optional<JobState> state = job_state_from_string(row.state);
+  s.state = state.value_or(JobState::failed);
+  s.priority = row.priority;
+  s.width = row.width;
+  s.height = row.height;
+  s.tile_size = row.tile_size;
+  s.created_at_ms = row.created_at_ms;
+  s.started_at_ms = row.started_at_ms;
+  s.finished_at_ms = row.finished_at_ms;
+  s.error = std::move(row.error);
+  s.rays = row.rays;
+  s.scene_digest = std::move(row.scene_digest);
+  s.output_transfer =
+      row.output_transfer == "linear" ? OutputTransfer::linear : OutputTransfer::srgb;
+  return state.has_value();
+}
+
 WorkerRow worker_row(const WorkerEntry& w) {
   return {w.info.id,    w.info.name,           w.info.host,        w.info.threads,
           w.info.state, w.info.tiles_rendered, w.info.last_seen_ms};

@@ -90,7 +90,10 @@ struct StagedChange {
   std::vector<std::int64_t> forgotten_results;
 };
 
+// A job's status and its stored row, each from the other: the one mapping between them.
 JobRow job_row(const JobStatus& status);
+// False when the row's state is not one this build knows (the job is then failed).
+bool status_from_row(JobRow&& row, JobStatus& status);
 WorkerRow worker_row(const WorkerEntry& worker);
 
 }  // namespace tessera

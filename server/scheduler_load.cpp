@@ -82,25 +82,9 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
   std::set<std::string> unknown_state;
   for (JobRow& row : rows) {
     auto job = std::make_unique<JobEntry>();
-    JobStatus& s = job->status;
-    s.id = row.id;
-    s.name = std::move(row.name);
-    const std::optional<JobState> state = job_state_from_string(row.state);
-    if (!state) unknown_state.insert(row.id);
-    s.state = state.value_or(JobState::failed);
-    s.priority = row.priority;
-    s.width = row.width;
-    s.height = row.height;
-    s.tile_size = row.tile_size;
-    s.created_at_ms = row.created_at_ms;
-    s.started_at_ms = row.started_at_ms;
-    s.finished_at_ms = row.finished_at_ms;
-    s.error = std::move(row.error);
-    s.rays = row.rays;
-    s.scene_digest = std::move(row.scene_digest);
-    s.output_transfer =
-        row.output_transfer == "linear" ? OutputTransfer::linear : OutputTransfer::srgb;
-    jobs_.emplace(row.id, std::move(job));
+    if (!status_from_row(std::move(row), job->status)) unknown_state.insert(job->status.id);
+    const std::string id = job->status.id;
+    jobs_.emplace(id, std::move(job));
   }
 
   // A job's tiles follow from its size; each is pending unless the store says otherwise.

@@ -26,6 +26,179 @@ class FlushDenormals {
   unsigned saved_;
 };
 
+// The mean of a pixel's samples. Dividing by a power of two and multiplying by its
+// reciprocal round alike (the reciprocal is exact), and the product is cheaper: 1, 4, 16
+// and 64 samples are the common counts.
+class SampleMean {
+ public:
+  explicit SampleMean(int samples)
+      : samples_(samples),
+        power_of_two_((samples & (samples - 1)) == 0),
+        inverse_samples_(1.0 / samples) {}
+
+  Color operator()(const Color& sum) const {
+    return power_of_two_ ? sum * inverse_samples_ : sum / static_cast<double>(samples_);
+  }
+
+ private:
+  int samples_;
+  bool power_of_two_;
+  double inverse_samples_;
+};
+
+// A block of the image's 4x4 grid, and the part of it inside the tile: its columns and rows
+// counted from the block's corner, ends excluded.
+struct Block {
+  int x;
+  int y;
+  int column_begin;
+  int column_end;
+  int row_begin;
+  int row_end;
+};
+
+Block block_at(const TileRect& tile, int block_x, int block_y) {
+  const int x_end = tile.x + tile.width;
+  const int y_end = tile.y + tile.height;
+  return {block_x,
+          block_y,
+          std::max(block_x, tile.x) - block_x,
+          std::min(block_x + kPacketSide, x_end) - block_x,
+          std::max(block_y, tile.y) - block_y,
+          std::min(block_y + kPacketSide, y_end) - block_y};
+}
+
+// Where render_tile() stores the tile: rows `row_stride` floats apart from its first pixel.
+struct TileOutput {
+  TileRect tile;
+  float* first;
+  std::size_t row_stride;
+
+  // The first of the block's pixels inside the tile on the block's row `row`.
+  float* row_start(const Block& block, int row) const {
+    return first + static_cast<std::size_t>(block.y + row - tile.y) * row_stride +
+           3 * static_cast<std::size_t>(block.x + block.column_begin - tile.x);
+  }
+};
+
+// The block's pixels lie in as many rows of the image as the block has, each of which may
+// be far from the cache (a whole image is tens of megabytes): asked for before the block is
+// traced, for writing, they arrive meanwhile, and store_block() does not wait for them.
+void prefetch_block(const TileOutput& out, const Block& block) {
+  for (int row = block.row_begin; row < block.row_end; ++row) {
+    const float* begin = out.row_start(block, row);
+    __builtin_prefetch(begin, 1);
+    __builtin_prefetch(begin + 3 * (block.column_end - block.column_begin) - 1, 1);
+  }
+}
+
+// Which lanes get traced (their pixel lies in the image) and which are kept (it lies in the
+// tile too).
+void mark_lanes(const TileRect& tile, int width, int height, int block_x, int block_y,
+                bool (&active)[kPacketSize], bool (&in_tile)[kPacketSize]) {
+  const int x_end = tile.x + tile.width;
+  const int y_end = tile.y + tile.height;
+  // Most blocks lie wholly inside the tile, and so inside the image.
+  const bool whole = block_x >= tile.x && block_x + kPacketSide <= x_end && block_y >= tile.y &&
+                     block_y + kPacketSide <= y_end;
+  for (int i = 0; i < kPacketSize; ++i) {
+    if (whole) {
+      active[i] = in_tile[i] = true;
+      continue;
+    }
+    const int x = block_x + i % kPacketSide;
+    const int y = block_y + i / kPacketSide;
+    active[i] = x < width && y < height;
+    in_tile[i] = x >= tile.x && x < x_end && y >= tile.y && y < y_end;
+  }
+}
+
+// Each lane's pixel, and with several samples the rotation of its sequence, once for the
+// block: the rays of a sample are then loops over plain arrays, which vectorise. The lanes
+// outside the image get them too, and their rays are never traced.
+struct LanePixels {
+  double x[kPacketSize];
+  double y[kPacketSize];
+  double rotation_x[kPacketSize];
+  double rotation_y[kPacketSize];
+};
+
+void find_lane_pixels(int block_x, int block_y, int samples, LanePixels& pixels) {
+  for (int i = 0; i < kPacketSize; ++i) {
+    const int x = block_x + i % kPacketSide;
+    const int y = block_y + i / kPacketSide;
+    pixels.x[i] = x;
+    pixels.y[i] = y;
+    const SampleRotation rotation = samples > 1 ? sample_rotation(x, y) : SampleRotation{};
+    pixels.rotation_x[i] = rotation.x;
+    pixels.rotation_y[i] = rotation.y;
+  }
+}
+
+// Where sample `s` of each lane's pixel lies in the image: sample_offset()'s positions.
+void sample_positions(const LanePixels& pixels, int samples, int s, double (&x)[kPacketSize],
+                      double (&y)[kPacketSize]) {
+  if (samples == 1) {
+    for (int i = 0; i < kPacketSize; ++i) x[i] = pixels.x[i] + 0.5;
+    for (int i = 0; i < kPacketSize; ++i) y[i] = pixels.y[i] + 0.5;
+    return;
+  }
+  for (int i = 0; i < kPacketSize; ++i)
+    x[i] = pixels.x[i] + sample_fraction(pixels.rotation_x[i], kSampleStepX, s);
+  for (int i = 0; i < kPacketSize; ++i)
+    y[i] = pixels.y[i] + sample_fraction(pixels.rotation_y[i], kSampleStepY, s);
+}
+
+// Row by row of the block, only its pixels inside the tile.
+void store_block(const TileOutput& out, const Block& block, const double (&sums)[3][kPacketSize],
+                 const SampleMean& mean) {
+  for (int row = block.row_begin; row < block.row_end; ++row) {
+    float* pixel = out.row_start(block, row);
+    for (int column = block.column_begin; column < block.column_end; ++column, pixel += 3) {
+      const int i = row * kPacketSide + column;
+      const Color value = mean(Color(sums[0][i], sums[1][i], sums[2][i]));
+      pixel[0] = static_cast<float>(value.r);
+      pixel[1] = static_cast<float>(value.g);
+      pixel[2] = static_cast<float>(value.b);
+    }
+  }
+}
+
+// Traces every sample of one block of the image's 4x4 grid (see render_tile()) into
+// `sums`, each lane's sum of its samples by channel. `colors` is the packet's last colours:
+// its lanes outside the image keep theirs from block to block, never traced. Always inlined:
+// link-time optimisation then inlines the primary rays' trace_packet() into render_tile(),
+// as it does with this loop written out in place, where it kept it out of line otherwise.
+[[gnu::always_inline]] inline void trace_block(const Renderer& renderer, const TileRect& tile,
+                                               const Block& block, Color (&colors)[kPacketSize],
+                                               double (&sums)[3][kPacketSize], RayCounts& counts) {
+  const Scene& scene = renderer.scene();
+  const PinholeCamera& camera = renderer.camera();
+  const int samples = scene.render.samples_per_pixel;
+  bool in_tile[kPacketSize];
+  RayPacket packet;
+  for (int channel = 0; channel < 3; ++channel)
+    for (int i = 0; i < kPacketSize; ++i) sums[channel][i] = 0.0;
+  mark_lanes(tile, scene.width, scene.height, block.x, block.y, packet.active, in_tile);
+  LanePixels pixels;
+  find_lane_pixels(block.x, block.y, samples, pixels);
+  const glm::vec3 eye = camera.origin();
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < kPacketSize; ++i) packet.origin[axis][i] = eye[axis];
+  for (int s = 0; s < samples; ++s) {
+    double x[kPacketSize];
+    double y[kPacketSize];
+    sample_positions(pixels, samples, s, x, y);
+    camera.directions_through(x, y, packet.direction);
+    renderer.tracer().trace_packet(packet, 0, in_tile, colors, counts);
+    // Every lane, in tile or not: a loop without a condition stores whole vectors, which
+    // the loads of store_block() can take straight from the store, where masked stores make
+    // them wait.
+    for (int channel = 0; channel < 3; ++channel)
+      for (int i = 0; i < kPacketSize; ++i) sums[channel][i] += colors[i][channel];
+  }
+}
+
 }  // namespace
 
 Renderer::Renderer(Scene scene)
@@ -50,16 +223,9 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
     throw std::invalid_argument("render_tile: output buffer does not hold the tile");
 
   const FlushDenormals flush_denormals;
-  const int samples = scene_.render.samples_per_pixel;
   RayCounts counts;
-  // The mean of the samples. Dividing by a power of two and multiplying by its reciprocal
-  // round alike (the reciprocal is exact), and the product is cheaper: 1, 4, 16 and 64
-  // samples are the common counts.
-  const bool power_of_two = (samples & (samples - 1)) == 0;
-  const double inverse_samples = 1.0 / samples;
-  const auto divide_by_samples = [&](const Color& sum) {
-    return power_of_two ? sum * inverse_samples : sum / static_cast<double>(samples);
-  };
+  const SampleMean mean(scene_.render.samples_per_pixel);
+  const TileOutput output{tile, out.data(), row_stride};
   // Primary rays go out as packets of a 4x4 block of pixels aligned to the image, never to
   // the tile: a block cut by the tile's edge is traced whole and only its pixels inside the
   // tile are kept, so that Embree always sees the same packet for a pixel and its hit
@@ -72,92 +238,13 @@ RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out,
   const int y_end = tile.y + tile.height;
   for (int block_y = tile.y - tile.y % kPacketSide; block_y < y_end; block_y += kPacketSide) {
     for (int block_x = tile.x - tile.x % kPacketSide; block_x < x_end; block_x += kPacketSide) {
+      const Block block = block_at(tile, block_x, block_y);
+      prefetch_block(output, block);
       // By channel, lanes side by side: added to channel by channel and read back as a
       // pixel's three, never loaded wider than they were stored (which would stall).
       double sums[3][kPacketSize];
-      bool in_tile[kPacketSize];
-      RayPacket packet;
-      // Most blocks lie wholly inside the tile, and so inside the image.
-      const bool whole = block_x >= tile.x && block_x + kPacketSide <= x_end && block_y >= tile.y &&
-                         block_y + kPacketSide <= y_end;
-      for (int channel = 0; channel < 3; ++channel)
-        for (int i = 0; i < kPacketSize; ++i) sums[channel][i] = 0.0;
-      for (int i = 0; i < kPacketSize; ++i) {
-        if (whole) {
-          packet.active[i] = in_tile[i] = true;
-          continue;
-        }
-        const int x = block_x + i % kPacketSide;
-        const int y = block_y + i / kPacketSide;
-        packet.active[i] = x < scene_.width && y < scene_.height;
-        in_tile[i] = x >= tile.x && x < x_end && y >= tile.y && y < y_end;
-      }
-      // Row by row of the block, only its pixels inside the tile.
-      const int column_begin = std::max(block_x, tile.x) - block_x;
-      const int column_end = std::min(block_x + kPacketSide, x_end) - block_x;
-      const int row_begin = std::max(block_y, tile.y) - block_y;
-      const int row_end = std::min(block_y + kPacketSide, y_end) - block_y;
-      const auto first_pixel = [&](int row) {
-        return out.data() + static_cast<std::size_t>(block_y + row - tile.y) * row_stride +
-               3 * static_cast<std::size_t>(block_x + column_begin - tile.x);
-      };
-      // The block's pixels lie in as many rows of the image as the block has, each of which
-      // may be far from the cache (a whole image is tens of megabytes): asked for now, for
-      // writing, they arrive while the block is traced, and the stores below do not wait.
-      for (int row = row_begin; row < row_end; ++row) {
-        const float* begin = first_pixel(row);
-        __builtin_prefetch(begin, 1);
-        __builtin_prefetch(begin + 3 * (column_end - column_begin) - 1, 1);
-      }
-      // Each lane's pixel, and with several samples the rotation of its sequence, once for
-      // the block: the rays of a sample are then loops over plain arrays, which vectorise.
-      // The lanes outside the image get rays too, which are never traced.
-      double pixel_x[kPacketSize];
-      double pixel_y[kPacketSize];
-      double rotation_x[kPacketSize];
-      double rotation_y[kPacketSize];
-      for (int i = 0; i < kPacketSize; ++i) {
-        const int x = block_x + i % kPacketSide;
-        const int y = block_y + i / kPacketSide;
-        pixel_x[i] = x;
-        pixel_y[i] = y;
-        const SampleRotation rotation = samples > 1 ? sample_rotation(x, y) : SampleRotation{};
-        rotation_x[i] = rotation.x;
-        rotation_y[i] = rotation.y;
-      }
-      const glm::vec3 eye = camera_.origin();
-      for (int axis = 0; axis < 3; ++axis)
-        for (int i = 0; i < kPacketSize; ++i) packet.origin[axis][i] = eye[axis];
-      for (int s = 0; s < samples; ++s) {
-        // sample_offset()'s positions.
-        double x[kPacketSize];
-        double y[kPacketSize];
-        if (samples == 1) {
-          for (int i = 0; i < kPacketSize; ++i) x[i] = pixel_x[i] + 0.5;
-          for (int i = 0; i < kPacketSize; ++i) y[i] = pixel_y[i] + 0.5;
-        } else {
-          for (int i = 0; i < kPacketSize; ++i)
-            x[i] = pixel_x[i] + sample_fraction(rotation_x[i], kSampleStepX, s);
-          for (int i = 0; i < kPacketSize; ++i)
-            y[i] = pixel_y[i] + sample_fraction(rotation_y[i], kSampleStepY, s);
-        }
-        camera_.directions_through(x, y, packet.direction);
-        tracer_.trace_packet(packet, 0, in_tile, colors, counts);
-        // Every lane, in tile or not: a loop without a condition stores whole vectors, which
-        // the loads below can take straight from the store, where masked stores make them wait.
-        for (int channel = 0; channel < 3; ++channel)
-          for (int i = 0; i < kPacketSize; ++i) sums[channel][i] += colors[i][channel];
-      }
-      for (int row = row_begin; row < row_end; ++row) {
-        float* pixel = first_pixel(row);
-        for (int column = column_begin; column < column_end; ++column, pixel += 3) {
-          const int i = row * kPacketSide + column;
-          const Color value = divide_by_samples(Color(sums[0][i], sums[1][i], sums[2][i]));
-          pixel[0] = static_cast<float>(value.r);
-          pixel[1] = static_cast<float>(value.g);
-          pixel[2] = static_cast<float>(value.b);
-        }
-      }
+      trace_block(*this, tile, block, colors, sums, counts);
+      store_block(output, block, sums, mean);
     }
   }
   return counts;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -212,15 +213,31 @@ class SceneGeometry {
     std::uint32_t object;  // into Scene::objects (for planes: see the PlaneSet)
   };
 
-  // Both of the above: `t_max` null for unbounded rays.
+  // Both of the above: `t_max` null for unbounded rays. Its steps follow, each on all lanes
+  // (scene_geometry_packet.cpp).
   void intersect(const RayPacket& packet, const float (*t_max)[kPacketSize], unsigned mask,
                  SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
+  struct PacketQuery;
+  struct PacketLanes;
+  // Embree's nearest hits, and the opaque planes' where nearer.
+  void query_nearest(const RayPacket& packet, const float (*t_max)[kPacketSize], unsigned mask,
+                     PacketQuery& query) const;
+  // Which geometry and primitive each lane hit, and at what exact distance.
+  void identify_lanes(const RayPacket& packet, const PacketQuery& query, PacketLanes& lanes) const;
+  // Which lanes hit a world sphere or a plane, and that shape's centre and radius, or point
+  // and normal, with each such hit's object; the other lanes' triangles are prefetched.
+  void gather_shapes(PacketLanes& lanes, SurfaceHit (&hits)[kPacketSize]) const;
+  // The hits on world spheres and planes, on all lanes at once where any lane needs them.
+  static void rebuild_spheres_and_planes(const RayPacket& packet, PacketLanes& lanes);
+  // Every lane's hit, the shapes not rebuilt on all lanes finished one by one.
+  void store_hits(const RayPacket& packet, const PacketQuery& query, const PacketLanes& lanes,
+                  SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
   void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_box(const Box& box, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
                  bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
-  void add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
+  void add_analytic_shape(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
   // Lower and upper corners of the box around a sphere's, a box's or a mesh's record.
   std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;
   // The nearest opaque plane with 0 < t < t_max on the ray, as for a lane of a packet: its
@@ -259,6 +276,44 @@ class SceneGeometry {
 };
 
 namespace geometry_detail {
+
+// The next two rebuild hits for finish_hit() (scene_geometry.cpp) and for the packets' loops
+// (scene_geometry_packet.cpp) alike: one definition, so that both give the same bits.
+
+// A hit on a sphere that is a sphere in world space too, from the ray and the exact
+// distance t: the unit normal at o + t·d, and the point snapped onto the surface along it,
+// which removes the error that o + t·d accumulates. On scalars, so that the packets' loop
+// over lanes vectorises, in glm's order of operations (normalize(v) is v · (1 / sqrt(v·v)),
+// sums go (x + y) + z), so that a single ray's hit has the same bits as a lane's.
+[[gnu::always_inline]] inline void world_sphere_hit(double ox, double oy, double oz, double dx,
+                                                    double dy, double dz, double t, double cx,
+                                                    double cy, double cz, double radius,
+                                                    double (&normal)[3], double (&point)[3]) {
+  const double vx = ox + t * dx - cx;
+  const double vy = oy + t * dy - cy;
+  const double vz = oz + t * dz - cz;
+  const double inverse_length = 1.0 / std::sqrt(vx * vx + vy * vy + vz * vz);
+  normal[0] = vx * inverse_length;
+  normal[1] = vy * inverse_length;
+  normal[2] = vz * inverse_length;
+  point[0] = cx + radius * normal[0];
+  point[1] = cy + radius * normal[1];
+  point[2] = cz + radius * normal[2];
+}
+
+// A hit on a plane through q with unit normal n: o + t·d projected onto the plane, which
+// removes the error that o + t·d accumulates. Scalars and glm's order, as above.
+[[gnu::always_inline]] inline void plane_hit(double ox, double oy, double oz, double dx, double dy,
+                                             double dz, double t, double qx, double qy, double qz,
+                                             double nx, double ny, double nz, double (&point)[3]) {
+  const double px = ox + t * dx;
+  const double py = oy + t * dy;
+  const double pz = oz + t * dz;
+  const double height = (px - qx) * nx + (py - qy) * ny + (pz - qz) * nz;
+  point[0] = px - height * nx;
+  point[1] = py - height * ny;
+  point[2] = pz - height * nz;
+}
 
 // Narrows [t_near, t_far] to the part of the ray along one axis that lies between that
 // axis's faces of the box.

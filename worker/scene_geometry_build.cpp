@@ -6,8 +6,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "worker/analytic_shapes.hpp"
 #include "worker/triangulate.hpp"
-#include "worker/user_geometry.hpp"
 
 namespace tessera {
 
@@ -53,11 +53,11 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
     }
     transmissive_bounds_.assign(1, all);
   }
-  if (!plane_sets_[1].planes.empty()) add_user_geometry(Kind::plane, 1, 0, kTransmissiveMask);
+  if (!plane_sets_[1].planes.empty()) add_analytic_shape(Kind::plane, 1, 0, kTransmissiveMask);
   if (!plane_sets_[0].planes.empty()) {
     opaque_planes_geometry_ = static_cast<unsigned>(records_.size());
     if (opaque_planes == OpaquePlanes::also_in_embree)
-      add_user_geometry(Kind::plane, 0, 0, kOpaquePlaneMask);
+      add_analytic_shape(Kind::plane, 0, 0, kOpaquePlaneMask);
     else
       records_.push_back({Kind::plane, 0, 0});
   }
@@ -67,8 +67,8 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
   device_.check("building the scene's BVH");
 }
 
-void SceneGeometry::add_user_geometry(Kind kind, std::uint32_t index, std::uint32_t object,
-                                      unsigned mask) {
+void SceneGeometry::add_analytic_shape(Kind kind, std::uint32_t index, std::uint32_t object,
+                                       unsigned mask) {
   RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_USER);
   rtcSetGeometryUserPrimitiveCount(geometry, 1);
   rtcSetGeometryMask(geometry, mask);
@@ -111,7 +111,7 @@ void SceneGeometry::add_sphere(const Sphere& sphere, const Mat4& transform, std:
     prepared->world_radius = sphere.radius * std::sqrt(scale2);
   }
   spheres_.push_back(std::move(prepared));
-  add_user_geometry(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object, mask);
+  add_analytic_shape(Kind::sphere, static_cast<std::uint32_t>(spheres_.size() - 1), object, mask);
 }
 
 void SceneGeometry::add_box(const Box& box, const Mat4& transform, std::uint32_t object,
@@ -148,7 +148,7 @@ void SceneGeometry::add_box(const Box& box, const Mat4& transform, std::uint32_t
     }
   }
   boxes_.push_back(std::move(prepared));
-  add_user_geometry(Kind::box, static_cast<std::uint32_t>(boxes_.size() - 1), object, mask);
+  add_analytic_shape(Kind::box, static_cast<std::uint32_t>(boxes_.size() - 1), object, mask);
 }
 
 void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,

@@ -62,10 +62,28 @@ class WorkerDaemon {
   bool register_self();
   std::optional<Claimed> claim();
   const Renderer& renderer_for(const std::string& digest);
+  // What the threads rendering one lease share (render_lease.cpp).
+  struct LeaseProgress {
+    std::atomic<int> rendered{0};
+    // Thread time spent on the lease's tiles so far, for the size of its extensions.
+    std::atomic<std::int64_t> busy_ns{0};
+    std::mutex failure_mutex;
+    std::optional<std::pair<int, std::string>> failure;  // the first tile that failed
+    // This lease's time per tile on one thread, or `before` until one is rendered.
+    double seconds_per_tile(double before) const {
+      const int done = rendered.load();
+      return done > 0 ? busy_ns.load() * 1e-9 / done : before;
+    }
+  };
+
   // Renders the batch while heartbeating, handing each finished tile to uploads_, and
   // returns once they are all sent. Stops early when the lease is lost or the worker is
   // asked to stop; the tiles not rendered then are released.
   void render(const Claimed& lease);
+  // One thread's part of render(): tiles until none is left or the lease ends.
+  void render_tiles(const Renderer& renderer, BatchTiles& tiles, LeaseProgress& progress);
+  // Reports a refusal or a failed tile, or gives back what was not rendered.
+  void end_lease(const Claimed& lease, const LeaseProgress& progress, int count, bool still_held);
   // Asks the coordinator for more tiles of the lease (BatchTiles::Extend), about a
   // batch's worth at `tile_thread_seconds` a tile on one thread.
   std::optional<std::vector<ClaimedTile>> extend(const std::string& lease_id,

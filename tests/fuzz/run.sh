@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the scene parser's libFuzzer target with clang, AddressSanitizer and UBSan, and
-# fuzzes it for a bounded time from the seed corpus beside this script. Exits non-zero on
+# fuzzes it for a bounded time from the example scenes and the seeds beside this script. Exits non-zero on
 # any crash, sanitizer report, leak or hang; 77 (skipped) without clang's fuzzer runtime.
 #
 # Usage: tests/fuzz/run.sh BUILD_DIR [SECONDS]      (default 60 s)
@@ -28,11 +28,14 @@ cmake --build "$build" --target tessera_scene_fuzzer >"$build/fuzz-build.log" 2>
   { tail -n 30 "$build/fuzz-build.log"; exit 1; }
 
 # New inputs go to a scratch corpus, so the repository's seeds stay as they are; crashes
-# are written into the build tree, where the message below points.
+# are written into the build tree, where the message below points. The seeds are the
+# scenes the repository has anyway (examples/ and tests/data/), read where they are, and
+# the few of corpus/ that exist only to seed the fuzzer.
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-mkdir -p "$build/fuzz-artifacts"
+mkdir -p "$build/fuzz-artifacts" "$work/new" "$work/seeds"
+cp "$root"/examples/*.json "$root"/tests/data/*.json "$work/seeds/"
 "$build/tessera_scene_fuzzer" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
   -max_len=65536 -print_final_stats=1 -artifact_prefix="$build/fuzz-artifacts/" \
-  "$work" "$here/corpus"
+  "$work/new" "$work/seeds" "$here/corpus"
 echo "fuzz: no crash, leak or hang in ${seconds} s"

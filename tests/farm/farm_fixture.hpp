@@ -1,0 +1,206 @@
+// Shared by the farm's end-to-end tests: a real tessera-server on an ephemeral loopback
+// port, tessera-worker and tessera (CLI) processes, and the comparisons the tests make.
+// Every test directory is named after the test process's pid, so parallel runs (ctest -j)
+// never share a data dir or a log.
+#pragma once
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "common/image_io.hpp"
+#include "common/scene_parser.hpp"
+#include "tests/farm/json_api.hpp"
+#include "tests/farm/process.hpp"
+#include "tests/unit/worker/render_helpers.hpp"
+
+namespace tessera::test {
+
+namespace farm_fs = std::filesystem;
+
+inline farm_fs::path fresh_dir(const std::string& name) {
+  const farm_fs::path dir =
+      farm_fs::temp_directory_path() / ("tessera-farm-" + std::to_string(::getpid()) + "-" + name);
+  farm_fs::remove_all(dir);
+  farm_fs::create_directories(dir);
+  return dir;
+}
+
+inline std::string read_text(const farm_fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+inline void write_text(const farm_fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary)
+      .write(text.data(), static_cast<std::streamsize>(text.size()));
+}
+
+// A coordinator with `workers` local worker processes on an ephemeral port.
+class Farm {
+ public:
+  Farm(const std::string& name, int workers, const std::vector<std::string>& extra = {})
+      : dir_(fresh_dir(name)) {
+    using namespace std::chrono_literals;
+    std::vector<std::string> args{"--listen",        "127.0.0.1:0",
+                                  "--data-dir",      (dir_ / "data").string(),
+                                  "--local-workers", std::to_string(workers),
+                                  "--port-file",     (dir_ / "port").string(),
+                                  "--log-level",     "warn"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    server_ = std::make_unique<Process>(TESSERA_SERVER_BIN, args, dir_ / "server.log");
+    const bool up = eventually([&] { return farm_fs::exists(dir_ / "port"); }, 20s);
+    if (!up)
+      throw std::runtime_error("server did not start; see " + (dir_ / "server.log").string());
+    std::ifstream(dir_ / "port") >> port_;
+    api_ = std::make_unique<JsonApi>(url());
+  }
+  ~Farm() {
+    using namespace std::chrono_literals;
+    if (server_) {
+      server_->signal(SIGTERM);
+      server_->wait_for(20s);
+    }
+  }
+  Farm(const Farm&) = delete;
+  Farm& operator=(const Farm&) = delete;
+
+  // For a coordinator started with --api-token: api() sends it from now on.
+  void use_api_token(const std::string& token) { api_ = std::make_unique<JsonApi>(url(), token); }
+  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
+  int port() const { return port_; }
+  JsonApi& api() { return *api_; }
+  Process& server() { return *server_; }
+  const farm_fs::path& dir() const { return dir_; }
+
+  nlohmann::json wait_finished(const std::string& id,
+                               std::chrono::milliseconds limit = std::chrono::seconds(60)) {
+    nlohmann::json job;
+    eventually(
+        [&] {
+          job = api_->job(id);
+          const std::string state = job["state"];
+          return state == "completed" || state == "failed" || state == "canceled";
+        },
+        limit);
+    return job;
+  }
+
+  // A tessera-worker process of this farm; its log is WORKER_NAME.log in the farm's dir.
+  std::unique_ptr<Process> start_worker(const std::string& worker_name, int threads = 1) {
+    return std::make_unique<Process>(
+        TESSERA_WORKER_BIN,
+        std::vector<std::string>{"--server", url(), "--threads", std::to_string(threads), "--name",
+                                 worker_name, "--log-level", "info"},
+        dir_ / (worker_name + ".log"));
+  }
+
+  // The worker of that name in GET /v1/workers, if there is one.
+  std::optional<nlohmann::json> worker_named(const std::string& worker_name) {
+    const nlohmann::json reply = api_->workers();  // named: a range-for would not extend its life
+    for (const nlohmann::json& worker : reply["workers"])
+      if (worker["name"] == worker_name) return worker;
+    return std::nullopt;
+  }
+
+ private:
+  farm_fs::path dir_;
+  int port_ = 0;
+  std::unique_ptr<Process> server_;
+  std::unique_ptr<JsonApi> api_;
+};
+
+// The pids of a process's children, from /proc.
+inline std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> children;
+  for (const auto& entry : farm_fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string text;
+    std::getline(stat, text);
+    const auto close = text.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(text.substr(close + 2));
+    char state = 0;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
+  }
+  return children;
+}
+
+// The showcase scene at a size, sampling and tile size small enough for a test.
+inline nlohmann::json showcase(int width, int height, int spp, int tile_size) {
+  nlohmann::json scene =
+      read_json_file(farm_fs::path(TESSERA_SOURCE_DIR) / "examples" / "showcase.json");
+  scene["image"] = {{"width", width}, {"height", height}};
+  scene["render"]["samples_per_pixel"] = spp;
+  scene["render"]["tile_size"] = tile_size;
+  return scene;
+}
+
+inline nlohmann::json small_showcase(int tile_size) { return showcase(120, 90, 2, tile_size); }
+
+inline Image farm_image(Farm& farm, const std::string& id) {
+  const farm_fs::path path = farm.dir() / (id + ".exr");
+  write_text(path, farm.api().image(id, "exr", false));
+  return read_image(path);
+}
+
+// Bit for bit: the farm must assemble exactly the floats a single machine computes.
+inline ::testing::AssertionResult same_pixels(const Image& actual, const Image& expected) {
+  if (actual.width() != expected.width() || actual.height() != expected.height())
+    return ::testing::AssertionFailure()
+           << actual.width() << "x" << actual.height() << " instead of " << expected.width() << "x"
+           << expected.height();
+  if (std::memcmp(actual.pixels().data(), expected.pixels().data(),
+                  expected.pixels().size_bytes()) != 0)
+    return ::testing::AssertionFailure() << "pixels differ from the local render";
+  return ::testing::AssertionSuccess();
+}
+
+// A finished tessera CLI run: its exit code and everything it printed (stdout and stderr).
+struct CliRun {
+  int exit_code = -1;
+  std::string output;
+};
+
+// Runs `tessera ARGS...` to completion, logging into a fresh file under `dir`. A CLI that
+// has not exited after `limit` is killed and reported with exit code -1.
+inline CliRun run_cli(const farm_fs::path& dir, const std::vector<std::string>& args,
+                      std::chrono::milliseconds limit = std::chrono::seconds(30),
+                      const std::vector<std::string>& prefix = {}) {
+  static int counter = 0;
+  const farm_fs::path log = dir / ("cli-" + std::to_string(++counter) + ".log");
+  std::optional<int> status;
+  {
+    std::vector<std::string> argv = prefix;
+    std::string binary = TESSERA_CLI_BIN;
+    if (!prefix.empty()) {
+      binary = prefix.front();
+      argv.erase(argv.begin());
+      argv.push_back(TESSERA_CLI_BIN);
+    }
+    argv.insert(argv.end(), args.begin(), args.end());
+    Process cli(binary, argv, log);
+    status = cli.wait_for(limit);
+  }
+  CliRun run;
+  run.output = read_text(log);
+  if (status && WIFEXITED(*status)) run.exit_code = WEXITSTATUS(*status);
+  return run;
+}
+
+}  // namespace tessera::test

@@ -1,0 +1,174 @@
+// A pixel's value depends only on the scene and the pixel: never on tile size, tile order
+// or thread count. Checked bit for bit.
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/worker/render_helpers.hpp"
+#include "worker/pixel_sampler.hpp"
+
+namespace tessera {
+namespace {
+
+using test::json;
+
+// Every feature at once, with several samples per pixel.
+json busy_scene() {
+  return {
+      {"image", {{"width", 67}, {"height", 45}}},
+      {"camera", {{"eye", {0, 2, 7}}, {"look_at", {0, 0.8, 0}}, {"fov_y", 40}}},
+      {"render", {{"samples_per_pixel", 4}, {"max_depth", 6}}},
+      {"background", {0.3, 0.4, 0.6}},
+      {"materials",
+       {{"floor", {{"checker", {{"size", 0.7}, {"diffuse", 0.1}}}}},
+        {"mirror", {{"diffuse", 0.1}, {"specular", 0.8}, {"shininess", 80}}},
+        {"glass",
+         {{"diffuse", 0},
+          {"ambient", 0},
+          {"transmission", 0.9},
+          {"ior", 1.5},
+          {"specular", 0.1},
+          {"shininess", 100}}}}},
+      {"lights",
+       {{{"type", "point"}, {"position", {3, 5, 4}}, {"attenuation", {1, 0.02, 0.005}}},
+        {{"type", "spot"},
+         {"position", {-3, 4, 2}},
+         {"direction", {1, -1, -0.5}},
+         {"cutoff", 30},
+         {"exponent", 4}},
+        {{"type", "directional"}, {"direction", {0.2, -1, -0.3}}, {"intensity", 0.3}}}},
+      {"objects",
+       {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}}, {"material", "floor"}},
+        {{"type", "sphere"}, {"center", {-1.2, 1, 0}}, {"radius", 1}, {"material", "mirror"}},
+        {{"type", "sphere"}, {"center", {1.2, 0.8, 0.5}}, {"radius", 0.8}, {"material", "glass"}},
+        {{"type", "box"},
+         {"min", {-0.4, 0, -2}},
+         {"max", {0.4, 1.5, -1.2}},
+         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}}}}};
+}
+
+TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
+  const Renderer renderer(parse_scene(busy_scene()));
+  const Image reference = render_local(renderer, 1, 32).image;
+  for (int tile_size : {1, 7, 32, 64})
+    for (int threads : {1, 2}) {
+      const Image image = render_local(renderer, threads, tile_size).image;
+      ASSERT_EQ(image.pixels().size(), reference.pixels().size());
+      EXPECT_EQ(std::memcmp(image.pixels().data(), reference.pixels().data(),
+                            reference.pixels().size_bytes()),
+                0)
+          << "tile size " << tile_size << ", " << threads << " threads";
+    }
+}
+
+TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
+  // render_tile intersects primary rays, and their shadow rays, sixteen at a time; the
+  // tracer's single-ray path must give every pixel the very same bits.
+  json scene = busy_scene();
+  scene["render"]["samples_per_pixel"] = 1;
+  const Renderer renderer(parse_scene(scene));
+  const Image image = render_local(renderer, 1, 16).image;
+  int differing = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      RayCounts counts;
+      const Color single =
+          renderer.tracer().trace(renderer.camera().ray_through(x + 0.5, y + 0.5), 0, counts);
+      const float* pixel = image.pixel(x, y);
+      differing += pixel[0] != static_cast<float>(single.r) ||
+                   pixel[1] != static_cast<float>(single.g) ||
+                   pixel[2] != static_cast<float>(single.b);
+    }
+  EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels";
+}
+
+TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
+  // With several samples, render_tile makes each sample's sixteen camera rays at once; every
+  // pixel must still be the mean of single rays through sample_offset()'s positions, summed
+  // in sample order and divided as render_tile divides (by a reciprocal for powers of two).
+  for (int samples : {3, 4}) {
+    json scene = busy_scene();
+    scene["render"]["samples_per_pixel"] = samples;
+    const Renderer renderer(parse_scene(scene));
+    const Image image = render_local(renderer, 1, 16).image;
+    int differing = 0;
+    for (int y = 0; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) {
+        Color sum(0.0);
+        for (int s = 0; s < samples; ++s) {
+          RayCounts counts;
+          const SampleOffset offset = sample_offset(x, y, s, samples);
+          sum += renderer.tracer().trace(renderer.camera().ray_through(x + offset.x, y + offset.y),
+                                         0, counts);
+        }
+        const Color mean = samples == 4 ? sum * 0.25 : sum / static_cast<double>(samples);
+        const float* pixel = image.pixel(x, y);
+        differing += pixel[0] != static_cast<float>(mean.r) ||
+                     pixel[1] != static_cast<float>(mean.g) ||
+                     pixel[2] != static_cast<float>(mean.b);
+      }
+    EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels, " << samples
+                            << " samples";
+  }
+}
+
+TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
+  const Renderer renderer(parse_scene(busy_scene()));
+  const PinholeCamera& camera = renderer.camera();
+  // Positions anywhere on the image plane and a little beyond it, as edge blocks have.
+  double x[kPacketSize];
+  double y[kPacketSize];
+  float direction[3][kPacketSize];
+  for (int round = 0; round < 64; ++round) {
+    for (int i = 0; i < kPacketSize; ++i) {
+      x[i] = (round * kPacketSize + i) * 0.0371 - 1.3;
+      y[i] = (round * 7 + i * 3) * 0.113 - 0.9;
+    }
+    camera.directions_through(x, y, direction);
+    for (int i = 0; i < kPacketSize; ++i) {
+      const Ray single = camera.ray_through(x[i], y[i]);
+      for (int axis = 0; axis < 3; ++axis)
+        ASSERT_EQ(direction[axis][i], single.direction[axis])
+            << "position (" << x[i] << ", " << y[i] << "), axis " << axis;
+      EXPECT_EQ(camera.origin(), single.origin);
+    }
+  }
+}
+
+TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
+  // As when a worker on another machine, with a freshly built BVH, renders one tile.
+  const json scene = busy_scene();
+  const Image whole = render_local(Renderer(parse_scene(scene)), 2, 16).image;
+  const Renderer fresh(parse_scene(scene));
+  const TileRect tile{23, 11, 19, 13};
+  std::vector<float> pixels(tile.pixel_count() * 3);
+  fresh.render_tile(tile, pixels);
+  for (int y = 0; y < tile.height; ++y)
+    EXPECT_EQ(std::memcmp(&pixels[y * tile.width * 3], whole.pixel(tile.x, tile.y + y),
+                          tile.width * 3 * sizeof(float)),
+              0)
+        << "row " << y;
+}
+
+TEST(Determinism, SamplesSpreadOverThePixelAndAverageEqually) {
+  // The edge of an emitting box runs down the middle of the left pixel: with 64 samples
+  // spread over the pixel, about half hit it.
+  json scene = {{"image", {{"width", 2}, {"height", 1}}},
+                {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
+                {"ambient_light", 0},
+                {"render", {{"samples_per_pixel", 64}}},
+                {"objects",
+                 {{{"type", "box"},
+                   {"min", {0, -10, -1}},
+                   {"max", {10, 10, 0}},
+                   {"transform", {{{"translate", {-2.0710678, 0, 0}}}}},
+                   {"material", {{"ambient", 0}, {"diffuse", 0}, {"emission", 1}}}}}}};
+  // At z = 0 the view spans x in ±2·5·tan(22.5°) = ±4.142, so the left pixel's middle is
+  // x = -2.071.
+  const Image image = test::render_image(scene);
+  EXPECT_NEAR(image.pixel(0, 0)[0], 0.5, 0.05);
+  EXPECT_EQ(image.pixel(1, 0)[0], 1.0f);
+}
+
+}  // namespace
+}  // namespace tessera

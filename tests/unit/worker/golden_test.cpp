@@ -1,0 +1,111 @@
+// The examples, rendered small, against reference images in tests/golden/.
+// Regenerate after an intended change of the images with:
+//   TESSERA_UPDATE_GOLDEN=1 build/tests/tessera_tests --gtest_filter='Golden*'
+// then look at the new files before committing them.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "common/image_io.hpp"
+#include "tests/unit/worker/render_helpers.hpp"
+
+namespace tessera {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kGoldenWidth = 160;
+// Identical builds give identical bits; the tolerance leaves room for a different libm or
+// Embree version breaking a tie between two surfaces at one pixel.
+constexpr float kPixelTolerance = 1e-3f;
+constexpr double kMaxMismatchFraction = 0.002;
+
+struct Example {
+  std::string name;
+  fs::path path;
+};
+
+std::vector<Example> examples() {
+  std::vector<Example> list;
+  for (const auto& entry : fs::directory_iterator(fs::path(TESSERA_SOURCE_DIR) / "examples"))
+    if (entry.path().extension() == ".json")
+      list.push_back({entry.path().stem().string(), entry.path()});
+  list.push_back({"mesh", fs::path(TESSERA_BINARY_DIR) / "examples" / "mesh.json"});
+  std::sort(list.begin(), list.end(), [](auto& a, auto& b) { return a.name < b.name; });
+  return list;
+}
+
+void PrintTo(const Example& example, std::ostream* out) { *out << example.name; }
+
+class Golden : public ::testing::TestWithParam<Example> {};
+
+TEST_P(Golden, MatchesReferenceImage) {
+  nlohmann::json document = read_json_file(GetParam().path);
+  const int width = document["image"]["width"];
+  const int height = document["image"]["height"];
+  document["image"]["width"] = kGoldenWidth;
+  document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
+  const Image image = test::render_image(document, 2);
+
+  const fs::path golden =
+      fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" / (GetParam().name + ".exr");
+  if (const char* update = std::getenv("TESSERA_UPDATE_GOLDEN"); update && *update == '1') {
+    fs::create_directories(golden.parent_path());
+    write_image(image, golden, OutputTransfer::linear);
+    GTEST_SKIP() << "wrote " << golden;
+  }
+  ASSERT_TRUE(fs::exists(golden)) << golden << " is missing; see the top of " << __FILE__;
+  const Image reference = read_image(golden);
+  ASSERT_EQ(reference.width(), image.width());
+  ASSERT_EQ(reference.height(), image.height());
+  std::size_t mismatched = 0;
+  double max_difference = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      float worst = 0;
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, std::fabs(image.pixel(x, y)[c] - reference.pixel(x, y)[c]));
+      mismatched += worst > kPixelTolerance;
+      max_difference = std::max<double>(max_difference, worst);
+    }
+  const double fraction =
+      static_cast<double>(mismatched) / (static_cast<double>(image.width()) * image.height());
+  EXPECT_LE(fraction, kMaxMismatchFraction)
+      << mismatched << " pixels differ by more than " << kPixelTolerance << " (largest difference "
+      << max_difference << ")";
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, Golden, ::testing::ValuesIn(examples()),
+                         [](const auto& info) { return info.param.name; });
+
+TEST(Examples, CoverEveryFeature) {
+  std::set<std::string> lights, shapes;
+  bool checker = false, transmissive = false, deep = false, big_mesh = false;
+  for (const Example& example : examples()) {
+    const Scene scene = parse_scene(read_json_file(example.path));
+    for (const Light& light : scene.lights) lights.insert(std::to_string(light.index()));
+    for (const Object& object : scene.objects) {
+      shapes.insert(std::to_string(object.shape.index()));
+      if (const auto* mesh = std::get_if<Mesh>(&object.shape))
+        big_mesh |= mesh->triangles.size() >= 100000;
+    }
+    for (const Material& material : scene.materials) {
+      checker |= material.checker.has_value();
+      transmissive |= material.transmission != Color(0.0);
+    }
+    deep |= scene.render.max_depth >= 12;
+  }
+  EXPECT_EQ(lights.size(), 3u);
+  EXPECT_EQ(shapes.size(), 5u);
+  EXPECT_TRUE(checker);
+  EXPECT_TRUE(transmissive);
+  EXPECT_TRUE(deep);
+  EXPECT_TRUE(big_mesh);
+}
+
+}  // namespace
+}  // namespace tessera
