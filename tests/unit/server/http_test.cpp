@@ -651,6 +651,46 @@ TEST_F(HttpTest, ClientTimesOutOnASlowAnswer) {
   EXPECT_EQ(client.request("GET", "/v1/jobs/1").status, 200);  // a fresh connection
 }
 
+// One client shared by threads (a worker's upload senders share one): a request that waits
+// for its answer does not hold up another, which takes a connection of its own; kept-alive
+// connections are then reused; and interrupt() ends every request in flight.
+TEST_F(HttpTest, ASharedClientGivesEachConcurrentRequestItsOwnConnection) {
+  start();
+  HttpClient shared(url(), 20s);
+  auto parked = std::async(std::launch::async, [&] { return shared.request("GET", "/wait"); });
+  ASSERT_TRUE(parking_.wait_for_total(1));
+  // Answered while the first request still waits on its connection.
+  EXPECT_EQ(shared.request("GET", "/v1/jobs/1").status, 200);
+  EXPECT_EQ(parked.wait_for(0s), std::future_status::timeout);
+  EXPECT_EQ(server_->connection_count(), 2u);
+  parking_.answer_all();
+  EXPECT_EQ(parked.get().status, 200);
+  // Both connections are kept and reused: no third one is opened.
+  auto again = std::async(std::launch::async, [&] { return shared.request("GET", "/wait"); });
+  ASSERT_TRUE(parking_.wait_for_total(2));
+  EXPECT_EQ(shared.request("GET", "/v1/jobs/2").status, 200);
+  EXPECT_EQ(server_->connection_count(), 2u);
+  parking_.answer_all();
+  EXPECT_EQ(again.get().status, 200);
+
+  // Two requests in flight, both ended by one interrupt.
+  auto first = std::async(std::launch::async, [&] { return shared.request("GET", "/wait"); });
+  auto second = std::async(std::launch::async, [&] { return shared.request("GET", "/wait"); });
+  ASSERT_TRUE(parking_.wait_for_total(4));
+  shared.interrupt();
+  for (auto* pending : {&first, &second}) {
+    try {
+      pending->get();
+      FAIL() << "a request in flight was not interrupted";
+    } catch (const HttpError& e) {
+      EXPECT_EQ(e.kind(), HttpError::Kind::interrupted) << e.what();
+    }
+  }
+  parking_.answer_all();
+  shared.clear_interrupt();
+  EXPECT_EQ(shared.request("GET", "/v1/jobs/3").status, 200);
+}
+
 TEST(HttpClientTest, ConnectionRefusedIsConnectFailed) {
   HttpClient client("http://127.0.0.1:" + std::to_string(unused_port()), 5s);
   try {
