@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "common/or_list.hpp"
+
 namespace tessera {
 
 enum class ImageFileKind { exr, png, jpg, tif, unknown };
@@ -35,12 +37,6 @@ inline const ImageFormat* image_format_named(std::string_view name) {
   return nullptr;
 }
 
-inline const ImageFormat& image_format_of(ImageFileKind kind) {
-  for (const ImageFormat& format : kImageFormats)
-    if (format.kind == kind) return format;
-  return kImageFormats.front();
-}
-
 // By the path's extension, in any case; nullptr for none of them.
 inline const ImageFormat* image_format_of_path(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
@@ -53,12 +49,10 @@ inline const ImageFormat* image_format_of_path(const std::filesystem::path& path
 
 // "png, exr, jpg or tif", for messages; with `dots`, ".png, .exr, .jpg or .tif".
 inline std::string image_format_names(bool dots = false) {
-  std::string text;
-  for (std::size_t i = 0; i < kImageFormats.size(); ++i) {
-    if (i > 0) text += i + 1 == kImageFormats.size() ? " or " : ", ";
-    text += dots ? kImageFormats[i].extension : kImageFormats[i].name;
-  }
-  return text;
+  std::array<std::string_view, kImageFormats.size()> names;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    names[i] = dots ? kImageFormats[i].extension : kImageFormats[i].name;
+  return or_list(names);
 }
 
 }  // namespace tessera

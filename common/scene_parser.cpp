@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/output_transfer.hpp"
 #include "common/scene_parser_parts.hpp"
 
 namespace tessera {
@@ -52,7 +53,6 @@ Camera parse_camera(const ValueReader& value) {
 }
 
 RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
-  static constexpr std::string_view transfers[] = {"srgb", "linear"};
   const ObjectReader reader(value);
   reader.allow_only({"samples_per_pixel", "max_depth", "tile_size", "output_transfer"});
   RenderSettings render;
@@ -64,8 +64,7 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
   render.tile_size = static_cast<int>(reader.integer_or(
       "tile_size", render.tile_size, {1, limits.max_tile_size, "limit max_tile_size"}));
   if (const auto transfer = reader.find("output_transfer")) {
-    render.output_transfer =
-        transfer->choice(transfers) == "linear" ? OutputTransfer::linear : OutputTransfer::srgb;
+    render.output_transfer = output_transfer_named(transfer->choice(kOutputTransferNames));
   }
   return render;
 }

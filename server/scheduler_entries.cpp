@@ -2,6 +2,8 @@
 
 #include <array>
 
+#include "common/output_transfer.hpp"
+
 namespace tessera {
 namespace {
 
@@ -58,7 +60,7 @@ JobRow job_row(const JobStatus& s) {
           s.finished_at_ms,
           s.error,
           s.rays,
-          s.output_transfer == OutputTransfer::linear ? "linear" : "srgb"};
+          std::string(output_transfer_name(s.output_transfer))};
 }
 
 bool status_from_row(JobRow&& row, JobStatus& s) {
@@ -76,8 +78,7 @@ bool status_from_row(JobRow&& row, JobStatus& s) {
   s.error = std::move(row.error);
   s.rays = row.rays;
   s.scene_digest = std::move(row.scene_digest);
-  s.output_transfer =
-      row.output_transfer == "linear" ? OutputTransfer::linear : OutputTransfer::srgb;
+  s.output_transfer = output_transfer_named(row.output_transfer);
   return state.has_value();
 }
 

@@ -74,7 +74,6 @@ class CoordinatorClient {
   void release(std::string_view lease);
   void leave(std::string_view worker);
 
-  HttpClient& http() { return http_; }
   void interrupt() { http_.interrupt(); }
   void clear_interrupt() { http_.clear_interrupt(); }
 

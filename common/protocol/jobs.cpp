@@ -9,14 +9,6 @@ json string_or_null(const std::optional<std::string>& text) {
   return text ? json(*text) : json(nullptr);
 }
 
-std::string name_of(const FieldReader& body, std::string_view key) {
-  std::string name = body.string(key);
-  if (name.size() > kMaxNameBytes)
-    body.fail(key, "must be at most " + std::to_string(kMaxNameBytes) + " bytes, got " +
-                       std::to_string(name.size()));
-  return name;
-}
-
 int int_of(const FieldReader& body, std::string_view key) {
   return static_cast<int>(body.integer(key, 0, std::numeric_limits<int>::max()));
 }
@@ -25,7 +17,7 @@ int int_of(const FieldReader& body, std::string_view key) {
 JobSubmission read_settings(const FieldReader& body) {
   body.only({"name", "priority", "scene"});
   JobSubmission submission;
-  if (body.has("name")) submission.name = name_of(body, "name");
+  if (body.has("name")) submission.name = read_name(body, "name");
   if (const auto priority = body.optional_integer("priority", 0, 100))
     submission.priority = static_cast<int>(*priority);
   body.object("scene");  // the scene parser reads what is inside
@@ -33,6 +25,14 @@ JobSubmission read_settings(const FieldReader& body) {
 }
 
 }  // namespace
+
+std::string read_name(const FieldReader& body, std::string_view key) {
+  std::string name = body.string(key);
+  if (name.size() > kMaxNameBytes)
+    body.fail(key, "must be at most " + std::to_string(kMaxNameBytes) + " bytes, got " +
+                       std::to_string(name.size()));
+  return name;
+}
 
 JobState read_job_state(const FieldReader& body, std::string_view key) {
   const auto state = value_in(kJobStateNames, body.string(key));

@@ -82,6 +82,9 @@ struct JobList {
 };
 nlohmann::json to_json(const JobList& list);
 
+// A name (of a job, a worker, a host): a string of at most kMaxNameBytes.
+std::string read_name(const FieldReader& body, std::string_view key);
+
 // The job states' words, "queued, running, completed, failed or canceled".
 JobState read_job_state(const FieldReader& body, std::string_view key);
 

@@ -10,6 +10,8 @@
 #include <string_view>
 #include <utility>
 
+#include "common/or_list.hpp"
+
 namespace tessera::protocol {
 
 template <typename E, std::size_t N>
@@ -32,12 +34,9 @@ constexpr std::optional<E> value_in(const NameTable<E, N>& table, std::string_vi
 // "a, b or c", for errors that list what is allowed.
 template <typename E, std::size_t N>
 std::string names_of(const NameTable<E, N>& table) {
-  std::string text;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (i > 0) text += i + 1 == N ? " or " : ", ";
-    text += table[i].second;
-  }
-  return text;
+  std::array<std::string_view, N> names;
+  for (std::size_t i = 0; i < N; ++i) names[i] = table[i].second;
+  return or_list(names);
 }
 
 }  // namespace tessera::protocol

@@ -7,13 +7,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string short_name(const FieldReader& body, std::string_view key) {
-  std::string name = body.string(key);
-  if (name.size() > kMaxNameBytes)
-    body.fail(key, "must be at most " + std::to_string(kMaxNameBytes) + " bytes");
-  return name;
-}
-
 // The version the other side states: anything but this build's is a mismatch. Said from
 // the side that reads it, the coordinator's or the worker's.
 enum class Reader { coordinator, worker };
@@ -39,8 +32,8 @@ void check_version(const FieldReader& body, Reader reader) {
 
 WorkerRegistration WorkerRegistration::read(const FieldReader& body) {
   WorkerRegistration registration;
-  registration.name = short_name(body, "name");
-  if (body.has("host")) registration.host = short_name(body, "host");
+  registration.name = read_name(body, "name");
+  if (body.has("host")) registration.host = read_name(body, "host");
   if (const auto threads = body.optional_integer("threads", 1, 1 << 20))
     registration.threads = static_cast<int>(*threads);
   check_version(body, Reader::coordinator);
