@@ -121,4 +121,14 @@ protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms) {
   return l;
 }
 
+void respond_durable(Scheduler& scheduler, Respond respond, HttpResponse response) {
+  respond_when_stored(
+      scheduler, scheduler.durable(), std::move(respond),
+      [response = std::move(response)](std::monostate, const std::string&) { return response; });
+}
+
+HttpResponse storage_failed(const std::string& what, const std::string& error) {
+  return error_response(507, "storage_failed", "cannot store " + what + ": " + error);
+}
+
 }  // namespace tessera

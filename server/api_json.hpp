@@ -52,4 +52,22 @@ HttpResponse body_response(int status, const T& body) {
   return json_response(status, protocol::to_json(body));
 }
 
+// Gives `response`, made from memory as it is now, once all it reports is durable
+// (Scheduler::durable()).
+void respond_durable(Scheduler& scheduler, Respond respond, HttpResponse response);
+
+// 507 storage_failed: the store refused `what` (a full disk, say), and its job has failed.
+HttpResponse storage_failed(const std::string& what, const std::string& error);
+
+// Answers with `make(value, error)` once the scheduler says `pending` may be given, on the
+// store thread: the network's thread goes on meanwhile. `error` is the store's refusal of
+// the change, "" when it is durable.
+template <typename T, typename Make>
+void respond_when_stored(Scheduler& scheduler, Pending<T> pending, Respond respond, Make make) {
+  scheduler.when_stored(
+      pending.ticket, pending.wrote,
+      [value = std::move(pending.value), respond = std::move(respond), make = std::move(make)](
+          const std::string& error) mutable { respond(make(std::move(value), error)); });
+}
+
 }  // namespace tessera

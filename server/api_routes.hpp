@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 
 #include "common/scene.hpp"
 #include "server/clock.hpp"
@@ -23,6 +24,11 @@ struct ApiContext {
   std::size_t max_job_body_bytes = 64 << 20;
   std::filesystem::path temp_dir;         // where images are encoded before they are sent
   std::atomic<unsigned> temp_counter{0};  // unique temporary names under temp_dir
+  // Runs work that waits on the disk (encoding an image) off the network's threads and the
+  // store thread; at once, on the calling thread, where nothing else is given.
+  std::function<void(std::function<void()>)> run_blocking = [](const std::function<void()>& work) {
+    work();
+  };
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.

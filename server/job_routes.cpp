@@ -19,14 +19,14 @@ HttpResponse not_found(const std::string& id) {
 }
 
 // The submission envelope around the scene (`JobSubmission`).
-HttpResponse submit(ApiContext& context, const HttpRequest& request) {
+void submit(ApiContext& context, const HttpRequest& request, Respond respond) {
   auto parsed = json_body(request);
-  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return respond(std::move(*refused));
   protocol::JobSubmission submission;
   try {
     submission = protocol::JobSubmission::take(std::get<json>(parsed));
   } catch (const protocol::ProtocolError& e) {
-    return invalid_request(e);
+    return respond(invalid_request(e));
   }
   Scene scene;
   try {
@@ -34,22 +34,22 @@ HttpResponse submit(ApiContext& context, const HttpRequest& request) {
   } catch (const SceneError& e) {
     const std::string path = "/scene" + e.pointer();
     if (e.limit().empty())
-      return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+      return respond(error_response(400, "invalid_scene", path + ": " + e.detail(), path));
     // Valid, but more than this server takes: say which limit, so the user can ask for it.
-    return json_response(
-        422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(), path,
-                                               e.limit(), e.limit_value()}));
+    return respond(
+        json_response(422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(),
+                                                             path, e.limit(), e.limit_value()})));
   }
-  JobStatus job;
-  try {
-    job = context.scheduler.submit(submission.name, submission.priority, scene,
-                                   submission.scene.dump());
-  } catch (const std::exception& e) {  // the store refused: a full disk, say
-    return error_response(507, "storage_failed", std::string("cannot store the job: ") + e.what());
-  }
-  HttpResponse response = body_response(201, status_of(job, context.clock.now_ms()));
-  response.headers.emplace_back("Location", protocol::fill(protocol::route::job, job.id));
-  return response;
+  context.scheduler.submit(
+      submission.name, submission.priority, scene, submission.scene.dump(),
+      [&context, respond = std::move(respond)](std::optional<JobStatus> job,
+                                               const std::string& error) {
+        // The store refused (a full disk, say): nothing was created.
+        if (!job) return respond(storage_failed("the job", error));
+        HttpResponse response = body_response(201, status_of(*job, context.clock.now_ms()));
+        response.headers.emplace_back("Location", protocol::fill(protocol::route::job, job->id));
+        respond(std::move(response));
+      });
 }
 
 HttpResponse list(ApiContext& context, const HttpRequest& request) {
@@ -92,15 +92,30 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
   const auto answer = [&context, id, shared_respond](bool only_if_finished) {
     const auto job = context.scheduler.job(id);
     if (job && only_if_finished && !is_finished(job->state)) return false;
-    (*shared_respond)(job ? body_response(200, status_of(*job, context.clock.now_ms()))
-                          : not_found(id));
+    respond_durable(
+        context.scheduler, *shared_respond,
+        job ? body_response(200, status_of(*job, context.clock.now_ms())) : not_found(id));
     return true;
   };
   context.job_waits.wait(
       *wait, [answer] { return answer(true); }, [answer] { answer(false); });
 }
 
-HttpResponse image(ApiContext& context, const HttpRequest& request) {
+// The image of a job as assembled, encoded into a private temporary file that is sent from
+// the disk and removed once opened (OpenImageIO writes files).
+HttpResponse encoded(ApiContext& context, const std::string& id, const Image& image,
+                     const ImageFormat& format, OutputTransfer transfer) {
+  std::filesystem::create_directories(context.temp_dir);
+  const auto path = context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) +
+                                        std::string(format.extension));
+  write_image(image, path, transfer);
+  HttpResponse response{200, std::string(format.content_type), "", {}};
+  response.file = path.string();
+  response.file_is_temporary = true;
+  return response;
+}
+
+void image(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string& id = request.params.at("id");
   const auto query_value = [&](std::string_view key, const char* fallback) {
     auto it = request.query.find(std::string(key));
@@ -108,37 +123,37 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
   };
   const ImageFormat* format = image_format_named(query_value(protocol::query::format, "png"));
   if (!format)
-    return error_response(400, "invalid_request", "format must be " + image_format_names());
+    return respond(
+        error_response(400, "invalid_request", "format must be " + image_format_names()));
   const std::string partial = query_value(protocol::query::partial, "0");
   if (partial != "0" && partial != "1")
-    return error_response(400, "invalid_request", "partial must be 0 or 1");
+    return respond(error_response(400, "invalid_request", "partial must be 0 or 1"));
   const auto job = context.scheduler.job(id);
-  if (!job) return not_found(id);
+  if (!job) return respond(not_found(id));
   if (job->state != JobState::completed && partial != "1")
-    return error_response(409, "not_ready",
-                          "job " + id + " is " + to_string(job->state) +
-                              "; add ?partial=1 for the tiles rendered so far");
-  HttpResponse response{200, std::string(format->content_type), "", {}};
+    return respond(error_response(409, "not_ready",
+                                  "job " + id + " is " + to_string(job->state) +
+                                      "; add ?partial=1 for the tiles rendered so far"));
   // A completed job's EXR is the file the image thread wrote: sent as it is, with no
   // image assembled in memory (3 GiB for a 16384x16384 frame).
   if (format->kind == ImageFileKind::exr && job->state == JobState::completed) {
     if (const auto written = context.scheduler.image_file(id)) {
+      HttpResponse response{200, std::string(format->content_type), "", {}};
       response.file = written->string();
-      return response;
+      return respond(std::move(response));
     }
   }
-  const auto assembled = context.scheduler.assemble(id);
-  if (!assembled) return not_found(id);
-
-  // OpenImageIO writes files; encode into a private temporary one, which is sent from the
-  // disk and removed once opened.
-  std::filesystem::create_directories(context.temp_dir);
-  const auto path = context.temp_dir / (id + "-" + std::to_string(context.temp_counter++) +
-                                        std::string(format->extension));
-  write_image(*assembled, path, job->output_transfer);
-  response.file = path.string();
-  response.file_is_temporary = true;
-  return response;
+  // Assembled from the canvas or, on the store thread, from the store; encoded where the
+  // disk may be waited on.
+  context.scheduler.assemble(
+      id, [&context, id, format, transfer = job->output_transfer,
+           respond = std::move(respond)](std::shared_ptr<const Image> assembled) {
+        if (!assembled) return respond(not_found(id));
+        context.run_blocking(
+            [&context, id, format, transfer, respond, assembled = std::move(assembled)] {
+              respond(encoded(context, id, *assembled, *format, transfer));
+            });
+      });
 }
 
 }  // namespace
@@ -146,11 +161,15 @@ HttpResponse image(ApiContext& context, const HttpRequest& request) {
 void add_job_routes(Router& router, ApiContext& context) {
   router.add(
       "POST", std::string(protocol::route::jobs),
-      [&context](HttpRequest&& request, Respond respond) { respond(submit(context, request)); },
+      [&context](HttpRequest&& request, Respond respond) {
+        submit(context, request, std::move(respond));
+      },
       context.max_job_body_bytes, role_client);
   router.add(
       "GET", std::string(protocol::route::jobs),
-      [&context](HttpRequest&& request, Respond respond) { respond(list(context, request)); },
+      [&context](HttpRequest&& request, Respond respond) {
+        respond_durable(context.scheduler, std::move(respond), list(context, request));
+      },
       std::nullopt, role_client);
   router.add(
       "GET", std::string(protocol::route::job),
@@ -162,35 +181,50 @@ void add_job_routes(Router& router, ApiContext& context) {
       "DELETE", std::string(protocol::route::job),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
-        switch (context.scheduler.remove(id)) {
-          case RemoveOutcome::removed:
-            return respond(HttpResponse{204, "", "", {}});
-          case RemoveOutcome::not_found:
-            return respond(not_found(id));
-          case RemoveOutcome::not_finished:
-            return respond(error_response(409, "not_finished",
-                                          "job " + id + " is still active; cancel it first"));
-        }
+        respond_when_stored(context.scheduler, context.scheduler.remove(id), std::move(respond),
+                            [id](RemoveOutcome outcome, const std::string& error) {
+                              if (!error.empty())
+                                return storage_failed("the removal of job " + id, error);
+                              switch (outcome) {
+                                case RemoveOutcome::removed:
+                                  return HttpResponse{204, "", "", {}};
+                                case RemoveOutcome::not_found:
+                                  return not_found(id);
+                                case RemoveOutcome::not_finished:
+                                  break;
+                              }
+                              return error_response(
+                                  409, "not_finished",
+                                  "job " + id + " is still active; cancel it first");
+                            });
       },
       std::nullopt, role_client);
   router.add(
       "GET", std::string(protocol::route::job_image),
-      [&context](HttpRequest&& request, Respond respond) { respond(image(context, request)); },
+      [&context](HttpRequest&& request, Respond respond) {
+        image(context, request, std::move(respond));
+      },
       std::nullopt, role_client);
   router.add(
       "POST", std::string(protocol::route::job_cancel),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
-        switch (context.scheduler.cancel(id)) {
-          case CancelOutcome::canceled:
-            return respond(
-                body_response(200, status_of(*context.scheduler.job(id), context.clock.now_ms())));
-          case CancelOutcome::not_found:
-            return respond(not_found(id));
-          case CancelOutcome::already_finished:
-            return respond(
-                error_response(409, "already_finished", "job " + id + " has already finished"));
-        }
+        respond_when_stored(
+            context.scheduler, context.scheduler.cancel(id), std::move(respond),
+            [&context, id](CancelOutcome outcome, const std::string& error) {
+              if (!error.empty()) return storage_failed("the cancellation of job " + id, error);
+              const auto job = context.scheduler.job(id);
+              switch (outcome) {
+                case CancelOutcome::canceled:
+                  if (job) return body_response(200, status_of(*job, context.clock.now_ms()));
+                  [[fallthrough]];
+                case CancelOutcome::not_found:
+                  return not_found(id);
+                case CancelOutcome::already_finished:
+                  break;
+              }
+              return error_response(409, "already_finished", "job " + id + " has already finished");
+            });
       },
       std::nullopt, role_client);
 }

@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <span>
+#include <variant>
 
 #include <spdlog/spdlog.h>
 
@@ -45,7 +47,10 @@ std::span<const float> floats_of(std::string& body, std::vector<float>& copy) {
           count};
 }
 
-HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
+// An upload's tiles handed to the scheduler, or the answer that refuses it before.
+using Checked = std::variant<Pending<ResultOutcome>, HttpResponse>;
+
+Checked check_upload(ApiContext& context, HttpRequest& request) {
   const std::string& id = request.params.at("id");
   if (request.body.size() % (3 * sizeof(float)) != 0)
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
@@ -65,7 +70,6 @@ HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
   std::vector<float> copy;
   const std::span<const float> pixels = floats_of(request.body, copy);
 
-  ResultOutcome outcome{};
   if (const std::string* text = header(protocol::kTilesHeader)) {
     // Some of the lease's tiles, in the order given, each the size of its tile. Counted
     // before the list is parsed, so that an over-long one costs no more than its header.
@@ -92,13 +96,16 @@ HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
                             ? -1
                             : static_cast<int>(index));
     const auto results = slice_upload(pixels, indexes, *sizes, rays);
-    outcome = results ? context.scheduler.complete(id, *results) : ResultOutcome::wrong_size;
-  } else {
-    if (rays.size() != 1)
-      return error_response(400, "invalid_request",
-                            "X-Tessera-Rays must be one count when X-Tessera-Tiles is absent");
-    outcome = context.scheduler.complete(id, pixels, rays.front());
+    if (!results) return Pending<ResultOutcome>{ResultOutcome::wrong_size};
+    return context.scheduler.complete(id, *results);
   }
+  if (rays.size() != 1)
+    return error_response(400, "invalid_request",
+                          "X-Tessera-Rays must be one count when X-Tessera-Tiles is absent");
+  return context.scheduler.complete(id, pixels, rays.front());
+}
+
+HttpResponse result_response(ResultOutcome outcome, const std::string& id) {
   switch (outcome) {
     case ResultOutcome::accepted:
       return body_response(200, protocol::ResultAnswer{protocol::ResultStatus::accepted});
@@ -125,25 +132,45 @@ HttpResponse check_upload(ApiContext& context, HttpRequest& request) {
 
 // A result refused for any reason but a lost lease is a bug or a version mismatch on one
 // side: shown on the job, not only in the worker's log.
-HttpResponse upload(ApiContext& context, HttpRequest& request) {
-  HttpResponse response = check_upload(context, request);
-  if (response.status >= 400 && response.status < 500 && response.status != 409) {
-    const std::string& id = request.params.at("id");
-    const std::string why = std::to_string(response.status) + ": " +
-                            protocol::error_message(response.status, response.body);
-    spdlog::warn("result for lease {} refused ({})", id, why);
-    context.scheduler.note_refused_result(id, why);
+void note_refusal(ApiContext& context, const std::string& id, const HttpResponse& response) {
+  if (response.status < 400 || response.status >= 500 || response.status == 409) return;
+  const std::string why = std::to_string(response.status) + ": " +
+                          protocol::error_message(response.status, response.body);
+  spdlog::warn("result for lease {} refused ({})", id, why);
+  context.scheduler.note_refused_result(id, why);
+}
+
+// The request lives until the answer: its body holds the pixels the store thread writes.
+void upload(ApiContext& context, std::shared_ptr<HttpRequest> request, Respond respond) {
+  Checked checked = check_upload(context, *request);
+  const std::string id = request->params.at("id");
+  if (auto* refused = std::get_if<HttpResponse>(&checked)) {
+    note_refusal(context, id, *refused);
+    return respond(std::move(*refused));
   }
-  return response;
+  respond_when_stored(
+      context.scheduler, std::get<Pending<ResultOutcome>>(std::move(checked)), std::move(respond),
+      [&context, id, request](ResultOutcome outcome, const std::string& error) {
+        request->body = std::string();  // the pixels are stored: free them before answering
+        HttpResponse response =
+            result_response(error.empty() ? outcome : ResultOutcome::unstored, id);
+        note_refusal(context, id, response);
+        return response;
+      });
+}
+
+HttpResponse no_content(std::monostate, const std::string& error) {
+  return error.empty() ? HttpResponse{204, "", "", {}} : storage_failed("the change", error);
 }
 
 // The worker could not render that tile of its lease (`TileFailure`).
-HttpResponse report_failure(ApiContext& context, const HttpRequest& request) {
+void report_failure(ApiContext& context, const HttpRequest& request, Respond respond) {
   auto failure = request_body<protocol::TileFailure>(request);
-  if (auto* refused = std::get_if<HttpResponse>(&failure)) return std::move(*refused);
+  if (auto* refused = std::get_if<HttpResponse>(&failure)) return respond(std::move(*refused));
   const auto& [tile, error] = std::get<protocol::TileFailure>(failure);
-  context.scheduler.fail_tile(request.params.at("id"), tile, error);
-  return HttpResponse{204, "", "", {}};
+  respond_when_stored(context.scheduler,
+                      context.scheduler.fail_tile(request.params.at("id"), tile, error),
+                      std::move(respond), no_content);
 }
 
 }  // namespace
@@ -153,10 +180,14 @@ void add_lease_routes(Router& router, ApiContext& context) {
       "POST", std::string(route::lease_heartbeat),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
-        const auto lease = context.scheduler.heartbeat(id);
-        if (lease) context.scheduler.touch_worker(lease->worker_id);
-        respond(lease ? body_response(200, lease_of(*lease, context.clock.now_ms()))
-                      : lease_lost(id));
+        auto lease = context.scheduler.heartbeat(id);
+        if (lease.value) context.scheduler.touch_worker(lease.value->worker_id);
+        respond_when_stored(
+            context.scheduler, std::move(lease), std::move(respond),
+            [&context, id](const std::optional<Lease>& renewed, const std::string&) {
+              return renewed ? body_response(200, lease_of(*renewed, context.clock.now_ms()))
+                             : lease_lost(id);
+            });
       },
       std::nullopt, role_worker);
   router.add(
@@ -165,38 +196,35 @@ void add_lease_routes(Router& router, ApiContext& context) {
         const std::string& id = request.params.at("id");
         const auto max_tiles = max_tiles_of(context, request);
         if (!max_tiles) return respond(bad_max_tiles(context));
-        std::optional<Lease> lease;
-        try {
-          lease = context.scheduler.extend(id, *max_tiles);
-        } catch (const std::exception& e) {
-          // As for a claim: the store refused the new tiles, and the job has failed.
-          return respond(error_response(507, "storage_failed",
-                                        std::string("cannot store the lease: ") + e.what()));
-        }
-        if (lease) context.scheduler.touch_worker(lease->worker_id);
-        respond(lease ? body_response(200, lease_of(*lease, context.clock.now_ms()))
-                      : lease_lost(id));
+        auto lease = context.scheduler.extend(id, *max_tiles);
+        if (lease.value) context.scheduler.touch_worker(lease.value->worker_id);
+        respond_when_stored(
+            context.scheduler, std::move(lease), std::move(respond),
+            [&context, id](const std::optional<Lease>& extended, const std::string& error) {
+              // As for a claim: the store refused the new tiles, and the job has failed.
+              if (!error.empty()) return storage_failed("the lease", error);
+              return extended ? body_response(200, lease_of(*extended, context.clock.now_ms()))
+                              : lease_lost(id);
+            });
       },
       std::nullopt, role_worker);
   router.add(
       "PUT", std::string(route::lease_result),
       [&context](HttpRequest&& request, Respond respond) {
-        HttpResponse response = upload(context, request);
-        request.body = std::string();  // the pixels are stored: free them before answering
-        respond(std::move(response));
+        upload(context, std::make_shared<HttpRequest>(std::move(request)), std::move(respond));
       },
       protocol_limits(context).max_result_bytes, role_worker);
   router.add(
       "POST", std::string(route::lease_fail),
       [&context](HttpRequest&& request, Respond respond) {
-        respond(report_failure(context, request));
+        report_failure(context, request, std::move(respond));
       },
       std::nullopt, role_worker);
   router.add(
       "POST", std::string(route::lease_release),
       [&context](HttpRequest&& request, Respond respond) {
-        context.scheduler.release(request.params.at("id"));
-        respond(HttpResponse{204, "", "", {}});
+        respond_when_stored(context.scheduler, context.scheduler.release(request.params.at("id")),
+                            std::move(respond), no_content);
       },
       std::nullopt, role_worker);
 }

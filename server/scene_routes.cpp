@@ -10,9 +10,12 @@ void add_scene_routes(Router& router, ApiContext& context) {
       "GET", std::string(protocol::route::scene),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& digest = request.params.at("digest");
-        const auto scene = context.scheduler.scene_json(digest);
-        respond(scene ? HttpResponse{200, "application/json", *scene, {}}
-                      : error_response(404, "not_found", "no scene " + digest));
+        // Read on the store thread, and answered from there.
+        context.scheduler.scene_json(
+            digest, [digest, respond = std::move(respond)](std::optional<std::string> scene) {
+              respond(scene ? HttpResponse{200, "application/json", std::move(*scene), {}}
+                            : error_response(404, "not_found", "no scene " + digest));
+            });
       },
       std::nullopt, role_worker);
 }

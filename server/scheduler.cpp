@@ -1,6 +1,7 @@
 // The Scheduler's job side: submitting, listing, canceling, removing and assembling jobs.
 // Leases are in scheduler_leases.cpp, workers in scheduler_workers.cpp, start-up in
-// scheduler_load.cpp and the bookkeeping every change goes through in scheduler_commit.cpp.
+// scheduler_load.cpp, images in scheduler_images.cpp and the bookkeeping every change goes
+// through in scheduler_commit.cpp.
 #include <spdlog/spdlog.h>
 
 #include "server/scheduler.hpp"
@@ -18,21 +19,50 @@
 namespace tessera {
 
 Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
-    : store_(store), images_(store.data_dir()), clock_(clock), config_(config) {
+    : store_(store),
+      images_(store.data_dir()),
+      clock_(clock),
+      config_(config),
+      store_thread_(store) {
+  StoreTicket loaded = 0;
   {
+    // The store thread has nothing to do yet, so this thread may read the Store.
     std::lock_guard lock(mutex_);
     load_and_reconcile();
+    loaded = last_write_;
   }
+  // What reconciling changed is durable before anyone is answered.
+  if (const std::string error = store_thread_.wait(loaded); !error.empty())
+    throw std::runtime_error("cannot store the state reconciled at start: " + error);
   image_thread_ = std::thread([this] { write_images(); });
 }
 
 Scheduler::~Scheduler() {
+  // What is queued may queue images to write; the image thread then writes them, and may
+  // queue a job's failure, which the store thread's own destructor finishes.
+  store_thread_.wait(store_thread_.last());
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
   }
   images_changed_.notify_all();
   image_thread_.join();  // after the images still queued are written
+}
+
+void Scheduler::when_stored(StoreTicket ticket, bool wrote, StoreThread::Done done) {
+  store_thread_.after(ticket, [wrote, done = std::move(done)](const std::string& error) {
+    done(wrote ? error : std::string());
+  });
+}
+
+Written Scheduler::durable() const {
+  std::lock_guard lock(mutex_);
+  return {{}, last_write_, false};
+}
+
+std::string Scheduler::wait_stored(StoreTicket ticket, bool wrote) {
+  const std::string error = store_thread_.wait(ticket);
+  return wrote ? error : std::string();
 }
 
 JobEntry* Scheduler::find_job(const std::string& id) const {
@@ -45,8 +75,8 @@ WorkerEntry* Scheduler::find_worker(const std::string& id) const {
   return it == workers_.end() ? nullptr : it->second.get();
 }
 
-JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& scene,
-                            const std::string& scene_json) {
+void Scheduler::submit(const std::string& name, int priority, const Scene& scene,
+                       std::string scene_json, Submitted then) {
   // Outside the lock: hashing a large mesh scene takes a while.
   const std::string digest = sha256_hex(scene_json);
   const std::vector<TileRect> rects =
@@ -54,38 +84,54 @@ JobStatus Scheduler::submit(const std::string& name, int priority, const Scene& 
   // Also outside: sorting a million tiles takes a while too.
   std::vector<int> order = centre_first_order(rects, scene.width, scene.height);
 
-  Callbacks notify;
-  JobStatus result;
+  auto job = std::make_shared<JobEntry>();
+  JobStatus& s = job->status;
+  s.name = name;
+  s.state = JobState::queued;
+  s.priority = priority;
+  s.width = scene.width;
+  s.height = scene.height;
+  s.tile_size = scene.render.tile_size;
+  s.created_at_ms = clock_.now_ms();
+  s.scene_digest = digest;
+  s.output_transfer = scene.render.output_transfer;
+  job->tiles.resize(rects.size());
+  for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
+
+  StoreTicket ticket = 0;
   {
     std::lock_guard lock(mutex_);
-    auto job = std::make_unique<JobEntry>();
-    JobStatus& s = job->status;
     do {
       s.id = "j-" + random_hex(32);  // 128 bits: nobody finds a job by guessing its id
     } while (jobs_.contains(s.id));
-    s.name = name;
-    s.state = JobState::queued;
-    s.priority = priority;
-    s.width = scene.width;
-    s.height = scene.height;
-    s.tile_size = scene.render.tile_size;
-    s.created_at_ms = clock_.now_ms();
-    s.scene_digest = digest;
-    s.output_transfer = scene.render.output_transfer;
-
-    job->tiles.resize(rects.size());
-    for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
-    store_.insert_job(job_row(s), scene_json);
-
-    JobEntry& entry = *jobs_.emplace(s.id, std::move(job)).first->second;
-    index_tiles(entry, std::move(order));
-    result = entry.status;
-    notify = callbacks_;
+    ticket = queue_write(
+        [row = job_row(s), json = std::make_shared<const std::string>(std::move(scene_json))](
+            Store& store) { store.insert_job(row, *json); });
   }
-  spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", result.id, result.name,
-               result.width, result.height, result.tiles_total, result.priority);
-  for (const auto& callback : notify) callback();
-  return result;
+  // Nothing can lease a tile of the job, nor list it, before it is stored: a job the store
+  // refuses (a full disk, say) leaves nothing behind.
+  store_thread_.after(ticket, [this, job, order = std::move(order),
+                               then = std::move(then)](const std::string& error) mutable {
+    if (!error.empty()) {
+      spdlog::error("job {} ({}): cannot store it: {}", job->status.id, job->status.name, error);
+      return then(std::nullopt, error);
+    }
+    Callbacks notify;
+    JobStatus status;
+    {
+      std::lock_guard lock(mutex_);
+      const std::string id = job->status.id;
+      JobEntry& entry =
+          *jobs_.emplace(id, std::make_unique<JobEntry>(std::move(*job))).first->second;
+      index_tiles(entry, std::move(order));
+      status = entry.status;
+      notify = callbacks_;
+    }
+    spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", status.id, status.name,
+                 status.width, status.height, status.tiles_total, status.priority);
+    for (const auto& callback : notify) callback();
+    then(status, "");
+  });
 }
 
 std::optional<JobStatus> Scheduler::job(const std::string& id) const {
@@ -113,11 +159,12 @@ std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_
   return result;
 }
 
-CancelOutcome Scheduler::cancel(const std::string& id) {
+Pending<CancelOutcome> Scheduler::cancel(const std::string& id) {
   std::lock_guard lock(mutex_);
+  const StoreTicket before = last_write_;
   JobEntry* job = find_job(id);
-  if (!job) return CancelOutcome::not_found;
-  if (is_finished(job->status.state)) return CancelOutcome::already_finished;
+  if (!job) return pending(CancelOutcome::not_found, before);
+  if (is_finished(job->status.state)) return pending(CancelOutcome::already_finished, before);
   StagedChange change;
   JobStatus& status = change.job(*job);
   status.state = JobState::canceled;
@@ -126,146 +173,31 @@ CancelOutcome Scheduler::cancel(const std::string& id) {
   for (const TileSlot& tile : job->tiles)
     if (!tile.lease_id.empty()) stage_lease_end(change, tile.lease_id, false);
   commit(change);
-  return CancelOutcome::canceled;
+  return pending(CancelOutcome::canceled, before);
 }
 
-RemoveOutcome Scheduler::remove(const std::string& id) {
+Pending<RemoveOutcome> Scheduler::remove(const std::string& id) {
   std::lock_guard lock(mutex_);
+  const StoreTicket before = last_write_;
   JobEntry* job = find_job(id);
-  if (!job) return RemoveOutcome::not_found;
-  if (!is_finished(job->status.state)) return RemoveOutcome::not_finished;
-  store_.delete_job(id);
+  if (!job) return pending(RemoveOutcome::not_found, before);
+  if (!is_finished(job->status.state)) return pending(RemoveOutcome::not_finished, before);
+  const StoreTicket ticket = queue_write([id](Store& store) { store.delete_job(id); });
   // After the job's rows: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served.
-  images_.remove(id);
+  store_thread_.after(ticket, [this, id](const std::string& error) {
+    if (error.empty()) images_.remove(id);
+  });
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);
   jobs_.erase(id);
-  return RemoveOutcome::removed;
+  return pending(RemoveOutcome::removed, before);
 }
 
-std::optional<std::string> Scheduler::scene_json(const std::string& digest) const {
-  std::lock_guard lock(mutex_);
-  return store_.scene_json(digest);
-}
-
-std::shared_ptr<const Image> Scheduler::assemble(const std::string& id) const {
-  std::lock_guard lock(mutex_);
-  const JobEntry* job = find_job(id);
-  if (!job) return nullptr;
-  // Only a finished job's canvas is safe to share: a running one still takes tiles.
-  if (job->canvas && is_finished(job->status.state)) return job->canvas;
-  if (job->canvas) return std::make_shared<const Image>(*job->canvas);
-  return std::make_shared<const Image>(assemble_locked(*job));
-}
-
-std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
-  std::lock_guard lock(mutex_);
-  const JobEntry* job = find_job(id);
-  // The file appears whole (it is written beside its place and renamed), so once it is
-  // there it can be sent.
-  if (!job || job->status.state != JobState::completed || !images_.has(id)) return std::nullopt;
-  return images_.path(id);
-}
-
-void Scheduler::make_canvas(std::unique_lock<std::mutex>& lock, const std::string& id) {
-  JobEntry* job = find_job(id);
-  if (!job || job->canvas || job->canvas_coming) return;
-  job->canvas_coming = true;
-  const int width = job->status.width;
-  const int height = job->status.height;
-  lock.unlock();
-  auto canvas = std::make_shared<Image>(width, height);
-  lock.lock();
-  job = find_job(id);  // it may have been removed meanwhile
-  if (!job) return;
-  job->canvas_coming = false;
-  images_changed_.notify_all();  // the image thread may wait for it
-  // A failed or canceled job's image comes from the store; a completed one's canvas is
-  // taken by the image thread, which waited for it.
-  if (job->status.state == JobState::failed || job->status.state == JobState::canceled) return;
-  // Every result accepted so far is stored, those of the requests served meanwhile too.
-  paste_stored(*canvas, *job);
-  job->canvas = std::move(canvas);
-}
-
-Image Scheduler::assemble_locked(const JobEntry& job) const {
-  Image image(job.status.width, job.status.height);
-  paste_stored(image, job);
-  return image;
-}
-
-void Scheduler::paste_stored(Image& image, const JobEntry& job) const {
-  const auto floats_of = [&](int index) -> std::size_t {
-    if (index < 0 || index >= static_cast<int>(job.tiles.size()))
-      throw std::runtime_error("job " + job.status.id + ": stored pixels for unknown tile " +
-                               std::to_string(index));
-    return job.tiles[index].rect.pixel_count() * 3;
-  };
-  store_.for_each_tile_pixels(job.status.id, floats_of,
-                              [&](int index, std::span<const float> pixels) {
-                                // Only a done tile's pixels are the accepted result.
-                                if (job.tiles[index].state == TileState::done)
-                                  image.paste(job.tiles[index].rect, pixels);
-                              });
-}
-
-void Scheduler::wait_for_images() {
-  std::unique_lock lock(mutex_);
-  images_changed_.wait(lock, [&] { return images_to_write_.empty() && !writing_image_; });
-}
-
-void Scheduler::write_images() {
-  // Below the threads that answer requests and render: an image file is for later.
-  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
-  std::unique_lock lock(mutex_);
-  while (true) {
-    images_changed_.wait(lock, [&] { return stopping_ || !images_to_write_.empty(); });
-    if (images_to_write_.empty()) return;  // stopping, and nothing is left to write
-    const std::string id = std::move(images_to_write_.front());
-    images_to_write_.pop_front();
-    writing_image_ = true;
-    // A canvas on its way is waited for, rather than assembling a second one from the store.
-    const JobEntry* job = find_job(id);
-    while (job && job->canvas_coming) {
-      images_changed_.wait(lock);
-      job = find_job(id);
-    }
-    if (!job || job->status.state != JobState::completed) {
-      writing_image_ = false;
-      images_changed_.notify_all();
-      continue;
-    }
-    std::string error;
-    try {
-      // A completed job's canvas changes no more, so it can be read outside the lock.
-      const std::shared_ptr<const Image> image =
-          job->canvas ? job->canvas : std::make_shared<const Image>(assemble_locked(*job));
-      // Encoding takes a while and touches no shared state: workers and clients go on.
-      lock.unlock();
-      images_.write(id, *image);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    if (!lock.owns_lock()) lock.lock();
-    writing_image_ = false;
-    images_changed_.notify_all();
-    JobEntry* still = find_job(id);
-    if (!still) {
-      images_.remove(id);  // removed while it was being written
-      continue;
-    }
-    still->canvas.reset();  // the file (or the store) serves it from now on
-    if (!error.empty() && still->status.state == JobState::completed) {
-      // Every tile is stored, so a resubmission renders again; a "completed" job without
-      // an image file would only fail later, when someone looks for it.
-      StagedChange change;
-      JobStatus& status = change.job(*still);
-      status.state = JobState::failed;
-      status.error = "cannot write the image: " + error;
-      commit(change);
-    }
-  }
+void Scheduler::scene_json(const std::string& digest,
+                           std::function<void(std::optional<std::string>)> then) const {
+  store_thread_.read(
+      [digest, then = std::move(then)](Store& store) { then(store.scene_json(digest)); });
 }
 
 }  // namespace tessera

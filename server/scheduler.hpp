@@ -1,8 +1,11 @@
 // The coordinator's one state machine: jobs, their tiles, workers and the leases that
-// bind a tile to a worker. Every state change happens here, under one lock, and is made
-// durable in the Store before the call returns. Workers pull: claim() hands out the best
-// pending tile; heartbeats keep a lease alive; a result is accepted only from the current
-// holder of the tile's lease (fencing), and only once.
+// bind a tile to a worker. Every state change happens here, under one lock, in memory, and
+// is queued for the store thread (StoreThread) as it is made; a call returns its answer at
+// once as a Pending, which its caller gives only once when_stored() says the change is
+// durable. The network's threads thus never wait on the disk, and nobody hears of a change
+// that a crash could undo. Workers pull: claim() hands out the best pending tile;
+// heartbeats keep a lease alive; a result is accepted only from the current holder of the
+// tile's lease (fencing), and only once.
 #pragma once
 
 #include <condition_variable>
@@ -29,6 +32,7 @@
 #include "server/clock.hpp"
 #include "server/image_files.hpp"
 #include "server/store.hpp"
+#include "server/store_thread.hpp"
 
 namespace tessera {
 
@@ -140,6 +144,17 @@ enum class ResultOutcome {
   unstored,    // the store could not take the pixels (a full disk); the job has failed
 };
 
+// An answer known at once, to be given once the change it reports is durable
+// (Scheduler::when_stored). `ticket` is the last write queued when the answer was made:
+// its own when it wrote something (`wrote`), else the one that holds what it reports.
+template <class T>
+struct Pending {
+  T value{};
+  StoreTicket ticket = 0;
+  bool wrote = false;
+};
+using Written = Pending<std::monostate>;
+
 enum class CancelOutcome { canceled, not_found, already_finished };
 enum class RemoveOutcome { removed, not_found, not_finished };
 
@@ -158,73 +173,100 @@ class Scheduler {
   const SchedulerConfig& config() const { return config_; }
 
   // --- jobs -----------------------------------------------------------------
-  // `scene` is already validated; `scene_json` is what is stored and served to workers.
-  JobStatus submit(const std::string& name, int priority, const Scene& scene,
-                   const std::string& scene_json);
+  // Called on the store thread once the job is stored, with its status, or with nothing
+  // and the store's error when the store refused it.
+  using Submitted = std::function<void(std::optional<JobStatus>, const std::string& error)>;
+  // `scene` is already validated; `scene_json` is what is stored and served to workers. The
+  // job exists, for every other call too, once it is stored.
+  void submit(const std::string& name, int priority, const Scene& scene, std::string scene_json,
+              Submitted then);
   std::optional<JobStatus> job(const std::string& id) const;
   // Newest first; `state` filters when set; at most `limit`.
   std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit) const;
-  CancelOutcome cancel(const std::string& id);
-  RemoveOutcome remove(const std::string& id);
-  std::optional<std::string> scene_json(const std::string& digest) const;
+  Pending<CancelOutcome> cancel(const std::string& id);
+  Pending<RemoveOutcome> remove(const std::string& id);
+  // The scene stored under `digest`, read on the store thread and handed to `then` there.
+  void scene_json(const std::string& digest,
+                  std::function<void(std::optional<std::string>)> then) const;
   // The job's image from the tiles stored so far; missing tiles are black. A running job
   // keeps its image in memory as tiles arrive, until its image file is written, so that
   // previews and the download right after completion need not read every tile back.
-  std::shared_ptr<const Image> assemble(const std::string& id) const;
+  // `then` gets it, on this thread from the canvas or on the store thread from the store;
+  // null when there is no such job.
+  void assemble(const std::string& id,
+                std::function<void(std::shared_ptr<const Image>)> then) const;
   // The image file of a completed job, once the image thread has written it.
   std::optional<std::filesystem::path> image_file(const std::string& id) const;
   // Waits until the image file of every job completed so far is written (or has failed).
   void wait_for_images();
 
+  // --- durability -------------------------------------------------------------
+  // Calls `done` on the store thread once `pending`'s answer may be given: with "" when
+  // what it reports is durable, or with the store's error when its own change was refused
+  // (the change's jobs have failed, saying why).
+  template <class T>
+  void when_stored(const Pending<T>& pending, StoreThread::Done done) {
+    when_stored(pending.ticket, pending.wrote, std::move(done));
+  }
+  void when_stored(StoreTicket ticket, bool wrote, StoreThread::Done done);
+  // As when_stored(), waiting; for threads that may wait on the disk (never the network's).
+  std::string wait_stored(StoreTicket ticket, bool wrote);
+  // For an answer that reports memory as it is now (a job's status): once this is durable,
+  // so is everything the answer says, and a crash cannot take it back.
+  Written durable() const;
+
   // --- workers --------------------------------------------------------------
-  WorkerInfo register_worker(const std::string& name, const std::string& host, int threads);
+  Pending<WorkerInfo> register_worker(const std::string& name, const std::string& host,
+                                      int threads);
   bool worker_known(const std::string& worker_id) const;
   // A worker that still holds a live lease gets that lease back (reconnect); otherwise a
   // new lease on up to `max_tiles` of the best pending tiles: highest priority job first,
   // then oldest job, tiles centre-first. The batch is cut to the worker's share of the
   // job's pending tiles, so that the last tiles of a job spread over every worker.
-  std::optional<Lease> claim(const std::string& worker_id, int max_tiles = 1);
+  Pending<std::optional<Lease>> claim(const std::string& worker_id, int max_tiles = 1);
   // Extends the lease; nothing when it is no longer live.
-  std::optional<Lease> heartbeat(const std::string& lease_id);
+  Pending<std::optional<Lease>> heartbeat(const std::string& lease_id);
   // More tiles for a live lease, so that its worker renders on without the round trips of
   // a claim between batches: up to `max_tiles` more of the lease's job, cut as claim()
   // cuts a batch, while that job is the one claim() would give this worker. Renews the
   // lease as heartbeat() does. The Lease returned lists only the tiles added, which may
   // be none; nothing when the lease is no longer live.
-  std::optional<Lease> extend(const std::string& lease_id, int max_tiles);
+  Pending<std::optional<Lease>> extend(const std::string& lease_id, int max_tiles);
   // Stores the results of some or all of the lease's tiles, atomically: every tile is
-  // accepted or none is.
-  ResultOutcome complete(const std::string& lease_id, std::span<const TileResult> results);
+  // accepted or none is. The pixels must stay valid until when_stored() has answered: the
+  // store thread writes them, and pastes them into the job's canvas once they are durable.
+  // A refusal by the store makes the answer ResultOutcome::unstored.
+  Pending<ResultOutcome> complete(const std::string& lease_id, std::span<const TileResult> results);
   // The pixels of every tile the lease still owes, concatenated in the lease's order; the
   // rays are counted once, on the first of them.
-  ResultOutcome complete(const std::string& lease_id, std::span<const float> pixels,
-                         std::uint64_t rays);
+  Pending<ResultOutcome> complete(const std::string& lease_id, std::span<const float> pixels,
+                                  std::uint64_t rays);
   // The pixel count of each of the lease's job's tiles named by index (0 for an index the
   // job does not have), to cut an upload into tiles; nothing when the lease is unknown.
   std::optional<std::vector<std::size_t>> tile_pixel_counts(
       const std::string& lease_id, std::span<const std::uint64_t> tile_indexes) const;
   // The worker gives its remaining tiles back (for example on SIGTERM) without results.
-  void release(const std::string& lease_id);
+  Written release(const std::string& lease_id);
   // The worker could not render `tile_index`: that tile fails once (see max_tile_attempts)
   // and the lease's other tiles go back as by release(). Nothing when the lease is not
   // live or does not owe that tile.
-  void fail_tile(const std::string& lease_id, int tile_index, const std::string& error);
+  Written fail_tile(const std::string& lease_id, int tile_index, const std::string& error);
   // The coordinator refused a result under this lease for a reason other than a lost lease
   // (over a limit, malformed): a bug or a version mismatch, shown on the lease's job.
   void note_refused_result(const std::string& lease_id, const std::string& why);
   // Records that a worker is alive (any request from it).
-  void touch_worker(const std::string& worker_id);
-  void worker_left(const std::string& worker_id);
+  Written touch_worker(const std::string& worker_id);
+  Written worker_left(const std::string& worker_id);
   std::vector<WorkerInfo> workers() const;
 
   // --- time -----------------------------------------------------------------
   // Returns expired leases' tiles to the queue, and fails jobs stalled past
   // stall_timeout_ms. Call periodically.
-  void expire_leases();
+  Written expire_leases();
   // Called (outside the lock) whenever a tile may have become claimable.
   void on_work_available(std::function<void()> callback);
-  // Called whenever a job has finished (completed, failed or canceled). It runs with the
-  // lock held, so it must not call the Scheduler: it is meant to post a wake-up elsewhere.
+  // Called whenever a job has finished (completed, failed or canceled), once that is
+  // durable, on the store thread: it is meant to post a wake-up elsewhere.
   void on_job_finished(std::function<void()> callback);
 
  private:
@@ -260,20 +302,38 @@ class Scheduler {
   std::vector<JobEntry*> stage_job_states(StagedChange& change, std::int64_t now);
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
+  // On the store thread only, as every read of the Store.
   Image assemble_locked(const JobEntry& job) const;
-  // Pastes every done tile's stored pixels into `image`.
+  // Pastes every done tile's stored pixels into `image`; on the store thread only.
   void paste_stored(Image& image, const JobEntry& job) const;
-  // Gives job `id` its canvas, made with `lock` released: zeroing the 3 GiB of a 16384x16384
-  // frame takes a second or more, which every other request would otherwise wait out.
-  void make_canvas(std::unique_lock<std::mutex>& lock, const std::string& id);
-  // The image thread: writes each completed job's image file, off the path of the request
-  // that completed it, and fails a job whose image cannot be written.
+  // After an upload's tiles are durable (on the store thread): pastes them into the job's
+  // canvas, asks for a canvas when it has none, and queues the image of a completed job.
+  void note_stored(const std::string& job_id,
+                   const std::vector<std::pair<int, std::span<const float>>>& tiles, bool job_done);
+  // The image thread zeroes a canvas (3 GiB for a 16384x16384 frame takes a second or
+  // more, which no request and no commit should wait out); the store thread then pastes
+  // what is stored into it and puts it in place, so that no durable tile is missed.
+  void make_canvas(const std::string& id, int width, int height,
+                   std::unique_lock<std::mutex>& lock);
+  void install_canvas(const std::string& id, const std::shared_ptr<Image>& canvas);
+  // The image thread: makes canvases, and writes each completed job's image file, off the
+  // path of the request that completed it, and fails a job whose image cannot be written.
   void write_images();
+  void write_image(const std::string& id, std::unique_lock<std::mutex>& lock);
 
-  // The one way state changes: write `change` in one transaction, then apply it.
-  void commit(StagedChange& change);
-  void write(const StagedChange& change);  // throws what the store throws; memory untouched
+  // The one way state changes: apply `change` to memory and queue its write, recorded from
+  // memory as it was before. Should the store refuse it, the change's jobs fail with "cannot
+  // store `what`". Returns the write's ticket.
+  StoreTicket commit(StagedChange& change, const std::string& what = "a change");
+  StoreThread::Work record(const StagedChange& change) const;
   void apply(StagedChange& change);
+  // Queues a write for the store thread; the one place that does.
+  StoreTicket queue_write(StoreThread::Work work);
+  // `value` as the answer of an operation that began when last_write_ was `before`.
+  template <class T>
+  Pending<T> pending(T value, StoreTicket before) const {
+    return {std::move(value), last_write_, last_write_ > before};
+  }
   // The store refused a result (a full disk, say): the job fails with `error`, in the
   // store if it still takes that much, in memory at least. A restart, with room again,
   // resumes the job from what was stored.
@@ -359,10 +419,14 @@ class Scheduler {
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;
+  StoreTicket last_write_ = 0;               // the ticket of the last write queued by queue_write()
   std::deque<std::string> images_to_write_;  // completed jobs, oldest first
+  std::deque<std::tuple<std::string, int, int>> canvases_to_make_;  // job id, width, height
   bool writing_image_ = false;
   bool stopping_ = false;
   std::condition_variable images_changed_;
+  // After what its callbacks use, so that it finishes them first when destroyed.
+  mutable StoreThread store_thread_;
   std::thread image_thread_;  // last: it starts once everything else exists
 };
 

@@ -3,6 +3,7 @@
 // every tile and job change.
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <set>
 #include <stdexcept>
 
@@ -14,26 +15,43 @@
 
 namespace tessera {
 
-void Scheduler::commit(StagedChange& change) {
-  try {
-    write(change);
-  } catch (const std::exception& e) {
-    // The store refused (a full disk, say). Every job the change was for fails and says
-    // why, rather than workers retrying it forever; the caller still gets the error.
-    std::set<JobEntry*> touched;
-    for (const auto& [job, status] : change.jobs) touched.insert(job);
-    for (const auto& [key, tile] : change.tiles) touched.insert(key.first);
-    for (JobEntry* job : touched)
-      fail_unstorable(*job, std::string("cannot store a change: ") + e.what());
-    throw;
-  }
+StoreTicket Scheduler::commit(StagedChange& change, const std::string& what) {
+  StoreThread::Work work = record(change);
+  std::set<std::string> touched;
+  for (const auto& [job, status] : change.jobs) touched.insert(job->status.id);
+  for (const auto& [key, tile] : change.tiles) touched.insert(key.first->status.id);
+  bool finishes = false;
+  for (const auto& [job, status] : change.jobs)
+    finishes = finishes || (is_finished(status.state) && !is_finished(job->status.state));
   apply(change);
+  const StoreTicket ticket = queue_write(std::move(work));
+  store_thread_.after(ticket, [this, touched = std::move(touched), what](const std::string& error) {
+    if (error.empty()) return;
+    // The store refused (a full disk, say). Every job the change was for fails and says
+    // why, rather than workers retrying it forever.
+    std::lock_guard lock(mutex_);
+    for (const std::string& id : touched)
+      if (JobEntry* job = find_job(id))
+        fail_unstorable(*job, "cannot store " + what + ": " + error);
+  });
+  // Those waiting for a job to finish hear of it once it is durable.
+  if (finishes)
+    store_thread_.after(ticket, [callbacks = finished_callbacks_](const std::string&) {
+      for (const auto& callback : callbacks) callback();
+    });
+  return ticket;
 }
 
-void Scheduler::write(const StagedChange& change) {
+StoreTicket Scheduler::queue_write(StoreThread::Work work) {
+  last_write_ = store_thread_.write(std::move(work));
+  return last_write_;
+}
+
+StoreThread::Work Scheduler::record(const StagedChange& change) const {
   // What the store keeps of tiles is their leases, results and failures (see StoredState):
   // the staged tiles are told apart by what changed in them, so that an operation writes
-  // one row per lease and per upload it touches, however many tiles those hold.
+  // one row per lease and per upload it touches, however many tiles those hold. The rows
+  // are made here, from memory as it is before the change; the store thread writes them.
   struct LeaseMoves {
     const JobEntry* job = nullptr;
     std::string worker_id;  // of the tiles that join it
@@ -44,15 +62,24 @@ void Scheduler::write(const StagedChange& change) {
     ResultRow row;
     std::vector<std::span<const float>> pixels;
   };
+  struct Rows {
+    std::vector<JobRow> jobs;
+    std::vector<TileFailureRow> failures;
+    std::vector<LeaseRow> leases;
+    std::vector<std::string> leases_ended;
+    std::vector<Upload> uploads;
+    std::vector<std::int64_t> forgotten_results;
+    std::vector<WorkerRow> workers;
+  };
+  auto rows = std::make_shared<Rows>();
   std::map<std::string, LeaseMoves> leases;
   std::map<std::pair<const JobEntry*, std::string>, Upload> uploads;  // by job and lease
-  Transaction tx = store_.transaction();
-  for (const auto& [job, status] : change.jobs) store_.update_job(job_row(status));
+  for (const auto& [job, status] : change.jobs) rows->jobs.push_back(job_row(status));
   for (const auto& [key, tile] : change.tiles) {
     const auto& [job, index] = key;
     const TileSlot& was = job->tiles[index];
     if (tile.attempts != was.attempts || tile.last_error != was.last_error)
-      store_.put_tile_failure({job->status.id, index, tile.attempts, tile.last_error});
+      rows->failures.push_back({job->status.id, index, tile.attempts, tile.last_error});
     if (tile.lease_id != was.lease_id) {
       if (!was.lease_id.empty()) {
         LeaseMoves& moves = leases[was.lease_id];
@@ -91,18 +118,26 @@ void Scheduler::write(const StagedChange& change) {
     }
     row.tiles.insert(row.tiles.end(), moves.joined.begin(), moves.joined.end());
     if (row.tiles.empty())
-      store_.delete_lease(lease_id);
+      rows->leases_ended.push_back(lease_id);
     else
-      store_.put_lease(row);
+      rows->leases.push_back(std::move(row));
   }
   for (auto& [key, upload] : uploads) {
     upload.row.job_id = key.first->status.id;
     upload.row.lease_id = key.second;
-    store_.insert_result(upload.row, upload.pixels);
+    rows->uploads.push_back(std::move(upload));
   }
-  for (const std::int64_t id : change.forgotten_results) store_.delete_result(id);
-  for (const auto& [worker, staged] : change.workers) store_.upsert_worker(worker_row(staged));
-  tx.commit();
+  rows->forgotten_results = change.forgotten_results;
+  for (const auto& [worker, staged] : change.workers) rows->workers.push_back(worker_row(staged));
+  return [rows](Store& store) {
+    for (const JobRow& job : rows->jobs) store.update_job(job);
+    for (const TileFailureRow& failure : rows->failures) store.put_tile_failure(failure);
+    for (const LeaseRow& lease : rows->leases) store.put_lease(lease);
+    for (const std::string& lease_id : rows->leases_ended) store.delete_lease(lease_id);
+    for (const Upload& upload : rows->uploads) store.insert_result(upload.row, upload.pixels);
+    for (const std::int64_t id : rows->forgotten_results) store.delete_result(id);
+    for (const WorkerRow& worker : rows->workers) store.upsert_worker(worker);
+  };
 }
 
 void Scheduler::apply(StagedChange& change) {
@@ -139,10 +174,9 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   job.status = std::move(updated);
   if (!is_finished(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
-  else if (!was_finished) {
+  else if (!was_finished && job.status.state != JobState::completed) {
     // A canceled or failed job's partial image is read from the store from now on.
-    if (job.status.state != JobState::completed) job.canvas.reset();
-    for (const auto& callback : finished_callbacks_) callback();
+    job.canvas.reset();
   }
 }
 

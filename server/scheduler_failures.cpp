@@ -57,16 +57,27 @@ void Scheduler::fail_stalled_locked(std::int64_t now, StagedChange& change) {
 
 void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {
   spdlog::error("job {}: {}", job.status.id, error);
-  if (is_finished(job.status.state)) return;
+  if (job.status.state == JobState::failed || job.status.state == JobState::canceled) return;
   StagedChange change;
-  stage_job_failure(change, job, error);
-  try {
-    write(change);
-  } catch (const std::exception& e) {
-    spdlog::error("job {}: the failure could not be stored either ({}); it is kept in memory",
-                  job.status.id, e.what());
+  if (job.status.state == JobState::completed) {
+    // Its last tiles were refused after it was marked completed in memory.
+    JobStatus& status = change.job(job);
+    status.state = JobState::failed;
+    status.error = error;
+  } else {
+    stage_job_failure(change, job, error);
   }
+  StoreThread::Work work = record(change);
   apply(change);
+  // Not through commit(): a refusal of this write must not fail the job again.
+  const StoreTicket ticket = queue_write(std::move(work));
+  store_thread_.after(
+      ticket, [id = job.status.id, callbacks = finished_callbacks_](const std::string& refused) {
+        if (!refused.empty())
+          spdlog::error("job {}: the failure could not be stored either ({}); it is kept in memory",
+                        id, refused);
+        for (const auto& callback : callbacks) callback();
+      });
 }
 
 bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {
@@ -83,14 +94,18 @@ bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {
   return false;
 }
 
-void Scheduler::fail_tile(const std::string& lease_id, int tile_index, const std::string& error) {
+Written Scheduler::fail_tile(const std::string& lease_id, int tile_index,
+                             const std::string& error) {
   Callbacks notify;
+  Written result;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
     const auto it = leases_.find(lease_id);
-    if (it == leases_.end()) return;
+    if (it == leases_.end()) return pending(std::monostate{}, before);
     const std::vector<int>& live = it->second.live;
-    if (std::find(live.begin(), live.end(), tile_index) == live.end()) return;
+    if (std::find(live.begin(), live.end(), tile_index) == live.end())
+      return pending(std::monostate{}, before);
     JobEntry& job = *jobs_.at(it->second.job_id);
     const WorkerEntry* worker = find_worker(job.tiles[tile_index].worker_id);
     StagedChange change;
@@ -98,8 +113,10 @@ void Scheduler::fail_tile(const std::string& lease_id, int tile_index, const std
     stage_tile_failure(change, job, tile_index, worker, error);
     commit(change);
     notify = callbacks_;
+    result = pending(std::monostate{}, before);
   }
   for (const auto& callback : notify) callback();
+  return result;
 }
 
 }  // namespace tessera

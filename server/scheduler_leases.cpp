@@ -45,13 +45,15 @@ int Scheduler::batch_size(const JobEntry& job, int max_tiles) const {
   return std::clamp(share, 1, std::min(max_tiles, pending));
 }
 
-std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tiles) {
+Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int max_tiles) {
   Callbacks notify;
-  std::optional<Lease> result;
+  Pending<std::optional<Lease>> answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
+    std::optional<Lease> result;
     WorkerEntry* worker = find_worker(worker_id);
-    if (!worker) return std::nullopt;
+    if (!worker) return pending(result, before);
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
 
@@ -109,9 +111,10 @@ std::optional<Lease> Scheduler::claim(const std::string& worker_id, int max_tile
         if (chosen) result = lease_of(worker->lease_id);
       }
     }
+    answer = pending(std::move(result), before);
   }
   for (const auto& callback : notify) callback();
-  return result;
+  return answer;
 }
 
 JobEntry* Scheduler::next_job_for(const WorkerEntry& worker) const {
@@ -144,11 +147,13 @@ std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
   return batch;
 }
 
-std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tiles) {
+Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int max_tiles) {
   Callbacks notify;
-  std::optional<Lease> result;
+  Pending<std::optional<Lease>> answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
+    std::optional<Lease> result;
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
     const auto it = leases_.find(lease_id);
@@ -177,18 +182,21 @@ std::optional<Lease> Scheduler::extend(const std::string& lease_id, int max_tile
       for (const int index : added) lease.tiles.push_back({index, job.tiles[index].rect});
       result = std::move(lease);
     }
+    answer = pending(std::move(result), before);
   }
   for (const auto& callback : notify) callback();
-  return result;
+  return answer;
 }
 
-std::optional<Lease> Scheduler::heartbeat(const std::string& lease_id) {
+Pending<std::optional<Lease>> Scheduler::heartbeat(const std::string& lease_id) {
   Callbacks notify;
-  std::optional<Lease> result;
+  Pending<std::optional<Lease>> answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
+    std::optional<Lease> result;
     const auto it = leases_.find(lease_id);
-    if (it == leases_.end() || it->second.live.empty()) return std::nullopt;
+    if (it == leases_.end() || it->second.live.empty()) return pending(result, before);
     const std::vector<int> live = it->second.live;  // commit() rewrites the index
     JobEntry& job = *jobs_.at(it->second.job_id);
     const TileSlot& first = job.tiles[live.front()];
@@ -204,29 +212,36 @@ std::optional<Lease> Scheduler::heartbeat(const std::string& lease_id) {
       if (WorkerEntry* worker = find_worker(first.worker_id)) note_seen(*worker, now);
       result = lease_of(lease_id);
     }
+    answer = pending(std::move(result), before);
   }
   for (const auto& callback : notify) callback();
-  return result;
+  return answer;
 }
 
-void Scheduler::release(const std::string& lease_id) {
+Written Scheduler::release(const std::string& lease_id) {
   Callbacks notify;
+  Written answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
     const auto it = leases_.find(lease_id);
-    if (it == leases_.end() || it->second.live.empty()) return;
+    if (it == leases_.end() || it->second.live.empty()) return pending(std::monostate{}, before);
     StagedChange change;
     stage_lease_end(change, lease_id, false);
     commit(change);
     notify = callbacks_;
+    answer = pending(std::monostate{}, before);
   }
   for (const auto& callback : notify) callback();
+  return answer;
 }
 
-void Scheduler::expire_leases() {
+Written Scheduler::expire_leases() {
   Callbacks notify;
+  Written answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
     StagedChange change;
@@ -235,8 +250,10 @@ void Scheduler::expire_leases() {
       commit(change);
       notify = callbacks_;
     }
+    answer = pending(std::monostate{}, before);
   }
   for (const auto& callback : notify) callback();
+  return answer;
 }
 
 bool Scheduler::expire_locked(std::int64_t now) {

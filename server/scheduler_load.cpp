@@ -55,7 +55,11 @@ void Scheduler::load_and_reconcile() {
   // Written by the image thread, once it starts.
   for (JobEntry* job : needs_image)
     if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
-  store_.prune_pixels([this](const std::string& job_id) { return find_job(job_id) != nullptr; });
+  std::set<std::string> kept;
+  for (const auto& [id, job] : jobs_) kept.insert(id);
+  queue_write([kept = std::move(kept)](Store& store) {
+    store.prune_pixels([&](const std::string& job_id) { return kept.contains(job_id); });
+  });
   images_.prune([this](const std::string& job_id) {
     const JobEntry* job = find_job(job_id);
     return job && job->status.state == JobState::completed;

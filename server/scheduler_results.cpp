@@ -27,15 +27,17 @@ std::optional<std::vector<TileResult>> slice_upload(std::span<const float> pixel
   return results;
 }
 
-ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const float> pixels,
-                                  std::uint64_t rays) {
+Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
+                                           std::span<const float> pixels, std::uint64_t rays) {
   std::vector<TileResult> results;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
     const auto it = leases_.find(lease_id);
-    if (it == leases_.end()) return ResultOutcome::stale;
+    if (it == leases_.end()) return pending(ResultOutcome::stale, before);
     if (it->second.live.empty())
-      return it->second.delivered == 0 ? ResultOutcome::stale : ResultOutcome::duplicate;
+      return pending(it->second.delivered == 0 ? ResultOutcome::stale : ResultOutcome::duplicate,
+                     before);
     std::vector<int> tiles;
     std::vector<std::size_t> counts;
     for (const LeaseTile& tile : lease_of(lease_id).tiles) {
@@ -45,50 +47,62 @@ ResultOutcome Scheduler::complete(const std::string& lease_id, std::span<const f
     std::vector<std::uint64_t> rays_each(tiles.size(), 0);
     rays_each.front() = rays;  // the count is the whole upload's, kept on its first tile
     auto sliced = slice_upload(pixels, tiles, counts, rays_each);
-    if (!sliced) return ResultOutcome::wrong_size;
+    if (!sliced) return pending(ResultOutcome::wrong_size, before);
     results = std::move(*sliced);
   }
   // Checked again under the lock: the lease may have moved on in between.
   return complete(lease_id, results);
 }
 
-ResultOutcome Scheduler::complete(const std::string& lease_id,
-                                  std::span<const TileResult> results) {
-  std::unique_lock lock(mutex_);
+Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
+                                           std::span<const TileResult> results) {
+  std::lock_guard lock(mutex_);
+  const StoreTicket before = last_write_;
   const auto it = leases_.find(lease_id);
-  if (it == leases_.end()) return ResultOutcome::stale;
+  if (it == leases_.end()) return pending(ResultOutcome::stale, before);
   const std::vector<int> live = it->second.live;  // commit() rewrites the index
   JobEntry& job = *jobs_.at(it->second.job_id);
 
   std::set<int> named;
   const auto checked = fresh_results(job, lease_id, live, results, named);
-  if (const auto* refused = std::get_if<ResultOutcome>(&checked)) return *refused;
+  if (const auto* refused = std::get_if<ResultOutcome>(&checked)) return pending(*refused, before);
   const auto& fresh = std::get<std::vector<const TileResult*>>(checked);
 
   StagedChange change;
   const bool job_done = stage_results(change, job, lease_id, fresh, live, named);
-  try {
-    write(change);
-  } catch (const std::exception& e) {
-    fail_unstorable(job, "cannot store the result of tile " +
-                             std::to_string(fresh.front()->tile_index) + ": " + e.what());
-    return ResultOutcome::unstored;
-  }
-  apply(change);
-  // Without a canvas (the job's first result, or the first since a restart), these tiles
-  // are only stored: the canvas, made next, starts from the store.
-  if (job.canvas)
-    for (const TileResult* result : fresh)
-      job.canvas->paste(job.tiles[result->tile_index].rect, result->pixels);
-  // Should the write fail or the process die, the tiles are stored and a restart writes
-  // the image again.
-  if (job_done) {
-    images_to_write_.push_back(job.status.id);
+  const StoreTicket ticket =
+      commit(change, "the result of tile " + std::to_string(fresh.front()->tile_index));
+  std::vector<std::pair<int, std::span<const float>>> tiles;
+  for (const TileResult* result : fresh) tiles.emplace_back(result->tile_index, result->pixels);
+  store_thread_.after(ticket, [this, id = job.status.id, tiles = std::move(tiles),
+                               job_done](const std::string& error) {
+    if (error.empty()) note_stored(id, tiles, job_done);
+  });
+  return pending(ResultOutcome::accepted, before);
+}
+
+void Scheduler::note_stored(const std::string& job_id,
+                            const std::vector<std::pair<int, std::span<const float>>>& tiles,
+                            bool job_done) {
+  std::lock_guard lock(mutex_);
+  JobEntry* job = find_job(job_id);
+  if (!job) return;
+  if (job->canvas) {
+    for (const auto& [index, pixels] : tiles) job->canvas->paste(job->tiles[index].rect, pixels);
+  } else if (!job->canvas_coming && !job_done && !is_finished(job->status.state)) {
+    // The job's first result, or the first since a restart: these tiles are only stored,
+    // and the canvas, made next, starts from the store. The last result needs none: the
+    // image thread assembles from the store.
+    job->canvas_coming = true;
+    canvases_to_make_.emplace_back(job_id, job->status.width, job->status.height);
     images_changed_.notify_all();
   }
-  // The job's last result needs none: the image thread assembles from the store.
-  if (!job.canvas && !job_done) make_canvas(lock, job.status.id);
-  return ResultOutcome::accepted;
+  // Should the image's write fail or the process die, the tiles are stored and a restart
+  // writes the image again.
+  if (job_done && job->status.state == JobState::completed) {
+    images_to_write_.push_back(job_id);
+    images_changed_.notify_all();
+  }
 }
 
 std::variant<ResultOutcome, std::vector<const TileResult*>> Scheduler::fresh_results(

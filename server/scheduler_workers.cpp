@@ -16,9 +16,10 @@ constexpr std::int64_t seen_write_interval_ms = 1000;
 
 }  // namespace
 
-WorkerInfo Scheduler::register_worker(const std::string& name, const std::string& host,
-                                      int threads) {
+Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const std::string& host,
+                                               int threads) {
   std::lock_guard lock(mutex_);
+  const StoreTicket before = last_write_;
   auto worker = std::make_unique<WorkerEntry>();
   WorkerInfo& info = worker->info;
   do {
@@ -29,13 +30,13 @@ WorkerInfo Scheduler::register_worker(const std::string& name, const std::string
   info.threads = threads;
   info.state = worker_idle;
   info.last_seen_ms = clock_.now_ms();
-  store_.upsert_worker(worker_row(*worker));
+  queue_write([row = worker_row(*worker)](Store& store) { store.upsert_worker(row); });
   worker->persisted_seen_ms = info.last_seen_ms;
   const WorkerInfo result = info;
   workers_.emplace(result.id, std::move(worker));
   ++present_workers_;
   spdlog::info("worker {} joined: {} on {}, {} thread(s)", result.id, name, host, threads);
-  return result;
+  return pending(result, before);
 }
 
 bool Scheduler::worker_known(const std::string& worker_id) const {
@@ -43,14 +44,15 @@ bool Scheduler::worker_known(const std::string& worker_id) const {
   return workers_.contains(worker_id);
 }
 
-void Scheduler::touch_worker(const std::string& worker_id) {
+Written Scheduler::touch_worker(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
+  const StoreTicket before = last_write_;
   WorkerEntry* worker = find_worker(worker_id);
-  if (!worker) return;
+  if (!worker) return pending(std::monostate{}, before);
   const std::int64_t now = clock_.now_ms();
   if (worker->info.state != worker_gone) {
     note_seen(*worker, now);
-    return;
+    return pending(std::monostate{}, before);
   }
   // Marked gone (it left, or the coordinator restarted) but talking again.
   StagedChange change;
@@ -58,14 +60,17 @@ void Scheduler::touch_worker(const std::string& worker_id) {
   staged.info.state = worker_idle;
   staged.info.last_seen_ms = now;
   commit(change);
+  return pending(std::monostate{}, before);
 }
 
-void Scheduler::worker_left(const std::string& worker_id) {
+Written Scheduler::worker_left(const std::string& worker_id) {
   Callbacks notify;
+  Written answer;
   {
     std::lock_guard lock(mutex_);
+    const StoreTicket before = last_write_;
     WorkerEntry* worker = find_worker(worker_id);
-    if (!worker) return;
+    if (!worker) return pending(std::monostate{}, before);
     StagedChange change;
     if (!worker->lease_id.empty()) {
       stage_lease_end(change, worker->lease_id, false);
@@ -76,8 +81,10 @@ void Scheduler::worker_left(const std::string& worker_id) {
     staged.info.last_seen_ms = clock_.now_ms();
     commit(change);
     spdlog::info("worker {} ({}) left", worker_id, worker->info.name);
+    answer = pending(std::monostate{}, before);
   }
   for (const auto& callback : notify) callback();
+  return answer;
 }
 
 std::vector<WorkerInfo> Scheduler::workers() const {
@@ -104,7 +111,7 @@ void Scheduler::on_job_finished(std::function<void()> callback) {
 void Scheduler::note_seen(WorkerEntry& worker, std::int64_t now) {
   worker.info.last_seen_ms = now;
   if (now - worker.persisted_seen_ms < seen_write_interval_ms) return;
-  store_.update_worker_seen(worker.info.id, now);
+  queue_write([id = worker.info.id, now](Store& store) { store.update_worker_seen(id, now); });
   worker.persisted_seen_ms = now;
 }
 

@@ -16,6 +16,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <boost/asio/thread_pool.hpp>
 
 #include "common/image_io.hpp"
 #include "common/secret.hpp"
@@ -162,6 +163,12 @@ int run(const ServerOptions& options) {
                      options.limits,
                      options.max_job_bytes,
                      std::filesystem::path(options.data_dir) / "tmp"};
+  // Downloads are encoded here, so that neither the network's threads nor the store
+  // thread wait for an image to be written.
+  boost::asio::thread_pool encoders(1);
+  context.run_blocking = [&encoders](std::function<void()> work) {
+    boost::asio::post(encoders, std::move(work));
+  };
   add_health_routes(router, &readiness);
   add_job_routes(router, context);
   add_worker_routes(router, context);
@@ -209,6 +216,7 @@ int run(const ServerOptions& options) {
   io.run();
   for (auto& thread : threads) thread.join();
   if (stopper.joinable()) stopper.join();
+  encoders.join();
   spdlog::info("stopped");
   return 0;
 }

@@ -1,7 +1,7 @@
 // The coordinator's durable state: one SQLite database (WAL) and the finished images,
 // both under one data directory. Rows mirror the Scheduler's records; states are stored
 // as the words the Scheduler uses, so that the database reads well with the sqlite3 tool.
-// Not thread-safe: the Scheduler calls it under its lock.
+// Not thread-safe: once the coordinator serves, only its store thread (StoreThread) calls it.
 #pragma once
 
 #include <cstdint>

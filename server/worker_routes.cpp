@@ -12,9 +12,9 @@ namespace {
 
 namespace route = protocol::route;
 
-HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
+void register_worker(ApiContext& context, const HttpRequest& request, Respond respond) {
   auto parsed = json_body(request);
-  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return std::move(*refused);
+  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return respond(std::move(*refused));
   protocol::WorkerRegistration registration;
   try {
     registration =
@@ -23,20 +23,24 @@ HttpResponse register_worker(ApiContext& context, const HttpRequest& request) {
     // A worker of another protocol version would misread what this coordinator states (or
     // state nothing, like the builds before version 2): refused here, plainly, rather than
     // meeting later as results refused one by one.
-    return error_response(409, "protocol_mismatch", e.message(), e.pointer());
+    return respond(error_response(409, "protocol_mismatch", e.message(), e.pointer()));
   } catch (const protocol::ProtocolError& e) {
-    return invalid_request(e);
+    return respond(invalid_request(e));
   }
   // The peer's address without its port: "10.0.0.7:51234" -> "10.0.0.7".
   const std::string host = registration.host.value_or(
       request.remote_address.substr(0, request.remote_address.rfind(':')));
-  const WorkerInfo worker =
-      context.scheduler.register_worker(registration.name, host, registration.threads.value_or(1));
-  const SchedulerConfig& config = context.scheduler.config();
-  return body_response(201,
-                       protocol::Registration{worker.id, config.heartbeat_interval_ms / 1e3,
-                                              config.lease_timeout_ms / 1e3, kWorkerProtocolVersion,
-                                              protocol_limits(context)});
+  respond_when_stored(
+      context.scheduler,
+      context.scheduler.register_worker(registration.name, host, registration.threads.value_or(1)),
+      std::move(respond), [&context](const WorkerInfo& worker, const std::string& error) {
+        if (!error.empty()) return storage_failed("the worker", error);
+        const SchedulerConfig& config = context.scheduler.config();
+        return body_response(
+            201, protocol::Registration{worker.id, config.heartbeat_interval_ms / 1e3,
+                                        config.lease_timeout_ms / 1e3, kWorkerProtocolVersion,
+                                        protocol_limits(context)});
+      });
 }
 
 void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
@@ -55,18 +59,15 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   context.claims.wait(
       *wait,
       [&context, worker, max_tiles, shared_respond] {
-        std::optional<Lease> lease;
-        try {
-          lease = context.scheduler.claim(worker, max_tiles);
-        } catch (const std::exception& e) {
-          // The store refused the lease (a full disk, say); the job has failed and says why.
-          // Answered here, since a claim woken by notify() runs where nothing would catch it.
-          (*shared_respond)(error_response(507, "storage_failed",
-                                           std::string("cannot store the lease: ") + e.what()));
-          return true;
-        }
-        if (!lease) return false;
-        (*shared_respond)(body_response(200, lease_of(*lease, context.clock.now_ms())));
+        auto lease = context.scheduler.claim(worker, max_tiles);
+        if (!lease.value) return false;
+        respond_when_stored(
+            context.scheduler, std::move(lease), *shared_respond,
+            [&context](const std::optional<Lease>& granted, const std::string& error) {
+              // The store refused the lease (a full disk, say); the job has failed and says why.
+              if (!error.empty()) return storage_failed("the lease", error);
+              return body_response(200, lease_of(*granted, context.clock.now_ms()));
+            });
         return true;
       },
       [shared_respond] {
@@ -83,13 +84,13 @@ void add_worker_routes(Router& router, ApiContext& context) {
         protocol::WorkerList list;
         for (const WorkerInfo& worker : context.scheduler.workers())
           list.workers.push_back(worker_of(worker));
-        respond(body_response(200, list));
+        respond_durable(context.scheduler, std::move(respond), body_response(200, list));
       },
       std::nullopt, role_client);
   router.add(
       "POST", std::string(route::workers),
       [&context](HttpRequest&& request, Respond respond) {
-        respond(register_worker(context, request));
+        register_worker(context, request, std::move(respond));
       },
       std::nullopt, role_worker);
   router.add(
@@ -98,8 +99,11 @@ void add_worker_routes(Router& router, ApiContext& context) {
         const std::string& id = request.params.at("id");
         if (!context.scheduler.worker_known(id))
           return respond(error_response(404, "unknown_worker", "no worker " + id));
-        context.scheduler.worker_left(id);
-        respond(HttpResponse{204, "", "", {}});
+        respond_when_stored(context.scheduler, context.scheduler.worker_left(id),
+                            std::move(respond), [](std::monostate, const std::string& error) {
+                              return error.empty() ? HttpResponse{204, "", "", {}}
+                                                   : storage_failed("the departure", error);
+                            });
       },
       std::nullopt, role_worker);
   router.add(

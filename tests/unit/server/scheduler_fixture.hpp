@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "server/scheduler.hpp"
+#include "tests/unit/server/blocking_scheduler.hpp"
 
 namespace tessera::test {
 
@@ -95,7 +96,7 @@ class SchedulerTest : public ::testing::Test {
     open();
   }
 
-  Scheduler& s() { return *scheduler_; }
+  BlockingScheduler& s() { return blocking_; }
   std::string worker(const std::string& name = "w") {
     return s().register_worker(name, "host", 4).id;
   }
@@ -138,6 +139,7 @@ class SchedulerTest : public ::testing::Test {
   ManualClock clock_;
   std::unique_ptr<Store> store_;
   std::unique_ptr<Scheduler> scheduler_;
+  BlockingScheduler blocking_{scheduler_};
 };
 
 }  // namespace tessera::test

@@ -1,0 +1,177 @@
+#include "server/store_thread.hpp"
+
+#include <exception>
+#include <future>
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
+
+namespace tessera {
+namespace {
+
+// Enough for any callback given right after its write was queued; older errors are
+// forgotten so that a long run of refusals (a disk that stays full) costs bounded memory.
+constexpr std::size_t kRefusalsKept = 4096;
+
+std::string error_of(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown error";
+  }
+}
+
+}  // namespace
+
+StoreThread::StoreThread(Store& store) : store_(store), thread_([this] { run(); }) {}
+
+StoreThread::~StoreThread() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  queued_.notify_all();
+  thread_.join();
+}
+
+StoreTicket StoreThread::write(Work work) {
+  std::lock_guard lock(mutex_);
+  queue_.push_back({++last_, std::move(work)});
+  queued_.notify_one();
+  return last_;
+}
+
+StoreTicket StoreThread::last() const {
+  std::lock_guard lock(mutex_);
+  return last_;
+}
+
+void StoreThread::after(StoreTicket ticket, Done done) {
+  std::lock_guard lock(mutex_);
+  if (ticket > finished_at_) {
+    waiting_.emplace(ticket, std::move(done));
+    return;
+  }
+  // Told already: told again on the store thread, never here, since the caller may hold a
+  // lock that the callback takes.
+  const auto it = refused_.find(ticket);
+  queue_.push_back({0, [error = it == refused_.end() ? std::string() : it->second,
+                        done = std::move(done)](Store&) { done(error); }});
+  queued_.notify_one();
+}
+
+std::string StoreThread::wait(StoreTicket ticket) {
+  // As a callback of its own, so that it returns after every callback given before it.
+  std::promise<std::string> told;
+  after(ticket, [&](const std::string& error) { told.set_value(error); });
+  return told.get_future().get();
+}
+
+void StoreThread::read(Work work) {
+  std::lock_guard lock(mutex_);
+  queue_.push_back({0, std::move(work)});
+  queued_.notify_one();
+}
+
+void StoreThread::call(const Work& work) {
+  std::promise<void> finished;
+  read([&](Store& store) {
+    try {
+      work(store);
+      finished.set_value();
+    } catch (...) {
+      finished.set_exception(std::current_exception());
+    }
+  });
+  finished.get_future().get();
+}
+
+std::uint64_t StoreThread::transactions() const {
+  std::lock_guard lock(mutex_);
+  return transactions_;
+}
+
+void StoreThread::run() {
+  std::unique_lock lock(mutex_);
+  while (true) {
+    queued_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // stopping, and everything queued is done
+    std::vector<Item> items(std::make_move_iterator(queue_.begin()),
+                            std::make_move_iterator(queue_.end()));
+    queue_.clear();
+    lock.unlock();
+
+    const std::size_t committed_before = transactions_committed_;
+    std::map<StoreTicket, std::string> refused = commit(items);
+    // Reads after the writes queued with them: a read sees at least what was queued before.
+    for (Item& item : items) {
+      if (item.ticket != 0) continue;
+      try {
+        item.work(store_);
+      } catch (const std::exception& e) {
+        spdlog::error("reading the store: {}", e.what());
+      }
+    }
+    StoreTicket newest = 0;
+    for (const Item& item : items) newest = std::max(newest, item.ticket);
+
+    lock.lock();
+    transactions_ += transactions_committed_ - committed_before;
+    for (const auto& [ticket, error] : refused) refused_[ticket] = error;
+    while (refused_.size() > kRefusalsKept) refused_.erase(refused_.begin());
+    if (newest == 0) continue;
+    // Tickets are told in order, each ticket's callbacks in the order given. A callback
+    // may queue more work, or give more callbacks (for later tickets); it runs unlocked.
+    while (!waiting_.empty() && waiting_.begin()->first <= newest) {
+      auto node = waiting_.extract(waiting_.begin());
+      const auto it = refused.find(node.key());
+      const std::string error = it == refused.end() ? std::string() : it->second;
+      lock.unlock();
+      try {
+        node.mapped()(error);
+      } catch (const std::exception& e) {
+        spdlog::error("after a store write: {}", e.what());
+      }
+      lock.lock();
+    }
+    finished_at_ = newest;
+  }
+}
+
+std::map<StoreTicket, std::string> StoreThread::commit(std::vector<Item>& items) {
+  std::map<StoreTicket, std::string> refused;
+  std::size_t writes = 0;
+  for (const Item& item : items) writes += item.ticket != 0;
+  if (writes == 0) return refused;
+  try {
+    Transaction tx = store_.transaction();
+    for (Item& item : items)
+      if (item.ticket != 0) item.work(store_);
+    tx.commit();
+    ++transactions_committed_;
+    return refused;
+  } catch (const std::exception& e) {
+    if (writes == 1) {
+      for (const Item& item : items)
+        if (item.ticket != 0) refused[item.ticket] = e.what();
+      return refused;
+    }
+  }
+  // One of them spoiled the group: each alone, so that only what the store refuses fails.
+  for (Item& item : items) {
+    if (item.ticket == 0) continue;
+    try {
+      Transaction tx = store_.transaction();
+      item.work(store_);
+      tx.commit();
+      ++transactions_committed_;
+    } catch (...) {
+      refused[item.ticket] = error_of(std::current_exception());
+    }
+  }
+  return refused;
+}
+
+}  // namespace tessera

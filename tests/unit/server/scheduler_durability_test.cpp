@@ -1,0 +1,64 @@
+// The Scheduler answers at once, in memory, but its caller may give the answer only once
+// when_stored() says so: by then, what the answer reports is in the database, as another
+// connection (the next coordinator's) reads it.
+#include <future>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server/sqlite_db.hpp"
+#include "tests/unit/server/scheduler_fixture.hpp"
+
+namespace tessera {
+namespace {
+
+using test::SchedulerTest;
+
+class SchedulerDurabilityTest : public SchedulerTest {
+ protected:
+  // Counts `table`'s rows from a connection of its own when `pending` may be answered.
+  template <class T>
+  std::string rows_when_stored(const Pending<T>& pending, const std::string& table) {
+    std::promise<std::string> rows;
+    scheduler_->when_stored(pending, [&](const std::string& error) {
+      rows.set_value(error.empty() ? SqliteDb(store_->data_dir() / "tessera.db")
+                                         .query_text("SELECT count(*) FROM " + table)
+                                   : "refused: " + error);
+    });
+    return rows.get_future().get();
+  }
+};
+
+TEST_F(SchedulerDurabilityTest, ALeaseAndAResultAreInTheDatabaseBeforeTheyAreAnswered) {
+  const std::string job = submit(64, 32, 32).id;  // 2 tiles
+  const std::string w = worker();
+  for (int round = 1; round <= 2; ++round) {
+    const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+    ASSERT_TRUE(claimed.value);
+    EXPECT_TRUE(claimed.wrote);
+    EXPECT_EQ(rows_when_stored(claimed, "leases"), "1");
+    const std::vector<float> pixels = test::tile_pixels(claimed.value->tiles[0].rect, 0.0f);
+    const Pending<ResultOutcome> result = scheduler_->complete(claimed.value->id, pixels, 10);
+    ASSERT_EQ(result.value, ResultOutcome::accepted);
+    EXPECT_EQ(rows_when_stored(result, "results"), std::to_string(round));
+  }
+  EXPECT_EQ(s().job(job)->state, JobState::completed);
+}
+
+TEST_F(SchedulerDurabilityTest, AnAnswerThatChangedNothingWaitsForWhatItReports) {
+  // A status read from memory may show a change still queued; Scheduler::durable() is
+  // given once that change is stored.
+  const std::string job = submit(32, 32, 32).id;
+  const std::string w = worker();
+  const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+  ASSERT_TRUE(claimed.value);
+  const Written now = scheduler_->durable();
+  EXPECT_FALSE(now.wrote);
+  EXPECT_GE(now.ticket, claimed.ticket);
+  EXPECT_EQ(rows_when_stored(now, "leases"), "1");
+  EXPECT_EQ(s().job(job)->tiles_rendering, 1);
+}
+
+}  // namespace
+}  // namespace tessera
