@@ -1,7 +1,7 @@
 // The Scheduler's job side: submitting, listing, canceling, removing and assembling jobs.
 // Leases are in scheduler_leases.cpp, workers in scheduler_workers.cpp, start-up in
-// scheduler_load.cpp, images in scheduler_images.cpp and the bookkeeping every change goes
-// through in scheduler_commit.cpp.
+// scheduler_load.cpp and the bookkeeping every change goes through in scheduler_commit.cpp;
+// images are ImageAssembly's.
 #include <spdlog/spdlog.h>
 
 #include "server/scheduler.hpp"
@@ -20,10 +20,13 @@ namespace tessera {
 
 Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
     : store_(store),
-      images_(store.data_dir()),
       clock_(clock),
       config_(config),
-      store_thread_(store) {
+      store_thread_(store),
+      images_(store.data_dir(), store_thread_,
+              [this](const std::string& id, const std::string& error) {
+                image_write_failed(id, error);
+              }) {
   StoreTicket loaded = 0;
   {
     // The store thread has nothing to do yet, so this thread may read the Store.
@@ -34,19 +37,12 @@ Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
   // What reconciling changed is durable before anyone is answered.
   if (const std::string error = store_thread_.wait(loaded); !error.empty())
     throw std::runtime_error("cannot store the state reconciled at start: " + error);
-  image_thread_ = std::thread([this] { write_images(); });
 }
 
 Scheduler::~Scheduler() {
-  // What is queued may queue images to write; the image thread then writes them, and may
-  // queue a job's failure, which the store thread's own destructor finishes.
+  // What is queued may queue images to write; images_, destroyed first, writes them, and
+  // may queue a job's failure, which the store thread's own destructor finishes.
   store_thread_.wait(store_thread_.last());
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  images_changed_.notify_all();
-  image_thread_.join();  // after the images still queued are written
 }
 
 void Scheduler::when_stored(StoreTicket ticket, bool wrote, StoreThread::Done done) {
@@ -83,6 +79,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       split_into_tiles(scene.width, scene.height, scene.render.tile_size);
   // Also outside: sorting a million tiles takes a while too.
   std::vector<int> order = centre_first_order(rects, scene.width, scene.height);
+  auto frame = std::make_shared<const Frame>(Frame{scene.width, scene.height, rects});
 
   auto job = std::make_shared<JobEntry>();
   JobStatus& s = job->status;
@@ -110,7 +107,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   }
   // Nothing can lease a tile of the job, nor list it, before it is stored: a job the store
   // refuses (a full disk, say) leaves nothing behind.
-  store_thread_.after(ticket, [this, job, order = std::move(order),
+  store_thread_.after(ticket, [this, job, order = std::move(order), frame = std::move(frame),
                                then = std::move(then)](const std::string& error) mutable {
     if (!error.empty()) {
       spdlog::error("job {} ({}): cannot store it: {}", job->status.id, job->status.name, error);
@@ -124,6 +121,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       JobEntry& entry =
           *jobs_.emplace(id, std::make_unique<JobEntry>(std::move(*job))).first->second;
       index_tiles(entry, std::move(order));
+      images_.add(id, std::move(frame));
       status = entry.status;
       notify = callbacks_;
     }
@@ -186,7 +184,7 @@ Pending<RemoveOutcome> Scheduler::remove(const std::string& id) {
   // After the job's rows: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served.
   store_thread_.after(ticket, [this, id](const std::string& error) {
-    if (error.empty()) images_.remove(id);
+    if (error.empty()) images_.removed(id);
   });
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);
@@ -198,6 +196,41 @@ void Scheduler::scene_json(const std::string& digest,
                            std::function<void(std::optional<std::string>)> then) const {
   store_thread_.read(
       [digest, then = std::move(then)](Store& store) { then(store.scene_json(digest)); });
+}
+
+void Scheduler::assemble(const std::string& id,
+                         std::function<void(std::shared_ptr<const Image>)> then) const {
+  images_.assemble(id, std::move(then));
+}
+
+std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
+  return images_.image_file(id);
+}
+
+void Scheduler::wait_for_images() {
+  // Completing writes hand their images over once durable.
+  store_thread_.wait(store_thread_.last());
+  images_.wait_for_images();
+}
+
+void Scheduler::image_write_failed(const std::string& id, const std::string& error) {
+  std::lock_guard lock(mutex_);
+  JobEntry* job = find_job(id);
+  if (!job || job->status.state != JobState::completed) return;
+  StagedChange change;
+  JobStatus& status = change.job(*job);
+  status.state = JobState::failed;
+  status.error = "cannot write the image: " + error;
+  commit(change);
+}
+
+void Scheduler::stop_notifying() {
+  {
+    std::lock_guard lock(mutex_);
+    callbacks_.clear();
+    finished_callbacks_.clear();
+  }
+  wait_for_images();
 }
 
 }  // namespace tessera

@@ -8,9 +8,7 @@
 // tile's lease (fencing), and only once.
 #pragma once
 
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -19,144 +17,20 @@
 #include <set>
 #include <span>
 #include <string>
-#include <thread>
 #include <tuple>
 #include <unordered_map>
 #include <variant>
 #include <vector>
 
 #include "common/image.hpp"
-#include "common/protocol/job_state.hpp"
-#include "common/protocol/limits.hpp"
 #include "common/scene.hpp"
 #include "server/clock.hpp"
-#include "server/image_files.hpp"
+#include "server/image_assembly.hpp"
+#include "server/scheduler_records.hpp"
 #include "server/store.hpp"
 #include "server/store_thread.hpp"
 
 namespace tessera {
-
-struct SchedulerConfig {
-  std::int64_t lease_timeout_ms = 30'000;      // a lease expires this long after its last heartbeat
-  std::int64_t heartbeat_interval_ms = 5'000;  // what workers are told to use
-  int max_tile_attempts = 3;                   // a tile that fails this often fails its job
-  // A worker that failed this often on a job gets no more of its tiles while another
-  // worker could take them.
-  int worker_failures_per_job = 2;
-  // The most tiles a lease may owe at once (ProtocolLimits::max_lease_tiles, stated to
-  // workers at registration): an extension adds no more than what keeps the lease within.
-  int max_lease_tiles = ProtocolLimits{}.max_lease_tiles;
-  // A tile handed out this often without its result being accepted fails its job: a worker
-  // whose results are refused, or that drops its lease and claims it back, would otherwise
-  // render the same tiles forever. Failures count against max_tile_attempts too; this
-  // catches the loops that no failure reports.
-  int max_tile_handouts = 10;
-  // A running job whose tiles are being rendered but of which no tile has been delivered
-  // for this long fails, saying so, instead of stalling unseen; 0: never.
-  std::int64_t stall_timeout_ms = 30 * 60 * 1000;
-};
-
-// Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
-// that renders the same tiles again and again, or delivers nothing, must be seen as such.
-// Kept in memory; tile_failures and last_problem are recounted from the stored tiles after
-// a restart.
-struct JobHealth {
-  int tile_failures = 0;    // failures charged to its tiles: expired leases, errors reported
-  int refused_results = 0;  // results the coordinator refused for a reason other than a lost lease
-  int repeated_handouts = 0;  // times one of its tiles went out again after going out before
-  std::string last_problem;   // the latest of those, in words; "" when none
-  // When a tile was last delivered, or rendering began (again) after none was under lease.
-  std::int64_t progress_at_ms = 0;
-};
-
-struct JobStatus {
-  std::string id;
-  std::string name;
-  JobState state = JobState::queued;
-  int priority = 50;
-  int width = 0;
-  int height = 0;
-  int tile_size = 0;
-  int tiles_total = 0;
-  int tiles_done = 0;
-  int tiles_rendering = 0;  // tiles under a live lease
-  std::int64_t created_at_ms = 0;
-  std::int64_t started_at_ms = 0;                         // 0: not started
-  std::int64_t finished_at_ms = 0;                        // 0: not finished
-  std::string error;                                      // set when failed
-  std::uint64_t rays = 0;                                 // summed over the tiles done
-  std::string scene_digest;                               // hex SHA-256 of the scene JSON as stored
-  OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
-  JobHealth health;  // in memory; only the Scheduler changes it, in place
-};
-
-struct WorkerInfo {
-  std::string id;
-  std::string name;
-  std::string host;
-  int threads = 0;
-  std::string state;        // "idle", "rendering", "gone"
-  std::string current_job;  // empty when idle
-  int current_tile = -1;
-  std::uint64_t tiles_rendered = 0;
-  std::int64_t last_seen_ms = 0;
-};
-
-struct LeaseTile {
-  int index = 0;
-  TileRect rect;
-};
-
-// A lease binds a batch of one or more tiles of one job to one worker. Its id is the
-// fencing token: a tile's pixels are accepted only under the lease it is currently bound
-// to. Tiles leave the lease one by one as their results arrive; the lease ends when none
-// is left, or all at once when it expires, is released or its job is canceled.
-struct Lease {
-  std::string id;  // unique per grant
-  std::string job_id;
-  std::string worker_id;
-  std::vector<LeaseTile> tiles;  // the tiles still owed, in hand-out order
-  std::string scene_digest;
-  std::int64_t expires_at_ms = 0;
-};
-
-// One tile's result within an upload.
-struct TileResult {
-  int tile_index = 0;
-  std::span<const float> pixels;  // float32 RGB, rows from the top
-  std::uint64_t rays = 0;
-};
-
-// An upload's body cut into its tiles, in order: pixel_counts[i] pixels of tiles[i], which
-// took rays[i] rays. Nothing when the pixels are not exactly those tiles. The one place an
-// upload is sliced, whether it names its tiles or sends every tile its lease owes.
-std::optional<std::vector<TileResult>> slice_upload(std::span<const float> pixels,
-                                                    std::span<const int> tiles,
-                                                    std::span<const std::size_t> pixel_counts,
-                                                    std::span<const std::uint64_t> rays);
-
-enum class ResultOutcome {
-  accepted,    // stored; the tiles are done (some may have been delivered already)
-  duplicate,   // every tile was already delivered under this lease; nothing changed
-  stale,       // the lease expired, was withdrawn or given to another worker; refused
-  wrong_size,  // pixel count does not match a tile; refused
-  wrong_tile,  // a tile that this lease never held, or named twice; refused
-  unstored,    // the store could not take the pixels (a full disk); the job has failed
-};
-
-// An answer known at once, to be given once the change it reports is durable
-// (Scheduler::when_stored). `ticket` is the last write queued when the answer was made:
-// its own when it wrote something (`wrote`), else the one that holds what it reports.
-template <class T>
-struct Pending {
-  T value{};
-  StoreTicket ticket = 0;
-  bool wrote = false;
-};
-using Written = Pending<std::monostate>;
-
-enum class CancelOutcome { canceled, not_found, already_finished };
-enum class RemoveOutcome { removed, not_found, not_finished };
 
 // Defined in server/scheduler_entries.hpp; only the scheduler's sources need them.
 struct JobEntry;
@@ -268,6 +142,9 @@ class Scheduler {
   // Called whenever a job has finished (completed, failed or canceled), once that is
   // durable, on the store thread: it is meant to post a wake-up elsewhere.
   void on_job_finished(std::function<void()> callback);
+  // Before what the callbacks use goes away (the server's long polls): drops them, then
+  // waits for the work still in flight to be done.
+  void stop_notifying();
 
  private:
   // The tiles bound to one lease id: live (still owed) and delivered (pixels stored).
@@ -302,24 +179,8 @@ class Scheduler {
   std::vector<JobEntry*> stage_job_states(StagedChange& change, std::int64_t now);
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
-  // On the store thread only, as every read of the Store.
-  Image assemble_locked(const JobEntry& job) const;
-  // Pastes every done tile's stored pixels into `image`; on the store thread only.
-  void paste_stored(Image& image, const JobEntry& job) const;
-  // After an upload's tiles are durable (on the store thread): pastes them into the job's
-  // canvas, asks for a canvas when it has none, and queues the image of a completed job.
-  void note_stored(const std::string& job_id,
-                   const std::vector<std::pair<int, std::span<const float>>>& tiles, bool job_done);
-  // The image thread zeroes a canvas (3 GiB for a 16384x16384 frame takes a second or
-  // more, which no request and no commit should wait out); the store thread then pastes
-  // what is stored into it and puts it in place, so that no durable tile is missed.
-  void make_canvas(const std::string& id, int width, int height,
-                   std::unique_lock<std::mutex>& lock);
-  void install_canvas(const std::string& id, const std::shared_ptr<Image>& canvas);
-  // The image thread: makes canvases, and writes each completed job's image file, off the
-  // path of the request that completed it, and fails a job whose image cannot be written.
-  void write_images();
-  void write_image(const std::string& id, std::unique_lock<std::mutex>& lock);
+  // The image thread could not write a completed job's image: the job fails.
+  void image_write_failed(const std::string& id, const std::string& error);
 
   // The one way state changes: apply `change` to memory and queue its write, recorded from
   // memory as it was before. Should the store refuse it, the change's jobs fail with "cannot
@@ -401,7 +262,6 @@ class Scheduler {
   void note_seen(WorkerEntry& worker, std::int64_t now);
 
   Store& store_;
-  ImageFiles images_;  // beside the store: the finished images
   const Clock& clock_;
   SchedulerConfig config_;
   mutable std::mutex mutex_;
@@ -419,15 +279,11 @@ class Scheduler {
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;
-  StoreTicket last_write_ = 0;               // the ticket of the last write queued by queue_write()
-  std::deque<std::string> images_to_write_;  // completed jobs, oldest first
-  std::deque<std::tuple<std::string, int, int>> canvases_to_make_;  // job id, width, height
-  bool writing_image_ = false;
-  bool stopping_ = false;
-  std::condition_variable images_changed_;
+  StoreTicket last_write_ = 0;  // the ticket of the last write queued by queue_write()
   // After what its callbacks use, so that it finishes them first when destroyed.
   mutable StoreThread store_thread_;
-  std::thread image_thread_;  // last: it starts once everything else exists
+  // After the store thread, which its image thread uses until it has stopped.
+  ImageAssembly images_;
 };
 
 }  // namespace tessera

@@ -2,6 +2,7 @@
 // the indexes (pending tiles, live leases, delivered leases, claimable jobs) that follow
 // every tile and job change.
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -47,33 +48,76 @@ StoreTicket Scheduler::queue_write(StoreThread::Work work) {
   return last_write_;
 }
 
-StoreThread::Work Scheduler::record(const StagedChange& change) const {
-  // What the store keeps of tiles is their leases, results and failures (see StoredState):
-  // the staged tiles are told apart by what changed in them, so that an operation writes
-  // one row per lease and per upload it touches, however many tiles those hold. The rows
-  // are made here, from memory as it is before the change; the store thread writes them.
-  struct LeaseMoves {
-    const JobEntry* job = nullptr;
-    std::string worker_id;  // of the tiles that join it
-    std::vector<int> joined;
-    std::vector<int> left;
-  };
+namespace {
+
+// What the store keeps of tiles is their leases, results and failures (see StoredState):
+// the rows one change writes, made under the lock from memory as it is before the change,
+// and written on the store thread.
+struct StoredRows {
   struct Upload {
     ResultRow row;
     std::vector<std::span<const float>> pixels;
   };
-  struct Rows {
-    std::vector<JobRow> jobs;
-    std::vector<TileFailureRow> failures;
-    std::vector<LeaseRow> leases;
-    std::vector<std::string> leases_ended;
-    std::vector<Upload> uploads;
-    std::vector<std::int64_t> forgotten_results;
-    std::vector<WorkerRow> workers;
-  };
-  auto rows = std::make_shared<Rows>();
+  std::vector<JobRow> jobs;
+  std::vector<TileFailureRow> failures;
+  std::vector<LeaseRow> leases;
+  std::vector<std::string> leases_ended;
+  std::vector<Upload> uploads;
+  std::vector<std::int64_t> forgotten_results;
+  std::vector<WorkerRow> workers;
+
+  void write(Store& store) const {
+    for (const JobRow& job : jobs) store.update_job(job);
+    for (const TileFailureRow& failure : failures) store.put_tile_failure(failure);
+    for (const LeaseRow& lease : leases) store.put_lease(lease);
+    for (const std::string& lease_id : leases_ended) store.delete_lease(lease_id);
+    for (const Upload& upload : uploads) store.insert_result(upload.row, upload.pixels);
+    for (const std::int64_t id : forgotten_results) store.delete_result(id);
+    for (const WorkerRow& worker : workers) store.upsert_worker(worker);
+  }
+};
+
+// The tiles that join and leave one lease in a change.
+struct LeaseMoves {
+  const JobEntry* job = nullptr;
+  std::string worker_id;  // of the tiles that join it
+  std::vector<int> joined;
+  std::vector<int> left;
+};
+
+// Each moved lease's row as it is after the change: its live tiles (`live_of`, before the
+// change) less those that left, and those that joined; none when it owes nothing more.
+void record_leases(std::map<std::string, LeaseMoves>& leases,
+                   const std::function<const std::vector<int>*(const std::string&)>& live_of,
+                   StoredRows& rows) {
+  for (auto& [lease_id, moves] : leases) {
+    LeaseRow row{lease_id, moves.job->status.id, moves.worker_id, {}};
+    // Sorted, so that the lease's live tiles (up to max_lease_tiles) are each looked up in
+    // it, not scanned against it, on every upload.
+    std::sort(moves.left.begin(), moves.left.end());
+    if (const std::vector<int>* live = live_of(lease_id)) {
+      for (const int index : *live) {
+        if (std::binary_search(moves.left.begin(), moves.left.end(), index)) continue;
+        row.tiles.push_back(index);
+        if (row.worker_id.empty()) row.worker_id = moves.job->tiles[index].worker_id;
+      }
+    }
+    row.tiles.insert(row.tiles.end(), moves.joined.begin(), moves.joined.end());
+    if (row.tiles.empty())
+      rows.leases_ended.push_back(lease_id);
+    else
+      rows.leases.push_back(std::move(row));
+  }
+}
+
+}  // namespace
+
+StoreThread::Work Scheduler::record(const StagedChange& change) const {
+  // The staged tiles are told apart by what changed in them, so that an operation writes
+  // one row per lease and per upload it touches, however many tiles those hold.
+  auto rows = std::make_shared<StoredRows>();
   std::map<std::string, LeaseMoves> leases;
-  std::map<std::pair<const JobEntry*, std::string>, Upload> uploads;  // by job and lease
+  std::map<std::pair<const JobEntry*, std::string>, StoredRows::Upload> uploads;  // job, lease
   for (const auto& [job, status] : change.jobs) rows->jobs.push_back(job_row(status));
   for (const auto& [key, tile] : change.tiles) {
     const auto& [job, index] = key;
@@ -97,31 +141,20 @@ StoreThread::Work Scheduler::record(const StagedChange& change) const {
       const auto pixels = change.pixels.find(key);
       if (pixels == change.pixels.end())
         throw std::logic_error("tile " + std::to_string(index) + " done without pixels");
-      Upload& upload = uploads[{job, tile.result_lease_id}];
+      StoredRows::Upload& upload = uploads[{job, tile.result_lease_id}];
       upload.row.tiles.push_back(index);
       upload.row.rays.push_back(tile.rays);
       upload.row.worker_id = tile.worker_id;
       upload.pixels.push_back(pixels->second);
     }
   }
-  for (auto& [lease_id, moves] : leases) {
-    LeaseRow row{lease_id, moves.job->status.id, moves.worker_id, {}};
-    // Sorted, so that the lease's live tiles (up to max_lease_tiles) are each looked up in
-    // it, not scanned against it, on every upload.
-    std::sort(moves.left.begin(), moves.left.end());
-    if (const auto it = leases_.find(lease_id); it != leases_.end()) {
-      for (const int index : it->second.live) {
-        if (std::binary_search(moves.left.begin(), moves.left.end(), index)) continue;
-        row.tiles.push_back(index);
-        if (row.worker_id.empty()) row.worker_id = moves.job->tiles[index].worker_id;
-      }
-    }
-    row.tiles.insert(row.tiles.end(), moves.joined.begin(), moves.joined.end());
-    if (row.tiles.empty())
-      rows->leases_ended.push_back(lease_id);
-    else
-      rows->leases.push_back(std::move(row));
-  }
+  record_leases(
+      leases,
+      [this](const std::string& lease_id) -> const std::vector<int>* {
+        const auto it = leases_.find(lease_id);
+        return it == leases_.end() ? nullptr : &it->second.live;
+      },
+      *rows);
   for (auto& [key, upload] : uploads) {
     upload.row.job_id = key.first->status.id;
     upload.row.lease_id = key.second;
@@ -129,15 +162,7 @@ StoreThread::Work Scheduler::record(const StagedChange& change) const {
   }
   rows->forgotten_results = change.forgotten_results;
   for (const auto& [worker, staged] : change.workers) rows->workers.push_back(worker_row(staged));
-  return [rows](Store& store) {
-    for (const JobRow& job : rows->jobs) store.update_job(job);
-    for (const TileFailureRow& failure : rows->failures) store.put_tile_failure(failure);
-    for (const LeaseRow& lease : rows->leases) store.put_lease(lease);
-    for (const std::string& lease_id : rows->leases_ended) store.delete_lease(lease_id);
-    for (const Upload& upload : rows->uploads) store.insert_result(upload.row, upload.pixels);
-    for (const std::int64_t id : rows->forgotten_results) store.delete_result(id);
-    for (const WorkerRow& worker : rows->workers) store.upsert_worker(worker);
-  };
+  return [rows](Store& store) { rows->write(store); };
 }
 
 void Scheduler::apply(StagedChange& change) {
@@ -155,7 +180,7 @@ void Scheduler::apply(StagedChange& change) {
 
 void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   const JobStatus& s = job.status;
-  const bool was_finished = is_finished(s.state);
+  const JobState was = s.state;
   // Every job state change passes here: one log line each.
   if (next.state != s.state) {
     if (next.error.empty())
@@ -174,10 +199,10 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   job.status = std::move(updated);
   if (!is_finished(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
-  else if (!was_finished && job.status.state != JobState::completed) {
-    // A canceled or failed job's partial image is read from the store from now on.
-    job.canvas.reset();
-  }
+  // A canceled or failed job's partial image is read from the store from now on.
+  if ((job.status.state == JobState::failed || job.status.state == JobState::canceled) &&
+      was != job.status.state)
+    images_.ended(job.status.id);
 }
 
 void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {

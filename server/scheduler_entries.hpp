@@ -51,12 +51,6 @@ struct JobEntry {
   std::vector<int> order;  // position in hand-out order -> tile index (centre-first)
   std::vector<int> rank;   // tile index -> position
   PendingTiles pending;    // positions of pending tiles; the first is handed out next
-  // The accepted tiles pasted together, from the first result until the image file is
-  // written; shared with readers that encode it outside the lock, once it changes no more.
-  std::shared_ptr<Image> canvas;
-  // A request is making the canvas outside the lock; results meanwhile are only stored,
-  // and read back from the store when it is put in place.
-  bool canvas_coming = false;
   // Failures on this job by worker, as "name@host" so that a restarted worker process is
   // still the same worker; in memory only.
   std::map<std::string, int> failures_by_worker;

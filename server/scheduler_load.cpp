@@ -52,15 +52,26 @@ void Scheduler::load_and_reconcile() {
   const std::vector<JobEntry*> needs_image = stage_job_states(change, now);
   if (!change.empty()) commit(change);
 
-  // Written by the image thread, once it starts.
+  for (const auto& [id, job] : jobs_) {
+    auto frame = std::make_shared<Frame>(Frame{job->status.width, job->status.height, {}});
+    frame->tiles.reserve(job->tiles.size());
+    for (const TileSlot& tile : job->tiles) frame->tiles.push_back(tile.rect);
+    const JobState state = job->status.state;
+    images_.add(id, std::move(frame),
+                state == JobState::completed ? ImageAssembly::Stage::completed
+                : is_finished(state)         ? ImageAssembly::Stage::ended
+                                             : ImageAssembly::Stage::rendering);
+  }
+  // Written by the image thread once what was reconciled is durable, which the
+  // constructor waits for.
   for (JobEntry* job : needs_image)
-    if (job->status.state == JobState::completed) images_to_write_.push_back(job->status.id);
+    if (job->status.state == JobState::completed) images_.completed(job->status.id);
   std::set<std::string> kept;
   for (const auto& [id, job] : jobs_) kept.insert(id);
   queue_write([kept = std::move(kept)](Store& store) {
     store.prune_pixels([&](const std::string& job_id) { return kept.contains(job_id); });
   });
-  images_.prune([this](const std::string& job_id) {
+  images_.prune_files([this](const std::string& job_id) {
     const JobEntry* job = find_job(job_id);
     return job && job->status.state == JobState::completed;
   });
@@ -235,7 +246,7 @@ std::vector<JobEntry*> Scheduler::stage_job_states(StagedChange& change, std::in
         s.state = JobState::running;
         s.finished_at_ms = 0;
         if (s.started_at_ms == 0) s.started_at_ms = now;
-      } else if (!images_.has(id)) {
+      } else if (!images_.has_file(id)) {
         needs_image.push_back(&job);  // the process stopped between commit and write
       }
     }

@@ -1,5 +1,5 @@
-// Results: an upload's tiles checked against their lease (fencing), stored, and pasted
-// into the job's canvas.
+// Results: an upload's tiles checked against their lease (fencing), stored, and handed to
+// the job's image once durable.
 #include <set>
 #include <variant>
 
@@ -76,33 +76,11 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
   for (const TileResult* result : fresh) tiles.emplace_back(result->tile_index, result->pixels);
   store_thread_.after(ticket, [this, id = job.status.id, tiles = std::move(tiles),
                                job_done](const std::string& error) {
-    if (error.empty()) note_stored(id, tiles, job_done);
+    if (!error.empty()) return;
+    images_.stored(id, tiles, job_done);
+    if (job_done) images_.completed(id);
   });
   return pending(ResultOutcome::accepted, before);
-}
-
-void Scheduler::note_stored(const std::string& job_id,
-                            const std::vector<std::pair<int, std::span<const float>>>& tiles,
-                            bool job_done) {
-  std::lock_guard lock(mutex_);
-  JobEntry* job = find_job(job_id);
-  if (!job) return;
-  if (job->canvas) {
-    for (const auto& [index, pixels] : tiles) job->canvas->paste(job->tiles[index].rect, pixels);
-  } else if (!job->canvas_coming && !job_done && !is_finished(job->status.state)) {
-    // The job's first result, or the first since a restart: these tiles are only stored,
-    // and the canvas, made next, starts from the store. The last result needs none: the
-    // image thread assembles from the store.
-    job->canvas_coming = true;
-    canvases_to_make_.emplace_back(job_id, job->status.width, job->status.height);
-    images_changed_.notify_all();
-  }
-  // Should the image's write fail or the process die, the tiles are stored and a restart
-  // writes the image again.
-  if (job_done && job->status.state == JobState::completed) {
-    images_to_write_.push_back(job_id);
-    images_changed_.notify_all();
-  }
 }
 
 std::variant<ResultOutcome, std::vector<const TileResult*>> Scheduler::fresh_results(

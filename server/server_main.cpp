@@ -136,6 +136,26 @@ std::unique_ptr<tessera::LocalWorkers> start_local_workers(const ServerOptions& 
       options.local_workers, options.worker_threads, options.log_level);
 }
 
+// Every route of docs/openapi.yaml.
+void add_routes(tessera::Router& router, tessera::ApiContext& context,
+                const tessera::Readiness& readiness) {
+  using namespace tessera;
+  add_health_routes(router, &readiness);
+  add_job_routes(router, context);
+  add_worker_routes(router, context);
+  add_scene_routes(router, context);
+  add_lease_routes(router, context);
+}
+
+// Runs `io` on one thread per core (at least two) until it has nothing left to do.
+void run_io(boost::asio::io_context& io) {
+  const unsigned io_threads = std::max(2u, std::thread::hardware_concurrency());
+  std::vector<std::thread> threads;
+  for (unsigned i = 1; i < io_threads; ++i) threads.emplace_back([&io] { io.run(); });
+  io.run();
+  for (auto& thread : threads) thread.join();
+}
+
 int run(const ServerOptions& options) {
   using namespace tessera;
   const auto [host, port] = split_listen(options.listen);
@@ -169,11 +189,7 @@ int run(const ServerOptions& options) {
   context.run_blocking = [&encoders](std::function<void()> work) {
     boost::asio::post(encoders, std::move(work));
   };
-  add_health_routes(router, &readiness);
-  add_job_routes(router, context);
-  add_worker_routes(router, context);
-  add_scene_routes(router, context);
-  add_lease_routes(router, context);
+  add_routes(router, context, readiness);
 
   HttpServerOptions http;
   http.address = host;
@@ -210,13 +226,11 @@ int run(const ServerOptions& options) {
     });
   });
 
-  const unsigned io_threads = std::max(2u, std::thread::hardware_concurrency());
-  std::vector<std::thread> threads;
-  for (unsigned i = 1; i < io_threads; ++i) threads.emplace_back([&io] { io.run(); });
-  io.run();
-  for (auto& thread : threads) thread.join();
+  run_io(io);
   if (stopper.joinable()) stopper.join();
   encoders.join();
+  // The long polls go before the scheduler does: it may still finish a job meanwhile.
+  scheduler.stop_notifying();
   spdlog::info("stopped");
   return 0;
 }

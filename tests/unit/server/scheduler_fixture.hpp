@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/unit/server/test_dir.hpp"
+
 #include "server/scheduler.hpp"
 #include "tests/unit/server/blocking_scheduler.hpp"
 
@@ -73,10 +75,7 @@ inline std::vector<int> indexes_of(const Lease& lease) {
 class SchedulerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() /
-           ("tessera-scheduler-test-" + std::to_string(::getpid()) + "-" + info->name());
-    std::filesystem::remove_all(dir_);
+    dir_ = test::fresh_test_dir("tessera-scheduler-test");
     open();
   }
   void TearDown() override {

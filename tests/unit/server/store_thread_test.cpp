@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/unit/server/test_dir.hpp"
+
 #include "server/store_thread.hpp"
 
 namespace tessera {
@@ -22,10 +24,7 @@ namespace {
 class StoreThreadTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::temp_directory_path() /
-           ("tessera-store-thread-test-" + std::to_string(::getpid()) + "-" + info->name());
-    std::filesystem::remove_all(dir_);
+    dir_ = test::fresh_test_dir("tessera-store-thread-test");
     store_ = std::make_unique<Store>(dir_);
   }
   void TearDown() override {

@@ -1,0 +1,241 @@
+#include "server/image_assembly.hpp"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <stdexcept>
+
+#include <spdlog/spdlog.h>
+
+namespace tessera {
+
+ImageAssembly::ImageAssembly(const std::filesystem::path& data_dir, StoreThread& store,
+                             WriteFailed write_failed)
+    : files_(data_dir),
+      store_(store),
+      write_failed_(std::move(write_failed)),
+      thread_([this] { run(); }) {}
+
+ImageAssembly::~ImageAssembly() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+void ImageAssembly::add(const std::string& job_id, std::shared_ptr<const Frame> frame,
+                        Stage stage) {
+  std::lock_guard lock(mutex_);
+  Job& job = jobs_[job_id];
+  job.frame = std::move(frame);
+  job.completed = stage == Stage::completed;
+  job.ended = stage == Stage::ended;
+}
+
+void ImageAssembly::stored(const std::string& job_id,
+                           const std::vector<std::pair<int, std::span<const float>>>& tiles,
+                           bool last) {
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  Job& job = it->second;
+  if (job.canvas) {
+    for (const auto& [index, pixels] : tiles) job.canvas->paste(job.frame->tiles[index], pixels);
+  } else if (!job.canvas_coming && !last && !job.completed && !job.ended) {
+    // The job's first tiles, or the first since a restart: these are only stored, and
+    // the canvas, made next, starts from the store.
+    job.canvas_coming = true;
+    canvases_to_make_.push_back(job_id);
+    changed_.notify_all();
+  }
+}
+
+void ImageAssembly::completed(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  it->second.completed = true;
+  // Should the write fail or the process die, the tiles are stored and a restart writes
+  // the image again.
+  images_to_write_.push_back(job_id);
+  changed_.notify_all();
+}
+
+void ImageAssembly::ended(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  it->second.ended = true;
+  it->second.completed = false;
+  it->second.canvas.reset();
+}
+
+void ImageAssembly::removed(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  jobs_.erase(job_id);
+  // After the job's rows: a file left behind by a failure here is pruned on the next start,
+  // while a row without its image would be a completed job that cannot be served. One
+  // being written now is removed once written (write_image()).
+  files_.remove(job_id);
+}
+
+void ImageAssembly::assemble(const std::string& job_id,
+                             std::function<void(std::shared_ptr<const Image>)> then) const {
+  std::shared_ptr<const Frame> frame;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = jobs_.find(job_id);
+    if (it == jobs_.end()) return then(nullptr);
+    const Job& job = it->second;
+    // A completed job's canvas changes no more and can be shared; a running one's is copied.
+    if (job.canvas && job.completed) return then(job.canvas);
+    if (job.canvas) return then(std::make_shared<const Image>(*job.canvas));
+    frame = job.frame;
+  }
+  // From the store, after every tile accepted so far is durable.
+  store_.read([job_id, frame, then = std::move(then)](Store& store) {
+    auto image = std::make_shared<Image>(frame->width, frame->height);
+    paste_stored(store, *image, job_id, *frame);
+    then(std::move(image));
+  });
+}
+
+std::optional<std::filesystem::path> ImageAssembly::image_file(const std::string& job_id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  // The file appears whole (it is written beside its place and renamed), so once it is
+  // there it can be sent.
+  if (it == jobs_.end() || !it->second.completed || !files_.has(job_id)) return std::nullopt;
+  return files_.path(job_id);
+}
+
+void ImageAssembly::prune_files(
+    const std::function<bool(const std::string& job_id)>& completed) const {
+  files_.prune(completed);
+}
+
+void ImageAssembly::wait_for_images() {
+  std::unique_lock lock(mutex_);
+  changed_.wait(lock,
+                [&] { return images_to_write_.empty() && canvases_to_make_.empty() && !busy_; });
+}
+
+void ImageAssembly::paste_stored(Store& store, Image& image, const std::string& job_id,
+                                 const Frame& frame) {
+  const auto floats_of = [&](int index) -> std::size_t {
+    if (index < 0 || index >= static_cast<int>(frame.tiles.size()))
+      throw std::runtime_error("job " + job_id + ": stored pixels for unknown tile " +
+                               std::to_string(index));
+    return frame.tiles[index].pixel_count() * 3;
+  };
+  // Every stored result is a tile accepted once: a tile delivered again is refused, and
+  // what start-up found unusable it deleted before anything was assembled.
+  store.for_each_tile_pixels(job_id, floats_of, [&](int index, std::span<const float> pixels) {
+    image.paste(frame.tiles[index], pixels);
+  });
+}
+
+void ImageAssembly::run() {
+  // Below the threads that answer requests and render: an image file is for later.
+  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+  std::unique_lock lock(mutex_);
+  while (true) {
+    changed_.wait(
+        lock, [&] { return stopping_ || !images_to_write_.empty() || !canvases_to_make_.empty(); });
+    busy_ = true;
+    // Canvases first: an image to write may wait for its job's canvas.
+    if (!canvases_to_make_.empty()) {
+      const std::string id = std::move(canvases_to_make_.front());
+      canvases_to_make_.pop_front();
+      make_canvas(id, lock);
+    } else if (!images_to_write_.empty()) {
+      const std::string id = std::move(images_to_write_.front());
+      images_to_write_.pop_front();
+      write_image(id, lock);
+    } else {
+      return;  // stopping, and nothing is left to do
+    }
+    busy_ = false;
+    changed_.notify_all();
+  }
+}
+
+void ImageAssembly::make_canvas(const std::string& job_id, std::unique_lock<std::mutex>& lock) {
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  const std::shared_ptr<const Frame> frame = it->second.frame;
+  lock.unlock();
+  auto canvas = std::make_shared<Image>(frame->width, frame->height);
+  store_.read([this, job_id, canvas = std::move(canvas)](Store& store) mutable {
+    install_canvas(store, job_id, std::move(canvas));
+  });
+  lock.lock();
+}
+
+void ImageAssembly::install_canvas(Store& store, const std::string& job_id,
+                                   std::shared_ptr<Image> canvas) {
+  std::shared_ptr<const Frame> frame;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = jobs_.find(job_id);  // it may have been removed meanwhile
+    if (it == jobs_.end()) return;
+    frame = it->second.frame;
+  }
+  // On the store thread, unlocked: every tile durable so far is in the store, and every
+  // later one is pasted by stored(), which runs on this thread too.
+  paste_stored(store, *canvas, job_id, *frame);
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  if (it == jobs_.end()) return;
+  Job& job = it->second;
+  job.canvas_coming = false;
+  changed_.notify_all();  // the image thread may wait for it
+  // A failed or canceled job's image comes from the store; a completed one's canvas is
+  // taken by the image thread, which waited for it.
+  if (!job.ended) job.canvas = std::move(canvas);
+}
+
+void ImageAssembly::write_image(const std::string& job_id, std::unique_lock<std::mutex>& lock) {
+  // A canvas on its way is waited for, rather than assembling a second one from the store.
+  auto it = jobs_.find(job_id);
+  while (it != jobs_.end() && it->second.canvas_coming) {
+    changed_.wait(lock);
+    it = jobs_.find(job_id);
+  }
+  if (it == jobs_.end() || !it->second.completed) return;
+  // A completed job's canvas changes no more, so it can be read unlocked.
+  std::shared_ptr<const Image> image = it->second.canvas;
+  const std::shared_ptr<const Frame> frame = it->second.frame;
+  lock.unlock();
+  std::string error;
+  try {
+    if (!image)
+      store_.call([&](Store& store) {
+        auto assembled = std::make_shared<Image>(frame->width, frame->height);
+        paste_stored(store, *assembled, job_id, *frame);
+        image = std::move(assembled);
+      });
+    // Encoding takes a while and touches no shared state: workers and clients go on.
+    files_.write(job_id, *image);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  lock.lock();
+  it = jobs_.find(job_id);
+  if (it == jobs_.end()) {
+    files_.remove(job_id);  // removed while it was being written
+    return;
+  }
+  it->second.canvas.reset();  // the file (or the store) serves it from now on
+  if (error.empty() || !it->second.completed) return;
+  // Every tile is stored, so a resubmission renders again; a "completed" job without an
+  // image file would only fail later, when someone looks for it.
+  spdlog::error("job {}: cannot write the image: {}", job_id, error);
+  lock.unlock();
+  write_failed_(job_id, error);
+  lock.lock();
+}
+
+}  // namespace tessera

@@ -1,0 +1,143 @@
+// What the Scheduler is configured with and answers with: its settings, the records of
+// jobs, workers and leases it hands out, the outcomes of its calls, and Pending, the answer
+// that may be given once its change is durable.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "common/image.hpp"
+#include "common/protocol/job_state.hpp"
+#include "common/protocol/limits.hpp"
+#include "common/scene.hpp"
+#include "server/store_thread.hpp"
+
+namespace tessera {
+
+struct SchedulerConfig {
+  std::int64_t lease_timeout_ms = 30'000;      // a lease expires this long after its last heartbeat
+  std::int64_t heartbeat_interval_ms = 5'000;  // what workers are told to use
+  int max_tile_attempts = 3;                   // a tile that fails this often fails its job
+  // A worker that failed this often on a job gets no more of its tiles while another
+  // worker could take them.
+  int worker_failures_per_job = 2;
+  // The most tiles a lease may owe at once (ProtocolLimits::max_lease_tiles, stated to
+  // workers at registration): an extension adds no more than what keeps the lease within.
+  int max_lease_tiles = ProtocolLimits{}.max_lease_tiles;
+  // A tile handed out this often without its result being accepted fails its job: a worker
+  // whose results are refused, or that drops its lease and claims it back, would otherwise
+  // render the same tiles forever. Failures count against max_tile_attempts too; this
+  // catches the loops that no failure reports.
+  int max_tile_handouts = 10;
+  // A running job whose tiles are being rendered but of which no tile has been delivered
+  // for this long fails, saying so, instead of stalling unseen; 0: never.
+  std::int64_t stall_timeout_ms = 30 * 60 * 1000;
+};
+
+// Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
+// that renders the same tiles again and again, or delivers nothing, must be seen as such.
+// Kept in memory; tile_failures and last_problem are recounted from the stored tiles after
+// a restart.
+struct JobHealth {
+  int tile_failures = 0;    // failures charged to its tiles: expired leases, errors reported
+  int refused_results = 0;  // results the coordinator refused for a reason other than a lost lease
+  int repeated_handouts = 0;  // times one of its tiles went out again after going out before
+  std::string last_problem;   // the latest of those, in words; "" when none
+  // When a tile was last delivered, or rendering began (again) after none was under lease.
+  std::int64_t progress_at_ms = 0;
+};
+
+struct JobStatus {
+  std::string id;
+  std::string name;
+  JobState state = JobState::queued;
+  int priority = 50;
+  int width = 0;
+  int height = 0;
+  int tile_size = 0;
+  int tiles_total = 0;
+  int tiles_done = 0;
+  int tiles_rendering = 0;  // tiles under a live lease
+  std::int64_t created_at_ms = 0;
+  std::int64_t started_at_ms = 0;                         // 0: not started
+  std::int64_t finished_at_ms = 0;                        // 0: not finished
+  std::string error;                                      // set when failed
+  std::uint64_t rays = 0;                                 // summed over the tiles done
+  std::string scene_digest;                               // hex SHA-256 of the scene JSON as stored
+  OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
+  JobHealth health;  // in memory; only the Scheduler changes it, in place
+};
+
+struct WorkerInfo {
+  std::string id;
+  std::string name;
+  std::string host;
+  int threads = 0;
+  std::string state;        // "idle", "rendering", "gone"
+  std::string current_job;  // empty when idle
+  int current_tile = -1;
+  std::uint64_t tiles_rendered = 0;
+  std::int64_t last_seen_ms = 0;
+};
+
+struct LeaseTile {
+  int index = 0;
+  TileRect rect;
+};
+
+// A lease binds a batch of one or more tiles of one job to one worker. Its id is the
+// fencing token: a tile's pixels are accepted only under the lease it is currently bound
+// to. Tiles leave the lease one by one as their results arrive; the lease ends when none
+// is left, or all at once when it expires, is released or its job is canceled.
+struct Lease {
+  std::string id;  // unique per grant
+  std::string job_id;
+  std::string worker_id;
+  std::vector<LeaseTile> tiles;  // the tiles still owed, in hand-out order
+  std::string scene_digest;
+  std::int64_t expires_at_ms = 0;
+};
+
+// One tile's result within an upload.
+struct TileResult {
+  int tile_index = 0;
+  std::span<const float> pixels;  // float32 RGB, rows from the top
+  std::uint64_t rays = 0;
+};
+
+// An upload's body cut into its tiles, in order: pixel_counts[i] pixels of tiles[i], which
+// took rays[i] rays. Nothing when the pixels are not exactly those tiles. The one place an
+// upload is sliced, whether it names its tiles or sends every tile its lease owes.
+std::optional<std::vector<TileResult>> slice_upload(std::span<const float> pixels,
+                                                    std::span<const int> tiles,
+                                                    std::span<const std::size_t> pixel_counts,
+                                                    std::span<const std::uint64_t> rays);
+
+enum class ResultOutcome {
+  accepted,    // stored; the tiles are done (some may have been delivered already)
+  duplicate,   // every tile was already delivered under this lease; nothing changed
+  stale,       // the lease expired, was withdrawn or given to another worker; refused
+  wrong_size,  // pixel count does not match a tile; refused
+  wrong_tile,  // a tile that this lease never held, or named twice; refused
+  unstored,    // the store could not take the pixels (a full disk); the job has failed
+};
+
+// An answer known at once, to be given once the change it reports is durable
+// (Scheduler::when_stored). `ticket` is the last write queued when the answer was made:
+// its own when it wrote something (`wrote`), else the one that holds what it reports.
+template <class T>
+struct Pending {
+  T value{};
+  StoreTicket ticket = 0;
+  bool wrote = false;
+};
+using Written = Pending<std::monostate>;
+
+enum class CancelOutcome { canceled, not_found, already_finished };
+enum class RemoveOutcome { removed, not_found, not_finished };
+
+}  // namespace tessera
