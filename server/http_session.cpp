@@ -76,6 +76,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void deliver(HttpResponse response) {
     net::post(stream_.get_executor(),
               [self = shared_from_this(), response = std::move(response)]() mutable {
+                // A handler may hold the body until it answers: its budget goes now.
+                self->release_body_budget();
                 self->send(std::move(response), !self->keep_alive_);
               });
   }
@@ -376,9 +378,8 @@ void HttpSession::dispatch() {
     spdlog::error("http {}: handler threw: {}", route_.pattern, e.what());
     pending->answer(error_response(500, "internal_error", "internal error"));
   }
-  // What the handler did not take of the body goes now, and with it its share of the budget.
+  // What the handler did not take of the body goes now (its budget, with the answer).
   request.body = std::string();
-  release_body_budget();
 }
 
 void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {

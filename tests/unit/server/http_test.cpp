@@ -437,16 +437,18 @@ TEST_F(HttpTest, ExpectContinueGetsAnInterimAnswer) {
 }
 
 TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
-  // A handler that holds its request, and so its body's share of the budget, until told.
-  std::promise<void> let_go;
-  std::shared_future<void> released = let_go.get_future().share();
+  // A handler that keeps its request and answers later, from another thread, as the
+  // coordinator answers an upload once its pixels are stored: the body's share of the
+  // budget is held until the answer.
+  std::mutex mutex;
+  Respond later;
   std::atomic<bool> holding{false};
   router_.add(
       "POST", "/hold",
       [&](HttpRequest&&, Respond respond) {
+        std::lock_guard lock(mutex);
+        later = std::move(respond);
         holding = true;
-        released.wait();
-        respond(HttpResponse{204, "", "", {}});
       },
       1 << 20);
   router_.add(
@@ -474,7 +476,10 @@ TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
             50);
   EXPECT_EQ(waiting.wait_for(300ms), std::future_status::timeout);
 
-  let_go.set_value();
+  std::thread([&] {
+    std::lock_guard lock(mutex);
+    later(HttpResponse{204, "", "", {}});
+  }).join();
   EXPECT_EQ(held.get().status, 204);
   const HttpResult result = waiting.get();
   EXPECT_EQ(result.status, 200);
