@@ -16,13 +16,15 @@ ImageAssembly::ImageAssembly(const std::filesystem::path& data_dir, StoreThread&
       write_failed_(std::move(write_failed)),
       thread_([this] { run(); }) {}
 
-ImageAssembly::~ImageAssembly() {
+ImageAssembly::~ImageAssembly() { stop(); }
+
+void ImageAssembly::stop() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
   }
   changed_.notify_all();
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
 }
 
 void ImageAssembly::add(const std::string& job_id, std::shared_ptr<const Frame> frame,

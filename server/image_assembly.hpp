@@ -39,8 +39,10 @@ class ImageAssembly {
 
   ImageAssembly(const std::filesystem::path& data_dir, StoreThread& store,
                 WriteFailed write_failed);
-  // Writes the images still queued, then stops the image thread.
+  // Writes the images still queued, then stops the image thread (stop()).
   ~ImageAssembly();
+  // Writes the images still queued and stops the image thread; later calls do nothing.
+  void stop();
   ImageAssembly(const ImageAssembly&) = delete;
   ImageAssembly& operator=(const ImageAssembly&) = delete;
 

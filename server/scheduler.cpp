@@ -40,8 +40,10 @@ Scheduler::Scheduler(Store& store, const Clock& clock, SchedulerConfig config)
 }
 
 Scheduler::~Scheduler() {
-  // What is queued may queue images to write; images_, destroyed first, writes them, and
-  // may queue a job's failure, which the store thread's own destructor finishes.
+  // What is queued may queue images to write; the image thread writes them and may queue
+  // a job's failure, whose callbacks use images_: all of it is done before images_ goes.
+  store_thread_.wait(store_thread_.last());
+  images_.stop();
   store_thread_.wait(store_thread_.last());
 }
 
