@@ -121,10 +121,15 @@ protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms) {
   return l;
 }
 
-void respond_durable(Scheduler& scheduler, Respond respond, HttpResponse response) {
-  respond_when_stored(
-      scheduler, scheduler.durable(), std::move(respond),
-      [response = std::move(response)](std::monostate, const std::string&) { return response; });
+void respond_durable(Scheduler& scheduler, Respond respond, std::function<HttpResponse()> make) {
+  // Counted before the answer is made: a refusal counted later is not in it.
+  const std::uint64_t refusals = scheduler.refusals();
+  HttpResponse now = make();
+  respond_when_stored(scheduler, scheduler.durable(), std::move(respond),
+                      [&scheduler, refusals, now = std::move(now), make = std::move(make)](
+                          std::monostate, const std::string&) {
+                        return scheduler.refusals() == refusals ? now : make();
+                      });
 }
 
 HttpResponse storage_failed(const std::string& what, const std::string& error) {

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <variant>
@@ -52,9 +53,10 @@ HttpResponse body_response(int status, const T& body) {
   return json_response(status, protocol::to_json(body));
 }
 
-// Gives `response`, made from memory as it is now, once all it reports is durable
-// (Scheduler::durable()).
-void respond_durable(Scheduler& scheduler, Respond respond, HttpResponse response);
+// Gives the answer `make` makes from memory as it is now, once all it reports is durable
+// (Scheduler::durable()). Should the store refuse a change meanwhile (its jobs then fail),
+// the answer is made again, so that it shows the failure rather than what was refused.
+void respond_durable(Scheduler& scheduler, Respond respond, std::function<HttpResponse()> make);
 
 // 507 storage_failed: the store refused `what` (a full disk, say), and its job has failed.
 HttpResponse storage_failed(const std::string& what, const std::string& error);

@@ -92,9 +92,10 @@ void status(ApiContext& context, const HttpRequest& request, Respond respond) {
   const auto answer = [&context, id, shared_respond](bool only_if_finished) {
     const auto job = context.scheduler.job(id);
     if (job && only_if_finished && !is_finished(job->state)) return false;
-    respond_durable(
-        context.scheduler, *shared_respond,
-        job ? body_response(200, status_of(*job, context.clock.now_ms())) : not_found(id));
+    respond_durable(context.scheduler, *shared_respond, [&context, id] {
+      const auto now = context.scheduler.job(id);
+      return now ? body_response(200, status_of(*now, context.clock.now_ms())) : not_found(id);
+    });
     return true;
   };
   context.job_waits.wait(
@@ -168,7 +169,9 @@ void add_job_routes(Router& router, ApiContext& context) {
   router.add(
       "GET", std::string(protocol::route::jobs),
       [&context](HttpRequest&& request, Respond respond) {
-        respond_durable(context.scheduler, std::move(respond), list(context, request));
+        respond_durable(
+            context.scheduler, std::move(respond),
+            [&context, request = std::move(request)] { return list(context, request); });
       },
       std::nullopt, role_client);
   router.add(

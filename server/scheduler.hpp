@@ -8,6 +8,7 @@
 // tile's lease (fencing), and only once.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -86,8 +87,12 @@ class Scheduler {
   // As when_stored(), waiting; for threads that may wait on the disk (never the network's).
   std::string wait_stored(StoreTicket ticket, bool wrote);
   // For an answer that reports memory as it is now (a job's status): once this is durable,
-  // so is everything the answer says, and a crash cannot take it back.
+  // so is everything the answer says, and a crash cannot take it back, unless the store
+  // refused a change meanwhile, which refusals() counts.
   Written durable() const;
+  // Changes the store has refused so far; each has failed its jobs in memory by the time
+  // it is counted.
+  std::uint64_t refusals() const { return refusals_.load(); }
 
   // --- workers --------------------------------------------------------------
   Pending<WorkerInfo> register_worker(const std::string& name, const std::string& host,
@@ -279,7 +284,9 @@ class Scheduler {
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;
-  StoreTicket last_write_ = 0;  // the ticket of the last write queued by queue_write()
+  StoreTicket last_write_ = 0;
+  std::atomic<std::uint64_t> refusals_{
+      0};  // see refusals()  // the ticket of the last write queued by queue_write()
   // After what its callbacks use, so that it finishes them first when destroyed.
   mutable StoreThread store_thread_;
   // After the store thread, which its image thread uses until it has stopped.

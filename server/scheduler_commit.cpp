@@ -34,6 +34,7 @@ StoreTicket Scheduler::commit(StagedChange& change, const std::string& what) {
     for (const std::string& id : touched)
       if (JobEntry* job = find_job(id))
         fail_unstorable(*job, "cannot store " + what + ": " + error);
+    ++refusals_;
   });
   // Those waiting for a job to finish hear of it once it is durable.
   if (finishes)

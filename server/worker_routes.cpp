@@ -81,10 +81,12 @@ void add_worker_routes(Router& router, ApiContext& context) {
   router.add(
       "GET", std::string(route::workers),
       [&context](HttpRequest&&, Respond respond) {
-        protocol::WorkerList list;
-        for (const WorkerInfo& worker : context.scheduler.workers())
-          list.workers.push_back(worker_of(worker));
-        respond_durable(context.scheduler, std::move(respond), body_response(200, list));
+        respond_durable(context.scheduler, std::move(respond), [&context] {
+          protocol::WorkerList list;
+          for (const WorkerInfo& worker : context.scheduler.workers())
+            list.workers.push_back(worker_of(worker));
+          return body_response(200, list);
+        });
       },
       std::nullopt, role_client);
   router.add(

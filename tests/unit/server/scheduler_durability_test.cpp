@@ -1,6 +1,7 @@
 // The Scheduler answers at once, in memory, but its caller may give the answer only once
 // when_stored() says so: by then, what the answer reports is in the database, as another
 // connection (the next coordinator's) reads it.
+#include <filesystem>
 #include <future>
 #include <string>
 #include <vector>
@@ -58,6 +59,32 @@ TEST_F(SchedulerDurabilityTest, AnAnswerThatChangedNothingWaitsForWhatItReports)
   EXPECT_GE(now.ticket, claimed.ticket);
   EXPECT_EQ(rows_when_stored(now, "leases"), "1");
   EXPECT_EQ(s().job(job)->tiles_rendering, 1);
+}
+
+TEST_F(SchedulerDurabilityTest, ALastResultTheStoreRefusesFailsTheJobBeforeAnyoneHears) {
+  // /dev/full answers every write with ENOSPC: the job's pixel file is made one.
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  const std::string job = submit(32, 32, 32).id;  // 1 tile: its result completes the job
+  const std::string w = worker();
+  std::filesystem::create_directories(store_->pixel_path(job).parent_path());
+  std::filesystem::create_symlink("/dev/full", store_->pixel_path(job));
+  const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+  ASSERT_TRUE(claimed.value);
+  const std::uint64_t refusals = scheduler_->refusals();
+  const std::vector<float> pixels = test::tile_pixels(claimed.value->tiles[0].rect, 0.0f);
+  const Pending<ResultOutcome> result = scheduler_->complete(claimed.value->id, pixels, 10);
+  EXPECT_EQ(result.value, ResultOutcome::accepted);  // in memory, at once...
+  // ...and refused by the store: by the time the answer may go, the job has failed and the
+  // refusal is counted, so that a status made before it is made again.
+  std::promise<std::pair<std::string, std::uint64_t>> told;
+  scheduler_->when_stored(result, [&](const std::string& error) {
+    told.set_value({error, scheduler_->refusals()});
+  });
+  const auto [error, counted] = told.get_future().get();
+  EXPECT_NE(error.find("the disk is full"), std::string::npos) << error;
+  EXPECT_EQ(counted, refusals + 1);
+  EXPECT_EQ(s().job(job)->state, JobState::failed);
+  EXPECT_NE(s().job(job)->error.find("cannot store"), std::string::npos) << s().job(job)->error;
 }
 
 }  // namespace
