@@ -61,6 +61,14 @@ void respond_durable(Scheduler& scheduler, Respond respond, std::function<HttpRe
 // 507 storage_failed: the store refused `what` (a full disk, say), and its job has failed.
 HttpResponse storage_failed(const std::string& what, const std::string& error);
 
+// For respond_when_stored(), the answer of a change that reports nothing: 204 once it is
+// stored, 507 naming `what` when the store refused it.
+inline auto no_content_when_stored(std::string what) {
+  return [what = std::move(what)](std::monostate, const std::string& error) {
+    return error.empty() ? HttpResponse{204, "", "", {}} : storage_failed(what, error);
+  };
+}
+
 // Answers with `make(value, error)` once the scheduler says `pending` may be given, on the
 // store thread: the network's thread goes on meanwhile. `error` is the store's refusal of
 // the change, "" when it is durable.

@@ -72,11 +72,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     net::post(stream_.get_executor(), [self = shared_from_this()] { self->on_shut_down(); });
   }
 
-  // Delivers a handler's answer, from any thread.
+  // Delivers a handler's answer, from any thread. A handler may hold the body until it
+  // answers: its share of the body budget goes with the answer.
   void deliver(HttpResponse response) {
     net::post(stream_.get_executor(),
               [self = shared_from_this(), response = std::move(response)]() mutable {
-                // A handler may hold the body until it answers: its budget goes now.
                 self->release_body_budget();
                 self->send(std::move(response), !self->keep_alive_);
               });
@@ -378,8 +378,7 @@ void HttpSession::dispatch() {
     spdlog::error("http {}: handler threw: {}", route_.pattern, e.what());
     pending->answer(error_response(500, "internal_error", "internal error"));
   }
-  // What the handler did not take of the body goes now (its budget, with the answer).
-  request.body = std::string();
+  request.body = std::string();  // what the handler did not take of it
 }
 
 void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {

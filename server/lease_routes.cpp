@@ -159,10 +159,6 @@ void upload(ApiContext& context, std::shared_ptr<HttpRequest> request, Respond r
       });
 }
 
-HttpResponse no_content(std::monostate, const std::string& error) {
-  return error.empty() ? HttpResponse{204, "", "", {}} : storage_failed("the change", error);
-}
-
 // The worker could not render that tile of its lease (`TileFailure`).
 void report_failure(ApiContext& context, const HttpRequest& request, Respond respond) {
   auto failure = request_body<protocol::TileFailure>(request);
@@ -170,7 +166,7 @@ void report_failure(ApiContext& context, const HttpRequest& request, Respond res
   const auto& [tile, error] = std::get<protocol::TileFailure>(failure);
   respond_when_stored(context.scheduler,
                       context.scheduler.fail_tile(request.params.at("id"), tile, error),
-                      std::move(respond), no_content);
+                      std::move(respond), no_content_when_stored("the change"));
 }
 
 }  // namespace
@@ -224,7 +220,7 @@ void add_lease_routes(Router& router, ApiContext& context) {
       "POST", std::string(route::lease_release),
       [&context](HttpRequest&& request, Respond respond) {
         respond_when_stored(context.scheduler, context.scheduler.release(request.params.at("id")),
-                            std::move(respond), no_content);
+                            std::move(respond), no_content_when_stored("the change"));
       },
       std::nullopt, role_worker);
 }

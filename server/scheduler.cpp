@@ -81,7 +81,6 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       split_into_tiles(scene.width, scene.height, scene.render.tile_size);
   // Also outside: sorting a million tiles takes a while too.
   std::vector<int> order = centre_first_order(rects, scene.width, scene.height);
-  auto frame = std::make_shared<const Frame>(Frame{scene.width, scene.height, rects});
 
   auto job = std::make_shared<JobEntry>();
   JobStatus& s = job->status;
@@ -96,6 +95,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   s.output_transfer = scene.render.output_transfer;
   job->tiles.resize(rects.size());
   for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
+  std::shared_ptr<const Frame> frame = frame_of(*job);  // outside the lock too
 
   StoreTicket ticket = 0;
   {

@@ -82,6 +82,13 @@ bool status_from_row(JobRow&& row, JobStatus& s) {
   return state.has_value();
 }
 
+std::shared_ptr<const Frame> frame_of(const JobEntry& job) {
+  auto frame = std::make_shared<Frame>(Frame{job.status.width, job.status.height, {}});
+  frame->tiles.reserve(job.tiles.size());
+  for (const TileSlot& tile : job.tiles) frame->tiles.push_back(tile.rect);
+  return frame;
+}
+
 WorkerRow worker_row(const WorkerEntry& w) {
   return {w.info.id,    w.info.name,           w.info.host,        w.info.threads,
           w.info.state, w.info.tiles_rendered, w.info.last_seen_ms};

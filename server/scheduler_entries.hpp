@@ -89,5 +89,7 @@ JobRow job_row(const JobStatus& status);
 // False when the row's state is not one this build knows (the job is then failed).
 bool status_from_row(JobRow&& row, JobStatus& status);
 WorkerRow worker_row(const WorkerEntry& worker);
+// What the job's image is made of, for ImageAssembly.
+std::shared_ptr<const Frame> frame_of(const JobEntry& job);
 
 }  // namespace tessera

@@ -53,11 +53,8 @@ void Scheduler::load_and_reconcile() {
   if (!change.empty()) commit(change);
 
   for (const auto& [id, job] : jobs_) {
-    auto frame = std::make_shared<Frame>(Frame{job->status.width, job->status.height, {}});
-    frame->tiles.reserve(job->tiles.size());
-    for (const TileSlot& tile : job->tiles) frame->tiles.push_back(tile.rect);
     const JobState state = job->status.state;
-    images_.add(id, std::move(frame),
+    images_.add(id, frame_of(*job),
                 state == JobState::completed ? ImageAssembly::Stage::completed
                 : is_finished(state)         ? ImageAssembly::Stage::ended
                                              : ImageAssembly::Stage::rendering);

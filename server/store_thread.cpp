@@ -88,10 +88,7 @@ void StoreThread::call(const Work& work) {
   finished.get_future().get();
 }
 
-std::uint64_t StoreThread::transactions() const {
-  std::lock_guard lock(mutex_);
-  return transactions_;
-}
+std::uint64_t StoreThread::transactions() const { return transactions_.load(); }
 
 void StoreThread::run() {
   std::unique_lock lock(mutex_);
@@ -103,7 +100,6 @@ void StoreThread::run() {
     queue_.clear();
     lock.unlock();
 
-    const std::size_t committed_before = transactions_committed_;
     std::map<StoreTicket, std::string> refused = commit(items);
     // Reads after the writes queued with them: a read sees at least what was queued before.
     for (Item& item : items) {
@@ -118,7 +114,6 @@ void StoreThread::run() {
     for (const Item& item : items) newest = std::max(newest, item.ticket);
 
     lock.lock();
-    transactions_ += transactions_committed_ - committed_before;
     for (const auto& [ticket, error] : refused) refused_[ticket] = error;
     while (refused_.size() > kRefusalsKept) refused_.erase(refused_.begin());
     if (newest == 0) continue;
@@ -150,12 +145,13 @@ std::map<StoreTicket, std::string> StoreThread::commit(std::vector<Item>& items)
     for (Item& item : items)
       if (item.ticket != 0) item.work(store_);
     tx.commit();
-    ++transactions_committed_;
+    ++transactions_;
     return refused;
-  } catch (const std::exception& e) {
+  } catch (...) {
     if (writes == 1) {
+      const std::string error = error_of(std::current_exception());
       for (const Item& item : items)
-        if (item.ticket != 0) refused[item.ticket] = e.what();
+        if (item.ticket != 0) refused[item.ticket] = error;
       return refused;
     }
   }
@@ -166,7 +162,7 @@ std::map<StoreTicket, std::string> StoreThread::commit(std::vector<Item>& items)
       Transaction tx = store_.transaction();
       item.work(store_);
       tx.commit();
-      ++transactions_committed_;
+      ++transactions_;
     } catch (...) {
       refused[item.ticket] = error_of(std::current_exception());
     }

@@ -8,6 +8,7 @@
 // change the store refuses (a full disk for one job's pixels) fails only itself.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -76,8 +77,7 @@ class StoreThread {
   std::multimap<StoreTicket, Done> waiting_;
   // The errors of the latest refused tickets, for callbacks given after the fact.
   std::map<StoreTicket, std::string> refused_;
-  std::uint64_t transactions_ = 0;          // under mutex_, for transactions()
-  std::size_t transactions_committed_ = 0;  // the store thread's own count
+  std::atomic<std::uint64_t> transactions_{0};  // see transactions()
   bool stopping_ = false;
   std::thread thread_;  // last: it starts once everything else exists
 };

@@ -102,10 +102,7 @@ void add_worker_routes(Router& router, ApiContext& context) {
         if (!context.scheduler.worker_known(id))
           return respond(error_response(404, "unknown_worker", "no worker " + id));
         respond_when_stored(context.scheduler, context.scheduler.worker_left(id),
-                            std::move(respond), [](std::monostate, const std::string& error) {
-                              return error.empty() ? HttpResponse{204, "", "", {}}
-                                                   : storage_failed("the departure", error);
-                            });
+                            std::move(respond), no_content_when_stored("the departure"));
       },
       std::nullopt, role_worker);
   router.add(
