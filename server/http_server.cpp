@@ -26,6 +26,8 @@ net::ip::address parse_address(const std::string& text) {
 
 HttpServer::HttpServer(net::io_context& io, const Router& router, HttpServerOptions options)
     : shared_(std::make_shared<ServerShared>(io, router, std::move(options))) {
+  if (shared_->options.min_body_rate == 0)
+    throw std::invalid_argument("min_body_rate must be at least one byte per second");
   const net::ip::tcp::endpoint endpoint(parse_address(shared_->options.address),
                                         shared_->options.port);
   listener_ = std::make_shared<Listener>(io, endpoint, shared_);

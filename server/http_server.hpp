@@ -42,13 +42,17 @@ struct HttpServerOptions {
   // From a request's first byte until its header is complete. A new connection must also
   // send its first byte within this.
   std::chrono::milliseconds header_timeout{10'000};
-  // For the whole body, so that a client dribbling bytes cannot hold a connection forever.
+  // For the whole body, so that a client dribbling bytes cannot hold a connection forever;
+  // extended by the time what arrives would take at min_body_rate, so that a large body on
+  // a slow but steady link still gets through.
   std::chrono::milliseconds body_timeout{30'000};
+  std::uint64_t min_body_rate = 64 * 1024;  // bytes per second
   // For writing a whole response to a slow reader.
   std::chrono::milliseconds write_timeout{30'000};
   // How long a kept-alive connection may wait for its next request.
   std::chrono::milliseconds idle_timeout{60'000};
   std::uint32_t max_header_bytes = 16 * 1024;  // larger: 431
+  std::size_t max_target_bytes = 8 * 1024;     // a longer request target: 414
   std::size_t default_body_limit = 1 << 20;    // for routes added without a limit; larger: 413
   // Bodies announced larger than this are read only while all of them together stay within
   // body_budget_bytes (see BodyBudget); smaller ones, and chunked ones, are read at once.

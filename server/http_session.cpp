@@ -1,13 +1,14 @@
 #include "server/http_session.hpp"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
-#include <filesystem>
 #include <limits>
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <spdlog/spdlog.h>
@@ -19,7 +20,9 @@
 #include "server/http_errors.hpp"
 #include "server/listener.hpp"
 #include "server/pending_response.hpp"
+#include "server/request_framing.hpp"
 #include "server/router.hpp"
+#include "server/wire_messages.hpp"
 
 namespace tessera {
 
@@ -106,6 +109,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     do_read_header();
   }
 
+  // Gathered here, not by Beast, whose parser unfolds folded lines without a trace.
   void do_read_header() {
     phase_ = Phase::header;
     parser_.emplace();
@@ -114,15 +118,47 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     // boost::none: Beast 1.74 compares a Content-Length with an empty limit as exceeding it.)
     parser_->body_limit(std::numeric_limits<std::uint64_t>::max());
     stream_.expires_after(shared_->options.header_timeout);
-    http::async_read_header(
-        stream_, buffer_, *parser_,
-        beast::bind_front_handler(&HttpSession::on_read_header, shared_from_this()));
+    header_scanned_ = 0;
+    read_header_more();
   }
 
-  void on_read_header(error_code ec, std::size_t) {
+  void read_header_more() {
+    const std::string_view data(static_cast<const char*>(buffer_.data().data()), buffer_.size());
+    // Resumed a little before where the last look ended: the blank line may straddle reads.
+    const std::size_t end = data.find("\r\n\r\n", header_scanned_ < 3 ? 0 : header_scanned_ - 3);
+    const std::size_t limit = shared_->options.max_header_bytes;
+    if (end != std::string_view::npos && end + 4 <= limit) return on_header_bytes(end + 4);
+    if (data.size() >= limit) {
+      auto problem = raw_header_problem(data, shared_->options.max_target_bytes);
+      return send(problem ? std::move(*problem) : header_too_large(limit), true);
+    }
+    header_scanned_ = data.size();
+    stream_.async_read_some(buffer_.prepare(std::min<std::size_t>(4096, limit - data.size())),
+                            [self = shared_from_this()](error_code ec, std::size_t bytes) {
+                              if (ec) return self->on_read_error(ec, "header");
+                              self->buffer_.commit(bytes);
+                              self->read_header_more();
+                            });
+  }
+
+  void on_header_bytes(std::size_t size) {
+    const std::string_view header(static_cast<const char*>(buffer_.data().data()), size);
+    if (auto problem = raw_header_problem(header, shared_->options.max_target_bytes))
+      return send(std::move(*problem), true);
+    error_code ec;
+    const std::size_t used = parser_->put(net::buffer(header.data(), header.size()), ec);
+    buffer_.consume(used);
+    if (!ec && !parser_->is_header_done()) ec = http::error::partial_message;
     if (ec) return on_read_error(ec, "header");
-    first_request_ = false;
+    on_read_header();
+  }
+
+  void on_read_header() {
     auto& request = parser_->get();
+    head_only_ = request.method() == http::verb::head;
+    if (auto problem = framing_problem(head_of(request), shared_->options.max_target_bytes))
+      return send(std::move(*problem), true);
+    first_request_ = false;
     keep_alive_ = request.keep_alive();
     const bool body_follows = !parser_->is_done();
 
@@ -191,12 +227,24 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void do_read_body() {
     phase_ = Phase::body;
-    stream_.expires_after(shared_->options.body_timeout);
-    http::async_read(stream_, buffer_, *parser_,
-                     beast::bind_front_handler(&HttpSession::on_read_body, shared_from_this()));
+    body_deadline_ = std::chrono::steady_clock::now() + shared_->options.body_timeout;
+    read_body_more();
   }
 
-  void on_read_body(error_code ec, std::size_t) {
+  // The body's deadline moves out by what arrives at the minimum rate: an honest upload
+  // of any size finishes, one that trickles in is cut off (as Apache's MinRate does).
+  void read_body_more() {
+    stream_.expires_at(body_deadline_);
+    http::async_read_some(
+        stream_, buffer_, *parser_, [self = shared_from_this()](error_code ec, std::size_t bytes) {
+          if (ec || self->parser_->is_done()) return self->on_read_body(ec);
+          self->body_deadline_ +=
+              std::chrono::microseconds(bytes * 1'000'000 / self->shared_->options.min_body_rate);
+          self->read_body_more();
+        });
+  }
+
+  void on_read_body(error_code ec) {
     if (ec) release_body_budget();
     if (ec == http::error::body_limit)
       return send(too_large(route_.body_limit.value_or(shared_->options.default_body_limit)), true);
@@ -205,8 +253,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void on_read_error(error_code ec, const char* what) {
-    if (ec == http::error::header_limit)
-      return send(header_too_large(shared_->options.max_header_bytes), true);
     // A message that does not parse: say so, then close, since where the next one would
     // begin is unknown. Anything else (timeouts, resets, end of stream) leaves no one to tell.
     if (ec.category() == http::make_error_code(http::error::end_of_stream).category() &&
@@ -232,47 +278,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                     response.status);
       response = error_response(500, "internal_error", "the handler answered an invalid status");
     }
-    if (!response.file.empty() && !has_no_body(response.status)) {
-      // Opened here, so that a temporary file can go from its directory at once: the open
-      // descriptor keeps its bytes until they are sent.
-      http::file_body::value_type file;
-      error_code ec;
-      file.open(response.file.c_str(), beast::file_mode::scan, ec);
-      if (response.file_is_temporary) {
-        std::error_code ignored;
-        std::filesystem::remove(response.file, ignored);
-      }
-      if (!ec) {
-        file_response_.emplace();
-        auto& message = *file_response_;
-        fill_header(message, response, close_after);
-        message.body() = std::move(file);
-        message.prepare_payload();
-        return write(message, close_after);
-      }
-      spdlog::error("http {} {}: cannot open {} to answer: {}", route_.pattern, path_,
-                    response.file, ec.message());
-      response = error_response(500, "internal_error", "the answer's file cannot be read");
-    }
-    response_.emplace();
-    auto& message = *response_;
-    fill_header(message, response, close_after);
-    if (!has_no_body(response.status)) {
-      message.body() = std::move(response.body);
-      message.prepare_payload();
-    }
-    write(message, close_after);
-  }
-
-  template <typename Message>
-  static void fill_header(Message& message, const HttpResponse& response, bool close_after) {
-    message.version(11);
-    message.result(static_cast<unsigned>(response.status));
-    message.set(http::field::server, "tessera");
-    if (!response.content_type.empty() && !has_no_body(response.status))
-      message.set(http::field::content_type, response.content_type);
-    for (auto& [name, value] : response.headers) message.insert(name, value);
-    message.keep_alive(!close_after);
+    answer_.emplace(response_message(std::move(response), head_only_, close_after,
+                                     route_.pattern.empty() ? path_ : route_.pattern));
+    std::visit([&](auto& message) { write(message, close_after); }, *answer_);
   }
 
   template <typename Message>
@@ -285,8 +293,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void on_write(bool close_after, error_code ec, std::size_t) {
-    response_.reset();
-    file_response_.reset();
+    answer_.reset();
     if (ec) {
       spdlog::debug("http {}: writing the response failed: {}", remote_address_, ec.message());
       return close();
@@ -332,15 +339,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::shared_ptr<ServerShared> shared_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
-  // The answer, alive while being written: in memory, or streamed from a file.
-  std::optional<http::response<http::string_body>> response_;
-  std::optional<http::response<http::file_body>> file_response_;
+  std::optional<WireMessage> answer_;              // alive while being written
   std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
   std::size_t budget_held_ = 0;  // of shared_->body_budget, for the body being read or served
   std::string remote_address_;
   Phase phase_ = Phase::idle;
   bool first_request_ = true;
   bool keep_alive_ = true;
+  bool head_only_ = false;          // HEAD: the GET route's answer, without its body
+  std::size_t header_scanned_ = 0;  // of buffer_, looked through for the header's end
+  std::chrono::steady_clock::time_point body_deadline_;
   // The request being served.
   std::string path_;
   std::map<std::string, std::string> query_;
@@ -349,18 +357,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
 void HttpSession::dispatch() {
   phase_ = Phase::handler;
-  auto& message = parser_->get();
-  HttpRequest request;
-  request.method = std::string(message.method_string());
+  HttpRequest request = plain_request(parser_->get());
   request.path = std::move(path_);
   request.query = std::move(query_);
   request.params = std::move(route_.params);
-  for (const auto& field : message) {
-    auto [it, inserted] = request.headers.try_emplace(
-        lower_ascii({field.name_string().data(), field.name_string().size()}), field.value());
-    if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
-  }
-  request.body = std::move(message.body());
   request.remote_address = remote_address_;
   parser_.reset();
   // A body is read through buffer_, which then keeps its largest size (64 KiB): with a

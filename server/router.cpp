@@ -155,10 +155,16 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
     return result;
   }
 
+  // HEAD is GET without the body (RFC 9110 9.3.2), on every GET route not given a HEAD
+  // of its own; the HTTP layer leaves the body out.
+  bool has_head = false;
+  for (const Route& route : routes_)
+    has_head = has_head || (route.pattern == best->pattern && route.method == "HEAD");
+  const std::string_view wanted = method == "HEAD" && !has_head ? "GET" : method;
   std::string allow;
   for (const Route& route : routes_) {
     if (route.pattern != best->pattern) continue;
-    if (route.method == method) {
+    if (route.method == wanted) {
       result.handler = &route.handler;
       result.pattern = route.pattern;
       result.body_limit = route.body_limit;
@@ -169,6 +175,7 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
     }
     if (!allow.empty()) allow += ", ";
     allow += route.method;
+    if (route.method == "GET" && !has_head) allow += ", HEAD";
   }
   result.pattern = best->pattern;
   result.error = error_response(

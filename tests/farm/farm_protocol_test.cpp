@@ -563,7 +563,11 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   const HttpResult delete_health = http.request("DELETE", "/healthz");
   EXPECT_TRUE(is_error(delete_health, 405, "method_not_allowed"));
   EXPECT_EQ(delete_health.headers.contains("allow") ? delete_health.headers.at("allow") : "",
-            "GET");
+            "GET, HEAD");
+  // HEAD on every GET route, as load balancers probe: the GET's header, no body.
+  const HttpResult head_health = http.request("HEAD", "/healthz");
+  EXPECT_EQ(head_health.status, 200);
+  EXPECT_TRUE(head_health.body.empty()) << head_health.body;
 
   // 409: the state is wrong for the request
   const std::string job_id = farm.api().submit("queued", 50, one_tile_scene())["id"];

@@ -29,6 +29,7 @@
 #include "common/net/http_client.hpp"
 #include "server/http_server.hpp"
 #include "server/router.hpp"
+#include "tests/unit/server/raw_connection.hpp"
 
 namespace tessera {
 namespace {
@@ -36,6 +37,9 @@ namespace {
 using namespace std::chrono_literals;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
+using raw_http::body_of;
+using raw_http::RawConnection;
+using raw_http::status_of;
 
 // Polls `condition` until it holds or `limit` passes; the limit is generous, the test
 // normally moves on as soon as the condition holds.
@@ -88,96 +92,6 @@ class Parking {
   std::deque<Respond> parked_;
   std::size_t total_ = 0;
 };
-
-// A client that can do what HttpClient never would: send half a request, garbage, or
-// nothing at all, and see exactly when the server hangs up.
-class RawConnection {
- public:
-  explicit RawConnection(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    if (fd_ < 0) throw std::runtime_error("socket failed");
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(port);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0)
-      throw std::runtime_error("connect failed");
-  }
-  ~RawConnection() { ::close(fd_); }
-  RawConnection(const RawConnection&) = delete;
-  RawConnection& operator=(const RawConnection&) = delete;
-
-  void send(std::string_view data) {
-    while (!data.empty()) {
-      const ssize_t sent = ::send(fd_, data.data(), data.size(), MSG_NOSIGNAL);
-      if (sent <= 0) throw std::runtime_error("send failed");
-      data.remove_prefix(static_cast<std::size_t>(sent));
-    }
-  }
-
-  // One response: the header, then as many body bytes as its Content-Length says.
-  std::string read_response(std::chrono::milliseconds limit = 10s) {
-    const auto deadline = Clock::now() + limit;
-    while (true) {
-      const std::size_t header_end = received_.find("\r\n\r\n");
-      if (header_end != std::string::npos) {
-        std::size_t length = 0;
-        const std::size_t at = lower(received_.substr(0, header_end)).find("content-length:");
-        if (at != std::string::npos) length = std::stoul(received_.substr(at + 15));
-        const std::size_t total = header_end + 4 + length;
-        if (received_.size() >= total) {
-          std::string response = received_.substr(0, total);
-          received_.erase(0, total);
-          return response;
-        }
-      }
-      if (!receive_some(deadline)) return std::exchange(received_, {});
-    }
-  }
-
-  // True when the server closes the connection within `limit`; what it sent is dropped.
-  bool closed_within(std::chrono::milliseconds limit) {
-    const auto deadline = Clock::now() + limit;
-    while (receive_some(deadline)) received_.clear();
-    return closed_;
-  }
-
- private:
-  static std::string lower(std::string text) {
-    for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-  }
-
-  // False once the connection is closed or the deadline has passed.
-  bool receive_some(Clock::time_point deadline) {
-    if (closed_) return false;
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left <= 0ms) return false;
-    pollfd entry{fd_, POLLIN, 0};
-    if (::poll(&entry, 1, static_cast<int>(left.count())) <= 0) return false;
-    char chunk[4096];
-    const ssize_t got = ::recv(fd_, chunk, sizeof chunk, 0);
-    if (got <= 0) {
-      closed_ = got == 0 || errno == ECONNRESET;
-      return false;
-    }
-    received_.append(chunk, static_cast<std::size_t>(got));
-    return true;
-  }
-
-  int fd_;
-  std::string received_;
-  bool closed_ = false;
-};
-
-int status_of(const std::string& raw_response) {
-  return raw_response.size() > 12 ? std::stoi(raw_response.substr(9, 3)) : 0;
-}
-
-json body_of(const std::string& raw_response) {
-  const std::size_t at = raw_response.find("\r\n\r\n");
-  return json::parse(raw_response.substr(at + 4));
-}
 
 // A port on which nothing listens: bound for a moment by us, then let go.
 std::uint16_t unused_port() {
@@ -294,7 +208,7 @@ TEST(RouterTest, MatchesLiteralsAndParameters) {
   EXPECT_EQ(m.error.status, 405);
   ASSERT_EQ(m.error.headers.size(), 1u);
   EXPECT_EQ(m.error.headers[0].first, "Allow");
-  EXPECT_EQ(m.error.headers[0].second, "GET, DELETE");
+  EXPECT_EQ(m.error.headers[0].second, "GET, HEAD, DELETE");
   EXPECT_EQ(json::parse(m.error.body)["error"]["code"], "method_not_allowed");
   // The resource is the most specific pattern: its methods only.
   EXPECT_EQ(router.match("DELETE", "/v1/jobs/stats").error.status, 405);
@@ -385,7 +299,7 @@ TEST_F(HttpTest, NotFoundAndMethodNotAllowedHaveJsonErrors) {
 
   const HttpResult wrong_method = client.request("PUT", "/v1/jobs/1", "{}");
   EXPECT_EQ(wrong_method.status, 405);
-  EXPECT_EQ(wrong_method.headers.at("allow"), "GET, DELETE");
+  EXPECT_EQ(wrong_method.headers.at("allow"), "GET, HEAD, DELETE");
   const json error = json::parse(wrong_method.body)["error"];
   EXPECT_EQ(error["code"], "method_not_allowed");
   EXPECT_TRUE(error["message"].is_string());
