@@ -10,6 +10,7 @@
 
 #include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
+#include "common/printable.hpp"
 #include "common/scene_parser.hpp"
 #include "common/secret.hpp"
 
@@ -45,7 +46,7 @@ struct CommandFailed {
 };
 
 [[noreturn]] void fail(int code, const std::string& message) {
-  std::fprintf(stderr, "error: %s\n", message.c_str());
+  std::fprintf(stderr, "error: %s\n", printable(message).c_str());
   throw CommandFailed{code};
 }
 
@@ -76,15 +77,17 @@ void print_health(const protocol::JobHealth& health) {
   if (health.no_progress_s >= 30)
     add("no tile delivered for " + format_duration(health.no_progress_s));
   if (trouble.empty()) return;
-  std::printf("  trouble: %s\n", trouble.c_str());
-  if (health.last_problem) std::printf("  last problem: %s\n", health.last_problem->c_str());
+  std::printf("  trouble: %s\n", printable(trouble).c_str());
+  if (health.last_problem)
+    std::printf("  last problem: %s\n", printable(*health.last_problem).c_str());
 }
 
 void print_status(const protocol::JobStatus& job) {
-  std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n", job.id.c_str(),
-              to_string(job.state), job.name.c_str(), static_cast<int>(job.progress * 100),
-              job.tiles.done, job.tiles.total, job.priority, job.width, job.height);
-  if (job.error) std::printf("  error: %s\n", job.error->c_str());
+  std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
+              printable(job.id).c_str(), to_string(job.state), printable(job.name).c_str(),
+              static_cast<int>(job.progress * 100), job.tiles.done, job.tiles.total, job.priority,
+              job.width, job.height);
+  if (job.error) std::printf("  error: %s\n", printable(*job.error).c_str());
   print_health(job.health);
 }
 
@@ -104,7 +107,10 @@ std::string progress_line(const protocol::JobStatus& job, bool bar) {
   return text;
 }
 
-void print_json(const nlohmann::json& body) { std::printf("%s\n", body.dump(2).c_str()); }
+// ASCII only: a C1 control inside a string would reach the terminal raw otherwise.
+void print_json(const nlohmann::json& body) {
+  std::printf("%s\n", body.dump(2, ' ', true).c_str());
+}
 
 // Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise (at
 // most one a second). Each poll waits on the server for the job to finish, so the end is
@@ -134,10 +140,10 @@ protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
 int job_exit_code(const protocol::JobStatus& job) {
   if (job.state == JobState::completed) return kExitOk;
   if (job.error)
-    std::fprintf(stderr, "job %s %s: %s\n", job.id.c_str(), to_string(job.state),
-                 job.error->c_str());
+    std::fprintf(stderr, "job %s %s: %s\n", printable(job.id).c_str(), to_string(job.state),
+                 printable(*job.error).c_str());
   else
-    std::fprintf(stderr, "job %s %s\n", job.id.c_str(), to_string(job.state));
+    std::fprintf(stderr, "job %s %s\n", printable(job.id).c_str(), to_string(job.state));
   return kExitJobFailed;
 }
 
@@ -154,7 +160,7 @@ void save_image(CoordinatorClient& api, const std::string& id, const std::string
     if (!out) fail(kExitJobFailed, "cannot write " + output);
   }
   std::filesystem::rename(temp, output);
-  std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
+  std::printf("wrote %s\n", printable(std::filesystem::absolute(output).string()).c_str());
 }
 
 int submit(const Options& options, CoordinatorClient& api) {
@@ -175,7 +181,7 @@ int submit(const Options& options, CoordinatorClient& api) {
   if (options.json_output && !options.wait)
     print_json(protocol::to_json(job));
   else
-    std::printf("submitted %s (%s)\n", id.c_str(), name.c_str());
+    std::printf("submitted %s (%s)\n", printable(id).c_str(), printable(name).c_str());
   std::fflush(stdout);  // scripts reading the id need it now, not when --wait ends
   if (!options.wait) return kExitOk;
   const protocol::JobStatus final_job = watch(api, id);
@@ -194,21 +200,21 @@ int run(const std::function<int(CoordinatorClient&)>& command, const Options& op
   } catch (const CommandFailed& failed) {
     return failed.code;
   } catch (const HttpError& e) {
-    std::fprintf(stderr, "error: cannot reach the server at %s: %s\n", server_url(options).c_str(),
-                 e.what());
+    std::fprintf(stderr, "error: cannot reach the server at %s: %s\n",
+                 printable(server_url(options)).c_str(), printable(e.what()).c_str());
     return kExitUnreachable;
   } catch (const ApiError& e) {
-    std::fprintf(stderr, "error: %s%s\n", e.what(),
-                 e.path().empty() || std::string(e.what()).find(e.path()) != std::string::npos
-                     ? ""
-                     : (" (at " + e.path() + ")").c_str());
+    const bool path_named =
+        e.path().empty() || std::string(e.what()).find(e.path()) != std::string::npos;
+    std::fprintf(stderr, "error: %s%s\n", printable(e.what()).c_str(),
+                 path_named ? "" : printable(" (at " + e.path() + ")").c_str());
     return e.status() == 400 || e.status() == 422 ? kExitUsage : kExitJobFailed;
   } catch (const protocol::ProtocolError& e) {
     std::fprintf(stderr, "error: the server at %s answered in a form this CLI does not know: %s\n",
-                 server_url(options).c_str(), e.what());
+                 printable(server_url(options)).c_str(), printable(e.what()).c_str());
     return kExitJobFailed;
   } catch (const std::runtime_error& e) {  // a token file that cannot be read, say
-    std::fprintf(stderr, "error: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
     return kExitUsage;
   }
 }
@@ -300,7 +306,7 @@ void add_job_changes(CLI::App& app, const SharedOptions& options) {
   CLI::App* rm_cmd = on(app, options, "rm", "Remove a finished job and its files",
                         [](const Options& o, CoordinatorClient& api) {
                           api.remove(o.job);
-                          if (!o.json_output) std::printf("removed %s\n", o.job.c_str());
+                          if (!o.json_output) std::printf("removed %s\n", printable(o.job).c_str());
                           return kExitOk;
                         });
   rm_cmd->add_option("job", options->job, "Job id")->required();
@@ -314,10 +320,11 @@ void add_workers_command(CLI::App& app, const SharedOptions& options) {
       return kExitOk;
     }
     for (const protocol::Worker& w : reply.workers)
-      std::printf(
-          "%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n", w.id.c_str(), w.name.c_str(),
-          w.host.c_str(), protocol::name_in(protocol::kWorkerStateNames, w.state).data(), w.threads,
-          static_cast<unsigned long long>(w.tiles_rendered), w.current_job.value_or("").c_str());
+      std::printf("%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n", printable(w.id).c_str(),
+                  printable(w.name).c_str(), printable(w.host).c_str(),
+                  protocol::name_in(protocol::kWorkerStateNames, w.state).data(), w.threads,
+                  static_cast<unsigned long long>(w.tiles_rendered),
+                  printable(w.current_job.value_or("")).c_str());
     return kExitOk;
   });
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/image_io.hpp"
+#include "common/printable.hpp"
 #include "common/scene_parser.hpp"
 #include "worker/local_render.hpp"
 
@@ -77,7 +78,7 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
               static_cast<unsigned long long>(result.rays.primary),
               static_cast<unsigned long long>(result.rays.secondary),
               static_cast<unsigned long long>(result.rays.shadow), rays_per_s / 1e6);
-  std::printf("wrote %s\n", std::filesystem::absolute(output).string().c_str());
+  std::printf("wrote %s\n", printable(std::filesystem::absolute(output).string()).c_str());
   return 0;
 }
 
@@ -86,7 +87,7 @@ int run_render(const RenderOptions& options) {
   if (output.empty()) output = std::filesystem::path(options.scene_path).stem().string() + ".png";
   if (!is_supported_image_path(output)) {
     std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
-                 output.string().c_str());
+                 printable(output.string()).c_str());
     return 2;
   }
   try {
@@ -99,10 +100,11 @@ int run_render(const RenderOptions& options) {
     }();
     return render_and_report(options, scene, output);
   } catch (const SceneError& e) {
-    std::fprintf(stderr, "error: %s: %s\n", options.scene_path.c_str(), e.what());
+    std::fprintf(stderr, "error: %s: %s\n", printable(options.scene_path).c_str(),
+                 printable(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
     return 1;
   }
 }

@@ -19,6 +19,7 @@
 #include <boost/asio/thread_pool.hpp>
 
 #include "common/image_io.hpp"
+#include "common/log_lines.hpp"
 #include "common/secret.hpp"
 #include "server/access.hpp"
 #include "server/api_routes.hpp"
@@ -330,6 +331,7 @@ int main(int argc, char** argv) {
   add_limit_options(app, options);
   add_token_options(app, options);
   CLI11_PARSE(app, argc, argv);
+  tessera::use_escaped_log_lines();
   spdlog::set_level(spdlog::level::from_str(options.log_level));
   try {
     return run(options);

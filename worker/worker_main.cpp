@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/huge_page_malloc.hpp"
+#include "common/log_lines.hpp"
 #include "common/secret.hpp"
 #include "worker/worker_daemon.hpp"
 
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   // Not a flag: only the test suite injects faults, and local workers inherit it from their
   // coordinator's environment.
   if (const char* fault = std::getenv("TESSERA_FAULT_INJECTION")) options.fault = fault;
+  tessera::use_escaped_log_lines();
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   // Signals go to one thread that turns them into a flag: the loop finishes the tiles in

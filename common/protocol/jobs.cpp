@@ -1,5 +1,7 @@
 #include "common/protocol/jobs.hpp"
 
+#include "common/printable.hpp"
+
 namespace tessera::protocol {
 namespace {
 
@@ -31,6 +33,10 @@ std::string read_name(const FieldReader& body, std::string_view key) {
   if (name.size() > kMaxNameBytes)
     body.fail(key, "must be at most " + std::to_string(kMaxNameBytes) + " bytes, got " +
                        std::to_string(name.size()));
+  // A name is shown in lists, terminals and logs: it may not hold what would steer them.
+  if (const std::size_t at = find_control_character(name); at != std::string::npos)
+    body.fail(key, "must not hold control characters; byte " + std::to_string(at) + " is " +
+                       printable(name.substr(at, 1 + (name[at] == '\xc2'))));
   return name;
 }
 

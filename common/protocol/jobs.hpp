@@ -82,7 +82,8 @@ struct JobList {
 };
 nlohmann::json to_json(const JobList& list);
 
-// A name (of a job, a worker, a host): a string of at most kMaxNameBytes.
+// A name (of a job, a worker, a host): a string of at most kMaxNameBytes, without control
+// characters (C0, DEL, C1).
 std::string read_name(const FieldReader& body, std::string_view key);
 
 // The job states' words, "queued, running, completed, failed or canceled".
