@@ -22,10 +22,19 @@ net::ip::address parse_address(const std::string& text) {
   return address;
 }
 
+// Unset hooks become ones that allow everything, so that sessions need not ask.
+HttpServerOptions with_defaults(HttpServerOptions options) {
+  if (!options.authorize)
+    options.authorize = [](std::string_view, std::string_view) -> std::optional<HttpResponse> {
+      return std::nullopt;
+    };
+  return options;
+}
+
 }  // namespace
 
 HttpServer::HttpServer(net::io_context& io, const Router& router, HttpServerOptions options)
-    : shared_(std::make_shared<ServerShared>(io, router, std::move(options))) {
+    : shared_(std::make_shared<ServerShared>(io, router, with_defaults(std::move(options)))) {
   if (shared_->options.min_body_rate == 0)
     throw std::invalid_argument("min_body_rate must be at least one byte per second");
   const net::ip::tcp::endpoint endpoint(parse_address(shared_->options.address),

@@ -25,6 +25,7 @@
 #include <string_view>
 
 #include "server/http_types.hpp"
+#include "server/origin_policy.hpp"
 
 namespace boost::asio {
 class io_context;
@@ -63,6 +64,7 @@ struct HttpServerOptions {
   // request with it. Unset: everyone may call everything.
   std::function<std::optional<HttpResponse>(std::string_view role, std::string_view authorization)>
       authorize;
+  OriginPolicy origins;  // which pages may call, under which Host names
 };
 
 class HttpServer {

@@ -156,25 +156,24 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void on_read_header() {
     auto& request = parser_->get();
     head_only_ = request.method() == http::verb::head;
-    if (auto problem = framing_problem(head_of(request), shared_->options.max_target_bytes))
+    const RequestHead head = head_of(request);
+    if (auto problem = framing_problem(head, shared_->options.max_target_bytes))
       return send(std::move(*problem), true);
     first_request_ = false;
     keep_alive_ = request.keep_alive();
     const bool body_follows = !parser_->is_done();
 
-    const std::string_view target(request.target().data(), request.target().size());
+    const std::string_view target = head.target;
     const std::size_t question = target.find('?');
     path_ = std::string(target.substr(0, question));
-    route_ = shared_->router.match(
-        std::string_view(request.method_string().data(), request.method_string().size()), path_);
+    route_ = shared_->router.match(head.method, path_);
     if (!route_.handler) return send(std::move(route_.error), body_follows || !keep_alive_);
-    if (shared_->options.authorize) {
-      const auto authorization = request[http::field::authorization];
-      // Refused before the body is read, so a stranger cannot make the server take one in.
-      if (auto refused = shared_->options.authorize(
-              route_.role, std::string_view(authorization.data(), authorization.size())))
-        return send(std::move(*refused), body_follows || !keep_alive_);
-    }
+    // Refused before the body is read, so a stranger cannot make the server take one in.
+    if (auto refused =
+            shared_->options.authorize(route_.role, head.field("authorization").value_or("")))
+      return send(std::move(*refused), body_follows || !keep_alive_);
+    if (auto refused = browser_problem(shared_->options.origins, head, route_.content_type))
+      return send(std::move(*refused), body_follows || !keep_alive_);
 
     auto query = parse_query(question == std::string_view::npos ? std::string_view()
                                                                 : target.substr(question + 1));

@@ -209,7 +209,8 @@ void add_lease_routes(Router& router, ApiContext& context) {
       [&context](HttpRequest&& request, Respond respond) {
         upload(context, std::make_shared<HttpRequest>(std::move(request)), std::move(respond));
       },
-      protocol_limits(context).max_result_bytes, role_worker);
+      protocol_limits(context).max_result_bytes, role_worker,
+      std::string(protocol::kPixelsContentType));
   router.add(
       "POST", std::string(route::lease_fail),
       [&context](HttpRequest&& request, Respond respond) {

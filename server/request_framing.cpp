@@ -82,6 +82,12 @@ bool valid_host(std::string_view host) {
 
 }  // namespace
 
+std::optional<std::string_view> RequestHead::field(std::string_view name) const {
+  for (const HeaderField& f : fields)
+    if (iequals(f.name, name)) return f.value;
+  return std::nullopt;
+}
+
 std::optional<HttpResponse> raw_header_problem(std::string_view header,
                                                std::size_t max_target_bytes) {
   const std::size_t line_end = header.find("\r\n");

@@ -20,9 +20,13 @@ struct HeaderField {
 
 // A parsed request header, as views into the parser's message.
 struct RequestHead {
+  std::string_view method;
   unsigned version = 11;  // 10 for HTTP/1.0, 11 for HTTP/1.1
   std::string_view target;
   std::vector<HeaderField> fields;  // in the order received, repeats kept
+
+  // The first field of that name (case-insensitive), if any.
+  std::optional<std::string_view> field(std::string_view name) const;
 };
 
 // The raw header, through its blank line, before it is parsed: a folded field line

@@ -21,6 +21,7 @@ struct RouteMatch {
   std::map<std::string, std::string> params;  // percent-decoded
   std::optional<std::size_t> body_limit;      // nullopt: the server's default
   std::string role;                           // who may call it; "" for anyone
+  std::string content_type;                   // of the body a POST or PUT must send
   // When handler is null: 404 not_found, 405 method_not_allowed (with an Allow header)
   // or 400 bad_request (a path that is not valid percent-encoding).
   HttpResponse error;
@@ -33,8 +34,11 @@ class Router {
   // (method, pattern) already added or a pattern that differs from an existing one only in
   // its parameter names (the two could never be told apart).
   // `role` names who may call the route, for HttpServerOptions::authorize; "" is anyone.
+  // `content_type` is what a POST or PUT to it must declare, bodiless or not (415 else;
+  // "" takes any).
   void add(std::string method, std::string pattern, Handler handler,
-           std::optional<std::size_t> body_limit = std::nullopt, std::string role = "");
+           std::optional<std::size_t> body_limit = std::nullopt, std::string role = "",
+           std::string content_type = "application/json");
 
   // `path` is the request target without its query, still percent-encoded. Where several
   // patterns fit, the one with a literal segment earliest wins ("/v1/jobs/stats" over
@@ -58,6 +62,7 @@ class Router {
     Handler handler;
     std::optional<std::size_t> body_limit;
     std::string role;
+    std::string content_type;
   };
 
   std::vector<Route> routes_;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -45,6 +46,7 @@ struct ServerOptions {
   std::string api_token, api_token_file;
   std::string worker_token, worker_token_file;
   bool insecure = false;
+  std::vector<std::string> allowed_origins;
 };
 
 // A refusal to start that the user can fix with a flag: exit status 2, like a usage error.
@@ -195,6 +197,10 @@ int run(const ServerOptions& options) {
   HttpServerOptions http;
   http.address = host;
   http.port = port;
+  // A server without tokens trusts whoever reaches it: on loopback, only this machine's
+  // programs, as long as no page under another name (DNS rebinding) gets in.
+  http.origins = {options.allowed_origins,
+                  is_loopback(host) && (tokens.client.empty() || tokens.worker.empty())};
   const AccessPolicy access(tokens);
   http.authorize = [&access](std::string_view role, std::string_view authorization) {
     return access.check(role, authorization);
@@ -320,6 +326,17 @@ void add_token_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--worker-token-file", options.worker_token_file,
                  "Read the worker token from this file");
   app.add_flag("--insecure", options.insecure, "Allow a non-loopback --listen without both tokens");
+  app.add_option("--allowed-origin", options.allowed_origins,
+                 "A web page's origin (scheme://host:port) that may call this server besides its "
+                 "own; repeat for more")
+      ->check([](const std::string& origin) {
+        const std::size_t scheme = origin.find("://");
+        return scheme == std::string::npos || scheme == 0 ||
+                       origin.find('/', scheme + 3) != std::string::npos ||
+                       origin.size() == scheme + 3
+                   ? "an origin is scheme://host[:port], with no path: " + origin
+                   : std::string();
+      });
 }
 
 }  // namespace

@@ -29,6 +29,7 @@ void fill_header(Message& message, const HttpResponse& response, bool close_afte
 
 RequestHead head_of(const BeastRequest& request) {
   RequestHead head;
+  head.method = std::string_view(request.method_string().data(), request.method_string().size());
   head.version = request.version();
   head.target = std::string_view(request.target().data(), request.target().size());
   for (const auto& field : request)

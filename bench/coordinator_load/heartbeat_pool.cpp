@@ -40,7 +40,7 @@ void HeartbeatPool::post(Link& link, bool retried) {
     });
     return;
   }
-  link.http.request("POST", link.target, "", {},
+  link.http.request("POST", link.target, "Content-Type: application/json\r\n", {},
                     [this, &link, retried](const error_code& ec, int status, std::string_view) {
                       if (state_.finished) return;
                       if (ec) {

@@ -56,7 +56,7 @@ void HttpConnection::request(std::string_view method, std::string_view target,
                              Done done) {
   done_ = std::move(done);
   head_.clear();
-  head_.append(method).append(" ").append(target).append(" HTTP/1.1\r\nHost: tessera\r\n");
+  head_.append(method).append(" ").append(target).append(" HTTP/1.1\r\nHost: 127.0.0.1\r\n");
   head_.append(authorization_).append(extra_headers);
   head_.append("Content-Length: ").append(std::to_string(body.size())).append("\r\n\r\n");
   const std::array<net::const_buffer, 2> buffers{net::buffer(head_),

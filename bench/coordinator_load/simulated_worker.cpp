@@ -67,7 +67,7 @@ void SimulatedWorker::do_claim() {
   if (state_.finished) return;
   timed_ = state_.timing;
   claim_sent_ = std::chrono::steady_clock::now();
-  http_.request("POST", claim_target_, "", {},
+  http_.request("POST", claim_target_, "Content-Type: application/json\r\n", {},
                 [this](const error_code& ec, int status, std::string_view body) {
                   if (state_.finished) return;
                   if (ec) return state_.fail(name_ + ": claim: " + ec.message());

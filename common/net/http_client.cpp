@@ -308,7 +308,11 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
   message.target(to_beast(target));
   message.set(http::field::host, c.host_header);
   message.set(http::field::user_agent, "tessera");
-  if (!body.empty() && !content_type.empty())
+  // Also on a bodiless POST or PUT: the coordinator requires it of every request that
+  // changes state, since a web page cannot send it to another site without asking.
+  const bool changes =
+      verb == http::verb::post || verb == http::verb::put || verb == http::verb::patch;
+  if ((!body.empty() || changes) && !content_type.empty())
     message.set(http::field::content_type, to_beast(content_type));
   if (!authorization_.empty()) message.set(http::field::authorization, authorization_);
   for (const auto& [name, value] : headers) message.set(name, value);

@@ -82,7 +82,10 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
       for (int i = 0; i < 40; ++i) {
         const BadRequest& bad = requests[random() % requests.size()];
         try {
-          const HttpResult result = http.request(bad.method, bad.target, bad.body);
+          // Uploads are pixels; everything else that has a body is JSON.
+          const HttpResult result =
+              http.request(bad.method, bad.target, bad.body,
+                           bad.method == "PUT" ? "application/octet-stream" : "application/json");
           const json body = json::parse(result.body, nullptr, false);
           const bool shaped = body.is_object() && body.contains("error") &&
                               body["error"].contains("code") && body["error"].contains("message");

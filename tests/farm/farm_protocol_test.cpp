@@ -583,10 +583,11 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
 
   // 413, answered from the headers: the bodies announced here are never sent.
   for (const auto& [head, what] : {
-           std::pair{"POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
-                     "Content-Length: 1073741824\r\n\r\n",
-                     "a 1 GiB job over the 64 MiB limit"},
-           std::pair{"PUT /v1/leases/l-x/result HTTP/1.1\r\nHost: test\r\n"
+           std::pair{
+               "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+               "Content-Length: 1073741824\r\n\r\n",
+               "a 1 GiB job over the 64 MiB limit"},
+           std::pair{"PUT /v1/leases/l-x/result HTTP/1.1\r\nHost: 127.0.0.1\r\n"
                      "Content-Type: application/octet-stream\r\nContent-Length: 1073741824\r\n\r\n",
                      "a 1 GiB tile over the largest tile's size"},
        }) {
@@ -597,13 +598,13 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
     EXPECT_TRUE(is_error(as_result, 413, "body_too_large"));
   }
   // Just over the job limit is refused too; the limit is 64 MiB, not some round number above it.
-  EXPECT_EQ(
-      send_head_only(farm.port(),
-                     "POST /v1/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: application/json\r\n"
-                     "Content-Length: " +
-                         std::to_string((64 << 20) + 1) + "\r\n\r\n")
-          .status,
-      413);
+  EXPECT_EQ(send_head_only(
+                farm.port(),
+                "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                "Content-Length: " +
+                    std::to_string((64 << 20) + 1) + "\r\n\r\n")
+                .status,
+            413);
 
   // After all of that the server is healthy and still takes work.
   HttpClient fresh(farm.url(), 10s);
@@ -690,7 +691,7 @@ TEST(FarmProtocol, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJ
   const std::uint64_t max_bytes = worker.registration()["limits"]["max_result_bytes"];
   const RawAnswer too_big = send_head_only(
       farm.port(), "PUT /v1/leases/" + lease_id +
-                       "/result HTTP/1.1\r\nHost: test\r\n"
+                       "/result HTTP/1.1\r\nHost: 127.0.0.1\r\n"
                        "Content-Type: application/octet-stream\r\nX-Tessera-Tiles: 0\r\n"
                        "Content-Length: " +
                        std::to_string(max_bytes + 1) + "\r\n\r\n");

@@ -128,7 +128,7 @@ class HttpTest : public ::testing::Test {
                                       {"content_type", request.headers["content-type"]},
                                       {"x_test", request.headers["x-test"]}}));
         },
-        16);
+        16, "", "");  // any content type: http_origin_test.cpp checks them
     router_.add("GET", "/whoami", [](HttpRequest&& request, Respond respond) {
       respond(json_response(200, {{"remote", request.remote_address}}));
     });

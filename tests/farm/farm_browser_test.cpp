@@ -1,0 +1,70 @@
+// What a web page the farm's user visits can make a real coordinator do: nothing. Forms
+// and text/plain get 415, other sites' pages 403, and a tokenless coordinator on loopback
+// answers no name but loopback ones (DNS rebinding); its own pages and the origins named
+// with --allowed-origin still may call.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/farm/farm_fixture.hpp"
+
+namespace tessera {
+namespace {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+using test::Farm;
+
+TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
+  Farm farm("browser-pages", 0, {"--allowed-origin", "https://dashboard.example:8443"});
+  HttpClient http(farm.url(), 10s);
+  const std::string job =
+      json{{"name", "from a page"}, {"scene", test::showcase(16, 16, 1, 16)}}.dump();
+  // A form post or a text/plain fetch, which a browser sends anywhere without asking.
+  EXPECT_EQ(http.request("POST", "/v1/jobs", job, "text/plain").status, 415);
+  EXPECT_EQ(http.request("POST", "/v1/jobs", job, "application/x-www-form-urlencoded").status, 415);
+  // A JSON post from another site's page (after a preflight no browser would pass).
+  const HttpResult cross = http.request("POST", "/v1/jobs", job, "application/json",
+                                        {{"Origin", "https://evil.example"}});
+  EXPECT_EQ(cross.status, 403) << cross.body;
+  EXPECT_EQ(json::parse(cross.body)["error"]["code"], "origin_refused");
+  EXPECT_EQ(http.request("GET", "/v1/jobs", "", "", {{"Origin", "https://evil.example"}}).status,
+            403);
+  EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 0u) << "a page's request made a job";
+
+  // The server's own origin and the one allowed may.
+  EXPECT_EQ(http.request("POST", "/v1/jobs", job, "application/json",
+                         {{"Origin", "http://127.0.0.1:" + std::to_string(farm.port())}})
+                .status,
+            201);
+  EXPECT_EQ(http.request("POST", "/v1/jobs", job, "application/json",
+                         {{"Origin", "https://dashboard.example:8443"}})
+                .status,
+            201);
+  EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+}
+
+TEST(FarmBrowser, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
+  Farm farm("browser-rebinding", 0);
+  HttpClient http(farm.url(), 10s);
+  const HttpResult rebound = http.request("GET", "/v1/jobs", "", "", {{"Host", "rebind.example"}});
+  EXPECT_EQ(rebound.status, 403) << rebound.body;
+  EXPECT_EQ(json::parse(rebound.body)["error"]["code"], "host_refused");
+  EXPECT_EQ(http.request("GET", "/v1/jobs", "", "", {{"Host", "localhost"}}).status, 200);
+  EXPECT_EQ(http.request("GET", "/healthz").status, 200);
+}
+
+TEST(FarmBrowser, ACoordinatorWithTokensAnswersAnyName) {
+  const auto dir = test::fresh_dir("browser-named-secrets");
+  test::write_text(dir / "api", "a-token\n");
+  test::write_text(dir / "worker", "w-token\n");
+  Farm farm("browser-named", 0,
+            {"--api-token-file", (dir / "api").string(), "--worker-token-file",
+             (dir / "worker").string()});
+  HttpClient http(farm.url(), 10s);
+  http.set_bearer_token("a-token");
+  EXPECT_EQ(http.request("GET", "/v1/jobs", "", "", {{"Host", "farm.example"}}).status, 200);
+}
+
+}  // namespace
+}  // namespace tessera
