@@ -1,9 +1,11 @@
 #include "client/job_commands.hpp"
 
 #include <unistd.h>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -149,17 +151,46 @@ int job_exit_code(const protocol::JobStatus& job) {
 
 void save_image(CoordinatorClient& api, const std::string& id, const std::string& output,
                 bool partial) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(output, ec))
+    fail(kExitUsage, output + " is a directory; name the image file, such as " +
+                         (std::filesystem::path(output) / "image.png").string());
   const ImageFormat* format = image_format_of_path(output);
   if (!format)
     fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
-  const std::string bytes = api.image(id, *format, partial);
+  // Opened before the download, so that a path that cannot be written costs no transfer;
+  // removed on any failure, so that nothing half-written is left behind.
   const std::filesystem::path temp = output + ".part";
-  {
-    std::ofstream out(temp, std::ios::binary);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out) fail(kExitJobFailed, "cannot write " + output);
+  std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+  if (!out) fail(kExitUsage, "cannot write " + output + ": " + std::strerror(errno));
+  const auto drop_temp = [&] {
+    out.close();
+    std::filesystem::remove(temp, ec);
+  };
+  std::string bytes;
+  try {
+    bytes = api.image(id, *format, partial);
+  } catch (const ApiError& e) {
+    drop_temp();
+    if (e.status() == 409 && !partial)
+      fail(kExitJobFailed, "job " + id + " has not completed; `tessera get " + id +
+                               " --partial -o " + output + "` gets the tiles rendered so far");
+    throw;
+  } catch (...) {
+    drop_temp();
+    throw;
   }
-  std::filesystem::rename(temp, output);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) {
+    std::filesystem::remove(temp, ec);
+    fail(kExitJobFailed, "cannot write " + output + ": " + std::strerror(errno));
+  }
+  std::filesystem::rename(temp, output, ec);
+  if (ec) {
+    std::filesystem::remove(temp, ec);
+    fail(kExitJobFailed, "cannot write " + output + ": " + ec.message());
+  }
   std::printf("wrote %s\n", printable(std::filesystem::absolute(output).string()).c_str());
 }
 
@@ -178,12 +209,12 @@ int submit(const Options& options, CoordinatorClient& api) {
                                : options.name;
   const protocol::JobStatus job = api.submit({name, options.priority, std::move(scene)});
   const std::string id = job.id;
-  if (options.json_output && !options.wait)
+  if (options.json_output && !options.wait && options.output.empty())
     print_json(protocol::to_json(job));
   else
     std::printf("submitted %s (%s)\n", printable(id).c_str(), printable(name).c_str());
   std::fflush(stdout);  // scripts reading the id need it now, not when --wait ends
-  if (!options.wait) return kExitOk;
+  if (!options.wait && options.output.empty()) return kExitOk;  // -o implies --wait
   const protocol::JobStatus final_job = watch(api, id);
   if (options.json_output) print_json(protocol::to_json(final_job));
   const int code = job_exit_code(final_job);
@@ -191,31 +222,48 @@ int submit(const Options& options, CoordinatorClient& api) {
   return code;
 }
 
-// Runs one command, turning transport and API errors into messages and exit codes.
+// Runs one command, turning every failure into one line and its documented exit code.
 int run(const std::function<int(CoordinatorClient&)>& command, const Options& options) {
+  const std::string url = server_url(options);
+  const auto say = [](const std::string& message) {
+    std::fprintf(stderr, "error: %s\n", printable(message).c_str());
+  };
+  std::string token;
   try {
-    CoordinatorClient api(server_url(options), resolve_secret(options.token, options.token_file,
-                                                              "TESSERA_API_TOKEN", "API token"));
+    token = resolve_secret(options.token, options.token_file, "TESSERA_API_TOKEN", "API token");
+  } catch (const std::exception& e) {  // a token file that cannot be read, say
+    say(e.what());
+    return kExitUsage;
+  }
+  try {
+    CoordinatorClient api(url, token);
     return command(api);
   } catch (const CommandFailed& failed) {
     return failed.code;
+  } catch (const BadServerUrl& e) {
+    say(std::string(e.what()) + " (from " +
+        (options.server.empty() ? "$TESSERA_SERVER" : "--server") + ")");
+    return e.wants_tls() ? kExitUnreachable : kExitUsage;
   } catch (const HttpError& e) {
-    std::fprintf(stderr, "error: cannot reach the server at %s: %s\n",
-                 printable(server_url(options)).c_str(), printable(e.what()).c_str());
+    say("cannot reach the server at " + url + ": " + e.what());
     return kExitUnreachable;
   } catch (const ApiError& e) {
+    if (e.code().empty()) {  // not a coordinator's error: a proxy's page, say
+      say("the server at " + url + " answered HTTP " + std::to_string(e.status()) +
+          " without a Tessera error" +
+          (e.from_gateway() ? " (a proxy in front of a coordinator it cannot reach?)" : ""));
+      return e.from_gateway() ? kExitUnreachable : kExitJobFailed;
+    }
     const bool path_named =
         e.path().empty() || std::string(e.what()).find(e.path()) != std::string::npos;
-    std::fprintf(stderr, "error: %s%s\n", printable(e.what()).c_str(),
-                 path_named ? "" : printable(" (at " + e.path() + ")").c_str());
-    return e.status() == 400 || e.status() == 422 ? kExitUsage : kExitJobFailed;
-  } catch (const protocol::ProtocolError& e) {
-    std::fprintf(stderr, "error: the server at %s answered in a form this CLI does not know: %s\n",
-                 printable(server_url(options)).c_str(), printable(e.what()).c_str());
+    say(std::string(e.what()) + (path_named ? "" : " (at " + e.path() + ")"));
     return kExitJobFailed;
-  } catch (const std::runtime_error& e) {  // a token file that cannot be read, say
-    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
-    return kExitUsage;
+  } catch (const protocol::ProtocolError& e) {
+    say("the server at " + url + " answered in a form this CLI does not know: " + e.what());
+    return kExitJobFailed;
+  } catch (const std::exception& e) {
+    say(e.what());
+    return kExitJobFailed;
   }
 }
 
@@ -240,7 +288,8 @@ void add_submit_command(CLI::App& app, const SharedOptions& options) {
   submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
       ->check(CLI::Range(0, 100));
   submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
-  submit_cmd->add_option("-o,--output", options->output, "With --wait: save the image here");
+  submit_cmd->add_option("-o,--output", options->output,
+                         "Save the image here once the job completes (implies --wait)");
 }
 
 // status, watch, list and get: they read what the coordinator has.

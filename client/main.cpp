@@ -1,6 +1,7 @@
 // `tessera`: the command-line client.
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string_view>
 
 #include <CLI/CLI.hpp>
@@ -8,6 +9,7 @@
 #include "client/job_commands.hpp"
 #include "client/render_command.hpp"
 #include "common/huge_page_malloc.hpp"
+#include "common/printable.hpp"
 
 namespace {
 
@@ -31,7 +33,11 @@ int main(int argc, char** argv) {
   if (argc > 1 && std::string_view(argv[1]) == "render")
     tessera::restart_with_huge_page_malloc(argv);
   CLI::App app{"tessera: distributed tile ray tracing"};
+  app.set_version_flag("--version", "tessera " TESSERA_VERSION);
   app.require_subcommand(1);
+  // The global options (--server, --json, --token...) also after the subcommand, as in
+  // git, gh and kubectl: `tessera list --json`.
+  app.fallthrough();
   tessera::add_render_command(app);
   tessera::add_job_commands(app);
   try {
@@ -41,6 +47,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);  // prints the usage error, or the help asked for
     leave(code == 0 ? 0 : 2);      // every usage error is exit code 2, as documented
+  } catch (const std::exception& e) {
+    // Whatever a command did not turn into a message itself: still one line, never abort().
+    std::fprintf(stderr, "error: %s\n", tessera::printable(e.what()).c_str());
+    leave(1);
   }
   leave(0);
 }

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -90,13 +91,21 @@ int run_render(const RenderOptions& options) {
                  printable(output.string()).c_str());
     return 2;
   }
+  std::string text;
+  try {
+    text = read_text_file(options.scene_path);
+  } catch (const std::exception&
+               e) {  // a scene file that is missing or unreadable: usage, as for submit
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
+    return 2;
+  }
   try {
     // The text and the document are freed before tracing starts, not kept beside the Scene
     // through it.
     const Scene scene = [&] {
-      const std::string text = read_text_file(options.scene_path);
-      return parse_scene_text(
-          text, Limits{}, [&](nlohmann::json& document) { apply_overrides(document, options); });
+      return parse_scene_text(std::exchange(text, {}), Limits{}, [&](nlohmann::json& document) {
+        apply_overrides(document, options);
+      });
     }();
     return render_and_report(options, scene, output);
   } catch (const SceneError& e) {

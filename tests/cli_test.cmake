@@ -61,4 +61,16 @@ string(FIND "${err}" "line 2" found)
 expect(NOT found EQUAL -1 MESSAGE "error does not name the line: ${err}")
 execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/missing.json"
   RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
-expect(NOT code EQUAL 0 MESSAGE "a missing file exited 0")
+expect(code EQUAL 2 MESSAGE "a missing scene file exited ${code}, not 2 (usage, as for submit)")
+execute_process(COMMAND "${TESSERA}" submit "${WORK_DIR}/missing.json" --server http://127.0.0.1:1
+  RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
+expect(code EQUAL 2 MESSAGE "submit of a missing scene file exited ${code}, not 2")
+
+# --version, and the global options after the subcommand as before it.
+execute_process(COMMAND "${TESSERA}" --version RESULT_VARIABLE code OUTPUT_VARIABLE out)
+expect(code EQUAL 0 MESSAGE "--version exited ${code}")
+string(REGEX MATCH "^tessera [0-9]+\\.[0-9]+\\.[0-9]+" version "${out}")
+expect(version MESSAGE "--version printed: ${out}")
+execute_process(COMMAND "${TESSERA}" list --json --server http://127.0.0.1:1
+  RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
+expect(code EQUAL 3 MESSAGE "list --json --server ... exited ${code} (not unreachable): ${err}")

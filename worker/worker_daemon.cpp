@@ -98,10 +98,15 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
     } catch (const HttpError& e) {
       if (e.kind() == HttpError::Kind::interrupted) return std::nullopt;  // stopping
       report_reachable(false, what, e.what());
-      for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms)
-        std::this_thread::sleep_for(50ms);
-      backoff = std::min<std::chrono::milliseconds>(backoff * 2, 5s);
+    } catch (const ApiError& e) {
+      // A proxy in front of a coordinator it cannot reach (restarting, say) is as good as
+      // no answer: wait as for that. A coordinator's own error stands.
+      if (!e.from_gateway()) throw;
+      report_reachable(false, what, "HTTP " + std::to_string(e.status()) + " from a proxy");
     }
+    for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms)
+      std::this_thread::sleep_for(50ms);
+    backoff = std::min<std::chrono::milliseconds>(backoff * 2, 5s);
   } while (!stop_);
   return std::nullopt;
 }

@@ -12,8 +12,39 @@
 
 #include "common/huge_page_malloc.hpp"
 #include "common/log_lines.hpp"
+#include "common/net/http_client.hpp"
+#include "common/printable.hpp"
 #include "common/secret.hpp"
 #include "worker/worker_daemon.hpp"
+
+namespace {
+
+// Runs the daemon until it ends, with `signals` (blocked in every thread) turned into `stop`.
+int run_daemon(const tessera::WorkerOptions& options, std::atomic<bool>& stop, sigset_t& signals) {
+  tessera::WorkerDaemon daemon(options, stop);
+  std::atomic<bool> exiting{false};
+  std::thread signal_thread([&signals, &stop, &daemon, &exiting] {
+    int signal = 0;
+    sigwait(&signals, &signal);
+    if (exiting) return;  // woken by main below
+    spdlog::info("signal {}: finishing the tiles in hand, then exiting", signal);
+    stop = true;
+    daemon.interrupt();
+  });
+  // The signal thread must be gone before the daemon it points at, however run() ends.
+  struct Joiner {
+    std::atomic<bool>& exiting;
+    std::thread& thread;
+    ~Joiner() {
+      exiting = true;
+      pthread_kill(thread.native_handle(), SIGTERM);
+      thread.join();
+    }
+  } joiner{exiting, signal_thread};
+  return daemon.run();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   tessera::restart_with_huge_page_malloc(argv);
@@ -31,13 +62,16 @@ int main(int argc, char** argv) {
                  "The coordinator's worker token (default: $TESSERA_WORKER_TOKEN; --token-file "
                  "keeps it out of the process list)");
   app.add_option("--token-file", token_file, "Read the worker token from this file");
+  app.set_version_flag("--version", "tessera-worker " TESSERA_VERSION);
   CLI11_PARSE(app, argc, argv);
   try {
+    tessera::parse_base_url(options.server_url);
     options.token =
         tessera::resolve_secret(options.token, token_file, "TESSERA_WORKER_TOKEN", "worker token");
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
+    std::fprintf(stderr, "error: %s\n", tessera::printable(e.what()).c_str());
+    const auto* url = dynamic_cast<const tessera::BadServerUrl*>(&e);
+    return url && url->wants_tls() ? 3 : 2;  // as the CLI's: 3 is a server out of reach
   }
   // Not a flag: only the test suite injects faults, and local workers inherit it from their
   // coordinator's environment.
@@ -59,20 +93,11 @@ int main(int argc, char** argv) {
   if (options.threads <= 0) options.threads = static_cast<int>(std::thread::hardware_concurrency());
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(options.threads));
-  tessera::WorkerDaemon daemon(options, stop);
-  std::atomic<bool> exiting{false};
-  std::thread signal_thread([&signals, &stop, &daemon, &exiting] {
-    int signal = 0;
-    sigwait(&signals, &signal);
-    if (exiting) return;  // woken by main below
-    spdlog::info("signal {}: finishing the tiles in hand, then exiting", signal);
-    stop = true;
-    daemon.interrupt();
-  });
-  const int code = daemon.run();
-  // The signal thread must be gone before the daemon it points at.
-  exiting = true;
-  pthread_kill(signal_thread.native_handle(), SIGTERM);
-  signal_thread.join();
-  return code;
+  // Anything the daemon does not handle itself ends the process with one line, not abort().
+  try {
+    return run_daemon(options, stop, signals);
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
 }

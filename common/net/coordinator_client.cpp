@@ -16,11 +16,23 @@ CoordinatorClient::CoordinatorClient(const std::string& server_url, const std::s
 
 namespace {
 
-// The answer, when its status is below 400 or one of `accepted`; otherwise ApiError.
+// The answer, when its status is 2xx or one of `accepted`; otherwise ApiError. A redirect
+// is an error too: a coordinator never sends one, so the URL names something else.
 HttpResult checked(HttpResult result, std::initializer_list<int> accepted = {}) {
-  if (result.status < 400) return result;
+  if (result.status >= 200 && result.status < 300) return result;
   for (const int status : accepted)
     if (result.status == status) return result;
+  if (result.status >= 300 && result.status < 400) {
+    const auto location = result.headers.find("location");
+    throw ApiError(result.status,
+                   {"",
+                    "the server answered HTTP " + std::to_string(result.status) + " (a redirect" +
+                        (location == result.headers.end() ? "" : " to " + location->second) +
+                        "), which a coordinator never sends: is --server its URL?",
+                    {},
+                    {},
+                    {}});
+  }
   if (auto error = protocol::error_of(result.body))
     throw ApiError(result.status, std::move(*error));
   throw ApiError(result.status,
@@ -54,7 +66,15 @@ protocol::JobStatus CoordinatorClient::cancel(std::string_view id) {
 void CoordinatorClient::remove(std::string_view id) { call("DELETE", fill(route::job, id)); }
 
 std::string CoordinatorClient::image(std::string_view id, const ImageFormat& format, bool partial) {
-  return call("GET", protocol::image_target(id, format, partial)).body;
+  HttpResult result = call("GET", protocol::image_target(id, format, partial));
+  // A proxy's page answered with 200 must not be saved as the image.
+  const auto type = result.headers.find("content-type");
+  if (type == result.headers.end() || !type->second.starts_with(format.content_type))
+    throw protocol::ProtocolError(
+        "", "the answer is " +
+                (type == result.headers.end() ? std::string("untyped") : type->second) + ", not " +
+                std::string(format.content_type));
+  return std::move(result.body);
 }
 
 protocol::WorkerList CoordinatorClient::workers() {

@@ -31,6 +31,11 @@ class ApiError : public std::runtime_error {
   const std::string& code() const { return error_.code; }
   std::string path() const { return error_.path.value_or(""); }
   const protocol::Error& error() const { return error_; }
+  // A proxy's 502, 503 or 504, with no coordinator's error in it: the coordinator behind
+  // it is out of reach, as good as no answer.
+  bool from_gateway() const {
+    return error_.code.empty() && (status_ == 502 || status_ == 503 || status_ == 504);
+  }
 
  private:
   int status_;

@@ -39,9 +39,9 @@ std::string lower(beast::string_view text) {
   return out;
 }
 
-[[noreturn]] void bad_url(std::string_view url, std::string_view why) {
-  throw std::invalid_argument("invalid server URL \"" + std::string(url) +
-                              "\": " + std::string(why));
+[[noreturn]] void bad_url(std::string_view url, std::string_view why, bool wants_tls = false) {
+  throw BadServerUrl("invalid server URL \"" + std::string(url) + "\": " + std::string(why),
+                     wants_tls);
 }
 
 // The server closed a kept-alive connection before (or while) we reused it: harmless,
@@ -55,16 +55,17 @@ bool is_closed_by_peer(const error_code& ec) {
 }  // namespace
 
 BaseUrl parse_base_url(std::string_view url) {
+  // A bare "host:port" means http://, as for curl.
   const std::size_t scheme_end = url.find("://");
-  if (scheme_end == std::string_view::npos) bad_url(url, "expected http://host[:port]");
-  const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
-  if (scheme == "https")
-    bad_url(
-        url,
-        "https is not supported; the coordinator speaks plain http:// (terminate TLS in a proxy)");
-  if (scheme != "http") bad_url(url, "expected http://host[:port]");
-
-  std::string_view authority = url.substr(scheme_end + 3);
+  if (scheme_end != std::string_view::npos) {
+    const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
+    if (scheme == "https")
+      bad_url(url, "this build speaks plain http:// only; reach the coordinator over http://",
+              true);
+    if (scheme != "http") bad_url(url, "expected http://host[:port]");
+  }
+  std::string_view authority =
+      scheme_end == std::string_view::npos ? url : url.substr(scheme_end + 3);
   const std::size_t slash = authority.find('/');
   if (slash != std::string_view::npos) {
     if (authority.substr(slash) != "/")

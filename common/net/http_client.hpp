@@ -45,7 +45,20 @@ struct BaseUrl {
   std::uint16_t port = 80;
 };
 
-// "http://host[:port][/]". Throws std::invalid_argument for anything else, https included.
+// A server URL this client cannot use, with what is wrong with it.
+class BadServerUrl : public std::invalid_argument {
+ public:
+  BadServerUrl(const std::string& message, bool wants_tls)
+      : std::invalid_argument(message), wants_tls_(wants_tls) {}
+  // An https:// URL: a server behind TLS, which this client cannot speak to yet.
+  bool wants_tls() const { return wants_tls_; }
+
+ private:
+  bool wants_tls_;
+};
+
+// "http://host[:port][/]", or "host[:port]" for the same. Throws BadServerUrl for anything
+// else, https included.
 BaseUrl parse_base_url(std::string_view url);
 
 class HttpClient {

@@ -219,8 +219,6 @@ TEST(FarmCli, AnUnreachableServerExitsWithThree) {
   EXPECT_EQ(test::run_cli(dir, {"--server", url, "submit", scene_file.string()}).exit_code, 3);
 }
 
-// Disabled: CLI11 parse errors exit with its own codes (105, 106, 109...) instead of the
-// documented 2, because client/main.cpp returns app.exit(e) unchanged. Enable once fixed.
 TEST(FarmCli, UsageErrorsExitWithTwo) {
   const fs::path dir = test::fresh_dir("cli-usage");
   for (const std::vector<std::string>& args :
@@ -228,6 +226,58 @@ TEST(FarmCli, UsageErrorsExitWithTwo) {
     const CliRun run = test::run_cli(dir, args);
     EXPECT_EQ(run.exit_code, 2) << (args.empty() ? "(none)" : args[0]) << ": " << run.output;
   }
+}
+
+TEST(FarmCli, RoughEdges) {
+  Farm farm("cli-edges", 0);
+  const fs::path scene_file = farm.dir() / "scene.json";
+  test::write_text(scene_file, test::showcase(32, 32, 1, 16).dump());
+  const std::string id = farm.api().submit("queued", 50, test::showcase(32, 32, 1, 16))["id"];
+
+  // The global options after the subcommand, as in git and kubectl.
+  const CliRun listed = test::run_cli(farm.dir(), {"list", "--json", "--server", farm.url()});
+  EXPECT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_EQ(json::parse(listed.output)["jobs"].size(), 1u) << listed.output;
+
+  // An id is data in the path: a space or a slash names no job, and changes no request.
+  for (const std::string odd : {"a b", "../jobs", "j\r\nX-Injected: 1", "%2e%2e"}) {
+    const CliRun status = tessera_cli(farm, {"status", odd});
+    EXPECT_EQ(status.exit_code, 1) << odd << ": " << status.output;
+    EXPECT_TRUE(contains(status.output, "error: no job")) << status.output;
+  }
+
+  // get of an unfinished job names the option that gets it anyway.
+  const fs::path out = farm.dir() / "out.png";
+  const CliRun unfinished = tessera_cli(farm, {"get", id, "-o", out.string()});
+  EXPECT_EQ(unfinished.exit_code, 1) << unfinished.output;
+  EXPECT_TRUE(contains(unfinished.output, "--partial")) << unfinished.output;
+  EXPECT_FALSE(contains(unfinished.output, "?partial")) << unfinished.output;
+  EXPECT_FALSE(fs::exists(out.string() + ".part"));
+  EXPECT_EQ(tessera_cli(farm, {"get", id, "--partial", "-o", out.string()}).exit_code, 0);
+
+  // get to a directory, or to a path that cannot be written: a clear error, no .part left.
+  const CliRun to_dir = tessera_cli(farm, {"get", id, "--partial", "-o", farm.dir().string()});
+  EXPECT_EQ(to_dir.exit_code, 2) << to_dir.output;
+  EXPECT_TRUE(contains(to_dir.output, "is a directory")) << to_dir.output;
+  const fs::path nowhere = farm.dir() / "no-such-dir" / "x.png";
+  const CliRun unwritable = tessera_cli(farm, {"get", id, "--partial", "-o", nowhere.string()});
+  EXPECT_EQ(unwritable.exit_code, 2) << unwritable.output;
+  EXPECT_TRUE(contains(unwritable.output, "cannot write")) << unwritable.output;
+  EXPECT_FALSE(fs::exists(nowhere.string() + ".part"));
+
+  // A request the server refuses is 1, as the README says.
+  const CliRun refused = tessera_cli(farm, {"rm", id});  // not finished: 409
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+}
+
+TEST(FarmCli, SubmitWithAnOutputWaitsForTheImage) {
+  Farm farm("cli-submit-output", 1);
+  const fs::path scene_file = farm.dir() / "scene.json";
+  test::write_text(scene_file, test::showcase(32, 32, 1, 16).dump());
+  const fs::path out = farm.dir() / "out.png";
+  const CliRun run = tessera_cli(farm, {"submit", scene_file.string(), "-o", out.string()}, 60s);
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(fs::exists(out)) << "-o without --wait did not wait for the image: " << run.output;
 }
 
 }  // namespace

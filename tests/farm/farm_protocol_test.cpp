@@ -518,13 +518,13 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   const std::string body = json{{"scene", padded}, {"name", std::string(150000, 'x')}}.dump();
   EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", body), 413, "body_too_large"));
 
-  // Within the limits, accepted; the CLI reports a limit as a usage error (exit 2).
+  // Within the limits, accepted; the CLI reports the refusal as one (exit 1), naming the limit.
   EXPECT_EQ(submit(test::showcase(16, 16, 8, 16)).status, 201);
   const fs::path scene_file = farm.dir() / "over.json";
   test::write_text(scene_file, test::showcase(16, 16, 16, 16).dump());
   const test::CliRun cli =
       test::run_cli(farm.dir(), {"--server", farm.url(), "submit", scene_file.string()});
-  EXPECT_EQ(cli.exit_code, 2) << cli.output;
+  EXPECT_EQ(cli.exit_code, 1) << cli.output;
   EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
 }
 

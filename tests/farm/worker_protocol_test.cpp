@@ -32,9 +32,13 @@ using nlohmann::json;
 // that went on past registration would claim.
 class OtherCoordinator {
  public:
-  explicit OtherCoordinator(json reply) {
-    router_.add("POST", "/v1/workers",
-                [reply](HttpRequest&&, Respond respond) { respond(json_response(201, reply)); });
+  // The first `proxy_failures` registrations get a proxy's 502 page instead of `reply`.
+  explicit OtherCoordinator(json reply, int proxy_failures = 0) : proxy_failures_(proxy_failures) {
+    router_.add("POST", "/v1/workers", [this, reply](HttpRequest&&, Respond respond) {
+      if (registrations_++ < proxy_failures_)
+        return respond(HttpResponse{502, "text/html", "<html>502 Bad Gateway</html>", {}});
+      respond(json_response(201, reply));
+    });
     router_.add("POST", "/v1/workers/{id}/claim", [this](HttpRequest&&, Respond respond) {
       ++claims_;
       respond(HttpResponse{204, "", "", {}});
@@ -61,6 +65,8 @@ class OtherCoordinator {
   std::unique_ptr<HttpServer> server_;
   std::thread thread_;
   std::atomic<int> claims_{0};
+  std::atomic<int> registrations_{0};
+  int proxy_failures_;
 };
 
 struct Outcome {
@@ -128,6 +134,47 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
   EXPECT_NE(outcome.log.find("/limits/max_result_tiles: must be an integer from 1"),
             std::string::npos)
       << outcome.log;
+}
+
+TEST(WorkerProtocol, AWorkerWaitsThroughAProxysBadGateway) {
+  json reply = {{"id", "w-1"},
+                {"heartbeat_interval_s", 5},
+                {"lease_timeout_s", 30},
+                {"protocol", kWorkerProtocolVersion}};
+  reply["limits"] = protocol::to_json(ProtocolLimits{});
+  OtherCoordinator coordinator(reply, 3);
+  const fs::path log = fs::temp_directory_path() /
+                       ("tessera-worker-protocol-" + std::to_string(::getpid()) + "-proxy.log");
+  test::Process worker(TESSERA_WORKER_BIN,
+                       {"--server", coordinator.url(), "--threads", "1", "--name", "proxied"}, log);
+  // Registered once the proxy let it through, and went on to claim.
+  EXPECT_TRUE(test::eventually([&] { return coordinator.claims() > 0; }, 20s))
+      << "the worker gave up at a 502";
+  worker.signal(SIGTERM);
+  EXPECT_TRUE(worker.wait_for(20s).has_value());
+}
+
+TEST(WorkerProtocol, AnyServerUrlIsOneLineAndAnExitCode) {
+  for (const auto& [url, code] :
+       std::vector<std::pair<std::string, int>>{{"https://127.0.0.1:1", 3},
+                                                {"ftp://127.0.0.1", 2},
+                                                {"http://", 2},
+                                                {"http://[::1", 2}}) {
+    const fs::path log = fs::temp_directory_path() /
+                         ("tessera-worker-protocol-" + std::to_string(::getpid()) + "-url.log");
+    fs::remove(log);
+    std::optional<int> status;
+    {
+      test::Process worker(TESSERA_WORKER_BIN, {"--server", url}, log);
+      status = worker.wait_for(20s);
+    }
+    std::ifstream in(log);
+    const std::string output{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_TRUE(status && WIFEXITED(*status)) << url << ": " << output;
+    EXPECT_EQ(WEXITSTATUS(*status), code) << url << ": " << output;
+    EXPECT_EQ(output.rfind("error: ", 0), 0u) << output;
+    EXPECT_EQ(output.find('\n'), output.size() - 1) << output;
+  }
 }
 
 TEST(ProtocolLimits, TheirJsonRoundTripsAndEveryLimitIsRequired) {

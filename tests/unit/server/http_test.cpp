@@ -632,11 +632,16 @@ TEST(HttpClientTest, ParsesBaseUrls) {
   try {
     parse_base_url("https://farm.example:443");
     FAIL() << "https accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("https is not supported"), std::string::npos);
+  } catch (const BadServerUrl& e) {
+    EXPECT_TRUE(e.wants_tls());
+    EXPECT_NE(std::string(e.what()).find("plain http:// only"), std::string::npos);
   }
-  EXPECT_THROW(HttpClient("https://x", 1s), std::invalid_argument);
-  EXPECT_THROW(parse_base_url("127.0.0.1:8640"), std::invalid_argument);
+  EXPECT_THROW(HttpClient("https://x", 1s), BadServerUrl);
+  // A bare host:port is http://, as for curl.
+  const BaseUrl bare = parse_base_url("127.0.0.1:8641");
+  EXPECT_EQ(bare.host, "127.0.0.1");
+  EXPECT_EQ(bare.port, 8641);
+  EXPECT_THROW(parse_base_url("ftp://host"), BadServerUrl);
   EXPECT_THROW(parse_base_url("http://:80"), std::invalid_argument);
   EXPECT_THROW(parse_base_url("http://host:0"), std::invalid_argument);
   EXPECT_THROW(parse_base_url("http://host:99999"), std::invalid_argument);
