@@ -21,6 +21,19 @@ if [ "$(id -u)" -ne 0 ]; then
   exit 1
 fi
 
+# Tools for tests only, never the product: from npm, pinned with their lock file in
+# tests/tools/. Only in a checkout (the container build copies this script alone).
+tools=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/tools
+if [ -f "$tools/package-lock.json" ]; then
+  packages+=(nodejs npm)
+fi
+
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -q
 apt-get install -y -q --no-install-recommends "${packages[@]}"
+
+if [ -f "$tools/package-lock.json" ]; then
+  # A failed install leaves the linter's test skipped, saying so; it does not stop the build.
+  (cd "$tools" && npm ci --no-audit --no-fund --loglevel=error) ||
+    echo "install-deps.sh: npm ci in $tools failed; tests/openapi_lint.sh will be skipped" >&2
+fi

@@ -79,6 +79,8 @@ class CoordinatorClient {
   void release(std::string_view lease);
   void leave(std::string_view worker);
 
+  // Every answer, as HttpClient::set_observer.
+  void observe(HttpClient::Observer observer) { http_.set_observer(std::move(observer)); }
   void interrupt() { http_.interrupt(); }
   void clear_interrupt() { http_.clear_interrupt(); }
 

@@ -332,7 +332,10 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
       }
     }
     Connection::Outcome outcome = c.exchange(message);
-    if (outcome.result) return std::move(*outcome.result);
+    if (outcome.result) {
+      if (observer_) observer_(method, target, *outcome.result);
+      return std::move(*outcome.result);
+    }
     c.close();
     if (pool_->interrupted) throw interrupted();
     if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) continue;

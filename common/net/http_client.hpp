@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -73,9 +74,9 @@ class HttpClient {
   HttpClient& operator=(HttpClient&&) noexcept;
 
   // `target` is the path and query, e.g. "/v1/jobs?state=running". Content-Type is sent
-  // only with a non-empty body. Throws HttpError when no answer arrives. When the kept-alive
-  // connection turns out to have been closed by the server before it answered, the request
-  // is sent once more on a new connection.
+  // with a body, and with every POST, PUT and PATCH. Throws HttpError when no answer arrives. When
+  // the kept-alive connection turns out to have been closed by the server before it answered, the
+  // request is sent once more on a new connection.
   HttpResult request(std::string_view method, std::string_view target, std::string body = {},
                      std::string_view content_type = "application/json",
                      const Headers& headers = {});
@@ -92,6 +93,12 @@ class HttpClient {
   void interrupt();
   // Makes the client usable again after interrupt(), on new connections.
   void clear_interrupt();
+  // Called with every answer that arrives, before request() returns it: for a program that
+  // logs its traffic, or tests that check each answer against docs/openapi.yaml. Set it
+  // before the client is shared.
+  using Observer = std::function<void(std::string_view method, std::string_view target,
+                                      const HttpResult& result)>;
+  void set_observer(Observer observer) { observer_ = std::move(observer); }
   const std::string& base_url() const { return base_url_; }
 
  private:
@@ -99,6 +106,7 @@ class HttpClient {
   struct Pool;
   std::string base_url_;
   std::string authorization_;  // the whole header value; "" for none
+  Observer observer_;
   std::unique_ptr<Pool> pool_;
 };
 

@@ -71,7 +71,7 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
   ASSERT_GE(routes.size(), 10u);
   const auto call = [&](const std::string& method, const std::string& path,
                         const std::string& token) {
-    HttpClient http(farm.url(), 10s);
+    HttpClient http = farm.http(10s);
     http.set_bearer_token(token);
     return http.request(method, concrete(path), method == "GET" || method == "DELETE" ? "" : "{}");
   };
@@ -112,7 +112,7 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
                            api_token + "\r\nContent-Length: 1073741824\r\n\r\n"),
       403);
   // The server kept serving, and logged no secret.
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
   const std::string log = test::read_text(farm.dir() / "server.log");
   EXPECT_EQ(log.find(api_token), std::string::npos);

@@ -17,7 +17,7 @@ using test::Farm;
 
 TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
   Farm farm("browser-pages", 0, {"--allowed-origin", "https://dashboard.example:8443"});
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   const std::string job =
       json{{"name", "from a page"}, {"scene", test::showcase(16, 16, 1, 16)}}.dump();
   // A form post or a text/plain fetch, which a browser sends anywhere without asking.
@@ -46,7 +46,7 @@ TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
 
 TEST(FarmBrowser, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
   Farm farm("browser-rebinding", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   const HttpResult rebound = http.request("GET", "/v1/jobs", "", "", {{"Host", "rebind.example"}});
   EXPECT_EQ(rebound.status, 403) << rebound.body;
   EXPECT_EQ(json::parse(rebound.body)["error"]["code"], "host_refused");
@@ -61,7 +61,7 @@ TEST(FarmBrowser, ACoordinatorWithTokensAnswersAnyName) {
   Farm farm("browser-named", 0,
             {"--api-token-file", (dir / "api").string(), "--worker-token-file",
              (dir / "worker").string()});
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   http.set_bearer_token("a-token");
   EXPECT_EQ(http.request("GET", "/v1/jobs", "", "", {{"Host", "farm.example"}}).status, 200);
 }

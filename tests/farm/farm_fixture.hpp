@@ -79,6 +79,12 @@ class Farm {
   // For a coordinator started with --api-token: api() sends it from now on.
   void use_api_token(const std::string& token) { api_ = std::make_unique<JsonApi>(url(), token); }
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
+  // A client of this farm whose every answer is checked against docs/openapi.yaml.
+  HttpClient http(std::chrono::milliseconds timeout) const {
+    HttpClient client(url(), timeout);
+    client.set_observer(contract_observer());
+    return client;
+  }
   int port() const { return port_; }
   JsonApi& api() { return *api_; }
   Process& server() { return *server_; }

@@ -78,7 +78,7 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
   for (int c = 0; c < 8; ++c) {
     clients.emplace_back([&, c] {
       std::mt19937 random(static_cast<unsigned>(c));
-      HttpClient http(farm.url(), 30s);
+      HttpClient http = farm.http(30s);
       for (int i = 0; i < 40; ++i) {
         const BadRequest& bad = requests[random() % requests.size()];
         try {
@@ -96,7 +96,7 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
           ++answered;
         } catch (const HttpError& e) {
           ADD_FAILURE() << bad.what << ": no answer: " << e.what();
-          http = HttpClient(farm.url(), 30s);
+          http = farm.http(30s);
           ++wrong;
         }
       }
@@ -107,7 +107,7 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
   EXPECT_EQ(wrong.load(), 0);
 
   // Still serving, and what was stored before is intact.
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
   const json job = farm.api().submit("after the storm", 50, test::showcase(16, 16, 1, 16));
   EXPECT_EQ(job["state"], "queued");

@@ -49,7 +49,7 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   std::vector<std::thread> clients;
   for (int c = 0; c < pollers; ++c) {
     clients.emplace_back([&, c] {
-      HttpClient http(farm.url(), 30s);
+      HttpClient http = farm.http(30s);
       std::vector<double> mine;
       for (std::size_t i = static_cast<std::size_t>(c); !stop; ++i) {
         const auto start = Clock::now();
@@ -57,7 +57,7 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
           if (http.request("GET", "/v1/jobs/" + ids[i % ids.size()]).status != 200) ++errors;
         } catch (const HttpError&) {
           ++errors;
-          http = HttpClient(farm.url(), 30s);
+          http = farm.http(30s);
         }
         if (measuring) {
           mine.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
@@ -123,7 +123,7 @@ TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
       << "the coordinator grew from " << warm_kib << " KiB to " << peak_kib << " KiB";
 #endif
   // And it still answers at once.
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
 }
 

@@ -139,7 +139,7 @@ json worker_info(Farm& farm, const std::string& id) {
 
 TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   Farm farm("proto-basic", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "raw");
   EXPECT_EQ(worker.registration()["heartbeat_interval_s"], 5.0);  // the documented defaults
   EXPECT_EQ(worker.registration()["lease_timeout_s"], 30.0);
@@ -215,7 +215,7 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
 
 TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
   Farm farm("proto-batch", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "batch");
   const std::string job_id = farm.api().submit("batch", 50, test::showcase(64, 32, 1, 16))["id"];
 
@@ -317,7 +317,7 @@ TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
 
 TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
   Farm farm("proto-job-wait", 0);
-  HttpClient http(farm.url(), 30s);
+  HttpClient http = farm.http(30s);
   RawWorker worker(farm.url(), "finisher");
   const std::string job_id = farm.api().submit("waited", 50, one_tile_scene())["id"];
   for (const char* bad : {"-1", "61", "soon", "1x"})
@@ -335,7 +335,7 @@ TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
 
   // Parked, then woken by the result that completes the job.
   auto parked = std::async(std::launch::async, [&] {
-    HttpClient waiting(farm.url(), 30s);
+    HttpClient waiting = farm.http(30s);
     return waiting.request("GET", "/v1/jobs/" + job_id + "?wait_s=20");
   });
   ASSERT_EQ(parked.wait_for(300ms), std::future_status::timeout) << "the status did not wait";
@@ -357,7 +357,7 @@ TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
 
 TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   Farm farm("proto-expiry", 0, {"--lease-timeout", "1", "--heartbeat-interval", "0.2"});
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   RawWorker slow(farm.url(), "slow");
   RawWorker rescuer(farm.url(), "rescuer");
   EXPECT_EQ(slow.registration()["heartbeat_interval_s"], 0.2);
@@ -493,7 +493,7 @@ RawAnswer send_head_only(int port, const std::string& head) {
 TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   Farm farm("proto-limits", 0,
             {"--max-samples", "8", "--max-pixels", "10000", "--max-job-bytes", "100000"});
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   const auto submit = [&](const json& scene) {
     return http.request("POST", "/v1/jobs", json{{"name", "big"}, {"scene", scene}}.dump());
   };
@@ -530,7 +530,7 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
 
 TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   Farm farm("proto-errors", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
 
   // 400
   EXPECT_TRUE(is_error(http.request("POST", "/v1/jobs", "{\"scene\": "), 400, "malformed_json"));
@@ -607,7 +607,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
             413);
 
   // After all of that the server is healthy and still takes work.
-  HttpClient fresh(farm.url(), 10s);
+  HttpClient fresh = farm.http(10s);
   const HttpResult health = fresh.request("GET", "/healthz");
   EXPECT_EQ(health.status, 200);
   EXPECT_EQ(json::parse(health.body)["status"], "ok");
@@ -617,7 +617,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
 
 TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {
   Farm farm("proto-version", 0, {"--max-tile-size", "4096"});
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "current");
   const json& reply = worker.registration();
   EXPECT_EQ(reply["protocol"], kWorkerProtocolVersion);
@@ -646,7 +646,7 @@ TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol
 
 TEST(FarmProtocol, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJob) {
   Farm farm("proto-over", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "over");
   // 64 tiles of 8 px.
   const std::string job_id = farm.api().submit("over", 50, test::showcase(64, 64, 1, 8))["id"];

@@ -71,7 +71,7 @@ TEST(Farm, InvalidSceneIsRefusedWithItsPointerAndTheServerKeepsServing) {
     EXPECT_EQ(e.code(), "invalid_scene");
     EXPECT_EQ(e.path(), "/scene/objects/1/radius");
   }
-  HttpClient http(farm.url(), 5s);
+  HttpClient http = farm.http(5s);
   const auto malformed = http.request("POST", "/v1/jobs", "{\"scene\": ");
   EXPECT_EQ(malformed.status, 400);
   EXPECT_NE(malformed.body.find("line 1"), std::string::npos) << malformed.body;

@@ -33,7 +33,7 @@ const std::vector<std::pair<const char*, std::string>> kControlNames = {
 
 TEST(FarmText, NamesWithControlCharactersAreRefusedWithTheirPointer) {
   Farm farm("text-names", 0);
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   const json scene = test::showcase(16, 16, 1, 16);
   for (const auto& [what, name] : kControlNames) {
     SCOPED_TRACE(what);
@@ -84,7 +84,7 @@ TEST(FarmText, TheServerLogAndTheCliEscapeWhatOthersWrote) {
   EXPECT_EQ(status.output.find("\n[2026-12-05"), std::string::npos) << status.output;
 
   // An id taken from a URL reaches the log (a refused result is logged with its lease).
-  HttpClient http(farm.url(), 10s);
+  HttpClient http = farm.http(10s);
   const HttpResult refused =
       http.request("PUT", "/v1/leases/l%0A%5B2026-12-05%5D%20forged%1B%5B31m/result",
                    std::string(13, '\0'), "application/octet-stream");

@@ -9,12 +9,15 @@
 
 #include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
+#include "tests/farm/contract_check.hpp"
 
 namespace tessera::test {
 
 class JsonApi {
  public:
-  explicit JsonApi(const std::string& url, const std::string& token = "") : client_(url, token) {}
+  explicit JsonApi(const std::string& url, const std::string& token = "") : client_(url, token) {
+    client_.observe(contract_observer());
+  }
 
   nlohmann::json submit(const std::string& name, int priority, const nlohmann::json& scene) {
     return protocol::to_json(client_.submit({name, priority, scene}));
