@@ -24,7 +24,8 @@ fi
 # Tools for tests only, never the product: from npm, pinned with their lock file in
 # tests/tools/. Only in a checkout (the container build copies this script alone).
 tools=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/tools
-if [ -f "$tools/package-lock.json" ]; then
+# Debian's, unless this machine has a Node.js of its own (which Debian's npm would conflict with).
+if [ -f "$tools/package-lock.json" ] && ! command -v npm >/dev/null; then
   packages+=(nodejs npm)
 fi
 
