@@ -1,10 +1,12 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <variant>
 
@@ -49,6 +51,22 @@ std::span<const float> floats_of(std::string& body, std::vector<float>& copy) {
 
 // An upload's tiles handed to the scheduler, or the answer that refuses it before.
 using Checked = std::variant<Pending<ResultOutcome>, HttpResponse>;
+
+// The offset of the first value that no render gives (NaN, an infinity, a negative), if any:
+// such a value would poison every image and sum it is part of.
+std::optional<std::size_t> first_impossible(std::span<const float> values) {
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (!(values[i] >= 0.0f && values[i] <= std::numeric_limits<float>::max())) return i;
+  return std::nullopt;
+}
+
+HttpResponse impossible_pixels(const std::string& where, std::size_t value, float seen) {
+  const char* what = std::isnan(seen) ? "NaN" : std::isinf(seen) ? "an infinity" : "a negative";
+  return error_response(400, "invalid_pixels",
+                        where + " holds " + what + " at pixel " + std::to_string(value / 3) +
+                            " (channel " + std::to_string(value % 3) +
+                            "); a render gives finite values of 0 or more");
+}
 
 Checked check_upload(ApiContext& context, HttpRequest& request) {
   const std::string& id = request.params.at("id");
@@ -97,11 +115,17 @@ Checked check_upload(ApiContext& context, HttpRequest& request) {
                             : static_cast<int>(index));
     const auto results = slice_upload(pixels, indexes, *sizes, rays);
     if (!results) return Pending<ResultOutcome>{ResultOutcome::wrong_size};
+    for (const TileResult& tile : *results)
+      if (const auto bad = first_impossible(tile.pixels))
+        return impossible_pixels("tile " + std::to_string(tile.tile_index), *bad,
+                                 tile.pixels[*bad]);
     return context.scheduler.complete(id, *results);
   }
   if (rays.size() != 1)
     return error_response(400, "invalid_request",
                           "X-Tessera-Rays must be one count when X-Tessera-Tiles is absent");
+  if (const auto bad = first_impossible(pixels))
+    return impossible_pixels("the upload", *bad, pixels[*bad]);
   return context.scheduler.complete(id, pixels, rays.front());
 }
 

@@ -9,7 +9,9 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <future>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -188,6 +190,19 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   EXPECT_TRUE(is_error(worker.upload(lease_id, tile_body(16, 15, 0.5f)), 400, "wrong_size"));
   EXPECT_TRUE(is_error(worker.upload(lease_id, tile_body(16, 16, 0.5f) + "x"), 400, "wrong_size"));
   EXPECT_TRUE(is_error(worker.upload(lease_id, ""), 400, "wrong_size"));
+  // Values no render gives are refused, naming the tile and the pixel, with or without
+  // X-Tessera-Tiles.
+  for (const float impossible :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.25f}) {
+    std::string body = tile_body(16, 16, 0.5f);
+    std::memcpy(body.data() + (17 * 3 + 1) * sizeof(float), &impossible, sizeof(float));
+    const HttpResult whole = worker.upload(lease_id, body);
+    EXPECT_TRUE(is_error(whole, 400, "invalid_pixels")) << impossible;
+    EXPECT_NE(whole.body.find("pixel 17 (channel 1)"), std::string::npos) << whole.body;
+    const HttpResult named = worker.upload_tiles(lease_id, "0", body, "100");
+    EXPECT_TRUE(is_error(named, 400, "invalid_pixels")) << impossible;
+    EXPECT_NE(named.body.find("tile 0 holds"), std::string::npos) << named.body;
+  }
   EXPECT_EQ(worker.heartbeat(lease_id).status, 200);
   EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 0);
 

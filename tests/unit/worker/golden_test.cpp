@@ -50,6 +50,12 @@ TEST_P(Golden, MatchesReferenceImage) {
   document["image"]["width"] = kGoldenWidth;
   document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
   const Image image = test::render_image(document, 2);
+  // What a worker uploads must be what the coordinator accepts: finite values of 0 or more.
+  const auto pixels = image.pixels();
+  const auto impossible = std::find_if(pixels.begin(), pixels.end(),
+                                       [](float v) { return !(v >= 0.0f && std::isfinite(v)); });
+  EXPECT_EQ(impossible, pixels.end()) << "value " << (impossible - pixels.begin()) << " is "
+                                      << (impossible == pixels.end() ? 0.0f : *impossible);
 
   const fs::path golden =
       fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" / (GetParam().name + ".exr");
