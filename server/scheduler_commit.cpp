@@ -171,8 +171,8 @@ void Scheduler::apply(StagedChange& change) {
   for (auto& [job, status] : change.jobs) apply_job(*job, status);
   for (auto& [key, tile] : change.tiles) apply_tile(*key.first, key.second, std::move(tile));
   for (auto& [worker, staged] : change.workers) {
-    present_workers_ += static_cast<int>(staged.info.state != worker_gone) -
-                        static_cast<int>(worker->info.state != worker_gone);
+    present_workers_ += static_cast<int>(is_present(staged.info.state)) -
+                        static_cast<int>(is_present(worker->info.state));
     *worker = std::move(staged);
     worker->persisted_seen_ms = worker->info.last_seen_ms;
   }

@@ -31,6 +31,12 @@ inline constexpr std::string_view worker_rendering =
     protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::rendering);
 inline constexpr std::string_view worker_gone =
     protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::gone);
+inline constexpr std::string_view worker_departed =
+    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::left);
+// Idle or rendering: counted among the workers that share a job's tiles.
+inline bool is_present(std::string_view state) {
+  return state != worker_gone && state != worker_departed;
+}
 
 struct TileSlot {
   TileRect rect;

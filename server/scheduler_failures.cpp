@@ -89,7 +89,7 @@ bool Scheduler::kept_off(const JobEntry& job, const WorkerEntry& worker) const {
   // Only while another worker could take the tiles: with nobody else, trying again is the
   // way to the attempt limit, which ends the job instead of leaving it waiting forever.
   for (const auto& [id, other] : workers_)
-    if (other.get() != &worker && other->info.state != worker_gone && !failed_too_often(*other))
+    if (other.get() != &worker && is_present(other->info.state) && !failed_too_often(*other))
       return true;
   return false;
 }

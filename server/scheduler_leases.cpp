@@ -53,7 +53,8 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
     const StoreTicket before = last_write_;
     std::optional<Lease> result;
     WorkerEntry* worker = find_worker(worker_id);
-    if (!worker) return pending(result, before);
+    // One that left registers again first.
+    if (!worker || worker->info.state == worker_departed) return pending(result, before);
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
 

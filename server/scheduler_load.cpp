@@ -85,7 +85,7 @@ void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
     worker->info.tiles_rendered = row.tiles_rendered;
     worker->info.last_seen_ms = row.last_seen_ms;
     worker->persisted_seen_ms = row.last_seen_ms;
-    present_workers_ += worker->info.state != worker_gone;
+    present_workers_ += is_present(worker->info.state);
     workers_.emplace(row.id, std::move(worker));
   }
 }
@@ -203,7 +203,7 @@ void Scheduler::stage_leases_kept(StagedChange& change, std::int64_t now) {
   }
   // Without a lease we know nothing of a worker until it talks to us again.
   for (auto& [id, worker] : workers_)
-    if (!holders.contains(worker.get()) && worker->info.state != worker_gone)
+    if (!holders.contains(worker.get()) && is_present(worker->info.state))
       change.worker(*worker).info.state = worker_gone;
 }
 

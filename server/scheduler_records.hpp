@@ -77,7 +77,7 @@ struct WorkerInfo {
   std::string name;
   std::string host;
   int threads = 0;
-  std::string state;        // "idle", "rendering", "gone"
+  std::string state;        // "idle", "rendering", "gone", "left"
   std::string current_job;  // empty when idle
   int current_tile = -1;
   std::uint64_t tiles_rendered = 0;

@@ -41,20 +41,21 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
 
 bool Scheduler::worker_known(const std::string& worker_id) const {
   std::lock_guard lock(mutex_);
-  return workers_.contains(worker_id);
+  const WorkerEntry* worker = find_worker(worker_id);
+  return worker && worker->info.state != worker_departed;
 }
 
 Written Scheduler::touch_worker(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   const StoreTicket before = last_write_;
   WorkerEntry* worker = find_worker(worker_id);
-  if (!worker) return pending(std::monostate{}, before);
+  if (!worker || worker->info.state == worker_departed) return pending(std::monostate{}, before);
   const std::int64_t now = clock_.now_ms();
   if (worker->info.state != worker_gone) {
     note_seen(*worker, now);
     return pending(std::monostate{}, before);
   }
-  // Marked gone (it left, or the coordinator restarted) but talking again.
+  // Marked gone (not heard from, or the coordinator restarted) but talking again.
   StagedChange change;
   WorkerEntry& staged = change.worker(*worker);
   staged.info.state = worker_idle;
@@ -77,7 +78,7 @@ Written Scheduler::worker_left(const std::string& worker_id) {
       notify = callbacks_;
     }
     WorkerEntry& staged = change.worker(*worker);
-    staged.info.state = worker_gone;
+    staged.info.state = worker_departed;
     staged.info.last_seen_ms = clock_.now_ms();
     commit(change);
     spdlog::info("worker {} ({}) left", worker_id, worker->info.name);

@@ -46,11 +46,14 @@ struct Registration {
 };
 nlohmann::json to_json(const Registration& registration);
 
-enum class WorkerState { idle, rendering, gone };
-inline constexpr NameTable<WorkerState, 3> kWorkerStateNames{{
+// gone: not heard from (it may come back, and claim again); left: it said goodbye, and must
+// register again before it claims.
+enum class WorkerState { idle, rendering, gone, left };
+inline constexpr NameTable<WorkerState, 4> kWorkerStateNames{{
     {WorkerState::idle, "idle"},
     {WorkerState::rendering, "rendering"},
     {WorkerState::gone, "gone"},
+    {WorkerState::left, "left"},
 }};
 
 // One worker of GET /v1/workers (`Worker`).

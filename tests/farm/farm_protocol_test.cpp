@@ -8,6 +8,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <future>
@@ -15,6 +16,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -77,6 +79,7 @@ class RawWorker {
 
   const std::string& id() const { return id_; }
   const json& registration() const { return registration_; }
+  HttpResult leave() { return http_.request("DELETE", "/v1/workers/" + id_); }
 
   HttpResult claim(double wait_s, const std::string& more_query = "") {
     return http_.request(
@@ -395,6 +398,16 @@ TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   EXPECT_EQ(rescuer_lease["tiles"], slow_lease["tiles"]);
   EXPECT_EQ(worker_info(farm, slow.id())["state"], "idle");
 
+  // The rescuer keeps its lease alive as tessera-worker does, every heartbeat interval,
+  // however long the checks below take on a busy machine.
+  std::atomic<bool> checked{false};
+  std::thread beating([&, lease = rescuer_lease["id"].get<std::string>()] {
+    HttpClient beats = farm.http(10s);
+    while (!checked) {
+      beats.request("POST", "/v1/leases/" + lease + "/heartbeat");
+      std::this_thread::sleep_for(200ms);
+    }
+  });
   // The slow worker learns it lost the tile, and its late result is refused.
   EXPECT_TRUE(is_error(slow.heartbeat(slow_lease["id"]), 410, "lease_lost"));
   const std::string before = exr_bytes(http, job_id);
@@ -404,6 +417,8 @@ TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   EXPECT_EQ(farm.api().job(job_id)["tiles"]["done"], 0);
 
   // The current holder delivers; the stale one still cannot overwrite it afterwards.
+  checked = true;
+  beating.join();
   EXPECT_EQ(rescuer.heartbeat(rescuer_lease["id"]).status, 200);
   const HttpResult accepted = rescuer.upload(rescuer_lease["id"], tile_body(16, 16, 0.25f));
   ASSERT_EQ(accepted.status, 200) << accepted.body;
@@ -628,6 +643,22 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_EQ(json::parse(health.body)["status"], "ok");
   EXPECT_EQ(farm.api().submit("after", 50, one_tile_scene())["state"], "queued");
   EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+}
+
+TEST(FarmProtocol, AWorkerThatLeftRegistersAgainBeforeItClaims) {
+  Farm farm("proto-left", 0);
+  farm.api().submit("one tile", 50, one_tile_scene());
+  RawWorker worker(farm.url(), "leaver");
+  EXPECT_EQ(worker.leave().status, 204);
+  EXPECT_EQ(worker_info(farm, worker.id())["state"], "left");
+  const HttpResult claimed = worker.claim(0);
+  EXPECT_TRUE(is_error(claimed, 404, "unknown_worker")) << claimed.body;
+  EXPECT_NE(claimed.body.find("register again"), std::string::npos) << claimed.body;
+  EXPECT_EQ(worker_info(farm, worker.id())["state"], "left") << "a claim brought it back";
+  // Registered again, under a new id, it gets the tile.
+  RawWorker again(farm.url(), "leaver");
+  EXPECT_NE(again.id(), worker.id());
+  EXPECT_EQ(again.claim(5).status, 200);
 }
 
 TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {

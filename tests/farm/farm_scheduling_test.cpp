@@ -118,7 +118,7 @@ TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
   const json after = *farm.worker_named("first");
   EXPECT_GE(after["tiles_rendered"].get<int>(), rendered_before + 1)
       << "the tile in progress at SIGTERM was not delivered; see " << (farm.dir() / "first.log");
-  EXPECT_EQ(after["state"], "gone");
+  EXPECT_EQ(after["state"], "left");
   EXPECT_LT(farm.api().job(id)["tiles"]["done"].get<int>(), total)
       << "nothing left for a second worker";
 
@@ -151,7 +151,7 @@ TEST(FarmScheduling, AnIdleWorkerExitsAtOnceOnSigterm) {
   EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "status " << *status;
   EXPECT_LT(std::chrono::steady_clock::now() - stopped_at, 3s)
       << "the worker sat out its long poll instead of stopping";
-  EXPECT_EQ(farm.worker_named("idle").value()["state"], "gone");  // it said goodbye
+  EXPECT_EQ(farm.worker_named("idle").value()["state"], "left");  // it said goodbye
   EXPECT_EQ(test::read_text(farm.dir() / "idle.log").find("cannot reach"), std::string::npos)
       << "the interrupted claim was reported as an unreachable coordinator";
 }

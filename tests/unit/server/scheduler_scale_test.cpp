@@ -60,8 +60,10 @@ TEST_F(SchedulerTest, TheBatchShareCountsWorkersThatLeaveComeBackAndSurviveARest
   s().worker_left(two);
   s().worker_left(two);                                 // leaving twice counts once
   EXPECT_EQ(s().claim(three, 256)->tiles.size(), 53u);  // 214 / (2 * 2)
-  s().touch_worker(two);                                // talking again: present again
-  EXPECT_EQ(s().claim(two, 256)->tiles.size(), 26u);    // 161 / (2 * 3)
+  s().touch_worker(two);                                // talking again: still left
+  EXPECT_FALSE(s().claim(two, 256));                    // it registers again first
+  const std::string back = worker("two");
+  EXPECT_EQ(s().claim(back, 256)->tiles.size(), 26u);  // 161 / (2 * 3)
 
   // A restart forgets every worker without a lease until it talks again: here all three
   // hold one, so they stay, and a fourth that left before stays gone.

@@ -347,10 +347,15 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   const std::string w2 = worker("two");
   const Lease first = *s().claim(w1);
   s().worker_left(w1);
-  EXPECT_EQ(info_of(w1).state, "gone");
+  EXPECT_EQ(info_of(w1).state, "left");
   EXPECT_EQ(info_of(w1).current_job, "");
   EXPECT_FALSE(s().heartbeat(first.id));
   EXPECT_EQ(deliver(first), ResultOutcome::stale);
+  // It said goodbye: it registers again before it claims, and touching it revives nothing.
+  EXPECT_FALSE(s().worker_known(w1));
+  s().touch_worker(w1);
+  EXPECT_EQ(info_of(w1).state, "left");
+  EXPECT_FALSE(s().claim(w1));
 
   const Lease second = *s().claim(w2);
   EXPECT_EQ(second.tiles[0].index, first.tiles[0].index);
@@ -359,11 +364,13 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   EXPECT_EQ(info_of(w2).state, "idle");
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
 
-  s().touch_worker(w1);  // it came back
-  EXPECT_EQ(info_of(w1).state, "idle");
-  EXPECT_TRUE(s().worker_known(w1));
+  // It comes back: not under its old id, which stays left, but registered anew.
+  s().touch_worker(w1);
+  EXPECT_EQ(info_of(w1).state, "left");
   EXPECT_FALSE(s().worker_known("w-000000000000"));
-  EXPECT_TRUE(s().claim(w1));
+  const std::string back = worker("one");
+  EXPECT_NE(back, w1);
+  EXPECT_TRUE(s().claim(back));
 }
 
 TEST_F(SchedulerTest, JobsAreListedNewestFirstWithFilterAndLimit) {
