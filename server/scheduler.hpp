@@ -250,6 +250,8 @@ class Scheduler {
   bool kept_off(const JobEntry& job, const WorkerEntry& worker) const;
   // Returns the tiles of leases expired at `now` to the queue; true when there were any.
   bool expire_locked(std::int64_t now);
+  // Drops the workers gone or left longer than config_.forget_workers_after_ms.
+  void forget_workers_locked(std::int64_t now);
   Lease lease_of(const std::string& lease_id) const;
   std::string new_lease_id() const;
   // The job a claim by `worker` takes tiles of: the first in claim order with a pending

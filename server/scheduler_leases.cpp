@@ -245,6 +245,7 @@ Written Scheduler::expire_leases() {
     const StoreTicket before = last_write_;
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
+    forget_workers_locked(now);
     StagedChange change;
     fail_stalled_locked(now, change);
     if (!change.empty()) {

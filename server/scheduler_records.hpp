@@ -36,6 +36,9 @@ struct SchedulerConfig {
   // A running job whose tiles are being rendered but of which no tile has been delivered
   // for this long fails, saying so, instead of stalling unseen; 0: never.
   std::int64_t stall_timeout_ms = 30 * 60 * 1000;
+  // A worker that left, or has not been heard from, for this long leaves the worker list
+  // and the store; 0: never.
+  std::int64_t forget_workers_after_ms = 60 * 60 * 1000;
 };
 
 // Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm

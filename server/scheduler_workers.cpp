@@ -88,6 +88,22 @@ Written Scheduler::worker_left(const std::string& worker_id) {
   return answer;
 }
 
+void Scheduler::forget_workers_locked(std::int64_t now) {
+  if (config_.forget_workers_after_ms <= 0) return;
+  for (auto it = workers_.begin(); it != workers_.end();) {
+    const WorkerEntry& worker = *it->second;
+    if (is_present(worker.info.state) || !worker.lease_id.empty() ||
+        now - worker.info.last_seen_ms < config_.forget_workers_after_ms) {
+      ++it;
+      continue;
+    }
+    spdlog::info("worker {} ({}) forgotten: {} since {} s ago", it->first, worker.info.name,
+                 worker.info.state, (now - worker.info.last_seen_ms) / 1000);
+    queue_write([id = it->first](Store& store) { store.delete_worker(id); });
+    it = workers_.erase(it);
+  }
+}
+
 std::vector<WorkerInfo> Scheduler::workers() const {
   std::lock_guard lock(mutex_);
   std::vector<WorkerInfo> result;

@@ -39,6 +39,7 @@ struct ServerOptions {
   int max_tile_attempts = 3;
   int max_tile_handouts = tessera::SchedulerConfig{}.max_tile_handouts;
   double stall_timeout_s = tessera::SchedulerConfig{}.stall_timeout_ms / 1e3;
+  double forget_workers_after_s = tessera::SchedulerConfig{}.forget_workers_after_ms / 1e3;
   std::string log_level = "info";
   std::string port_file;
   tessera::Limits limits;
@@ -115,6 +116,7 @@ tessera::SchedulerConfig scheduler_config(const ServerOptions& options) {
   config.max_tile_attempts = options.max_tile_attempts;
   config.max_tile_handouts = options.max_tile_handouts;
   config.stall_timeout_ms = static_cast<std::int64_t>(options.stall_timeout_s * 1000);
+  config.forget_workers_after_ms = static_cast<std::int64_t>(options.forget_workers_after_s * 1000);
   return config;
 }
 
@@ -277,6 +279,11 @@ void add_farm_options(CLI::App& app, ServerOptions& options) {
   app.add_option(
          "--stall-timeout", options.stall_timeout_s,
          "Seconds a job's tiles may render with none delivered before the job fails; 0: never")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--forget-workers-after", options.forget_workers_after_s,
+                 "Seconds after which a worker that left or went silent leaves the worker list; "
+                 "0: never")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")

@@ -288,6 +288,10 @@ void Store::put_tile_failure(const TileFailureRow& failure) {
       .run();
 }
 
+void Store::delete_worker(const std::string& id) {
+  db_.statement("DELETE FROM workers WHERE id = ?")->bind(1, id).run();
+}
+
 void Store::upsert_worker(const WorkerRow& worker) {
   db_.statement(
          "INSERT INTO workers (id, name, host, threads, state, tiles_rendered, last_seen_ms) "

@@ -136,6 +136,7 @@ class Store {
       const std::function<void(int tile_index, std::span<const float>)>& visit);
 
   void upsert_worker(const WorkerRow& worker);
+  void delete_worker(const std::string& id);
   void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);
 
   // Deletes pixel files whose job is not kept (left by a removal that stopped half-way).

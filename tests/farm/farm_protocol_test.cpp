@@ -661,6 +661,16 @@ TEST(FarmProtocol, AWorkerThatLeftRegistersAgainBeforeItClaims) {
   EXPECT_EQ(again.claim(5).status, 200);
 }
 
+TEST(FarmProtocol, AWorkerGoneLongerThanForgetWorkersAfterLeavesTheList) {
+  Farm farm("proto-forget", 0, {"--forget-workers-after", "1"});
+  RawWorker leaver(farm.url(), "leaver");
+  RawWorker stayer(farm.url(), "stayer");
+  EXPECT_EQ(leaver.leave().status, 204);
+  EXPECT_TRUE(test::eventually([&] { return worker_info(farm, leaver.id()).is_null(); }, 20s))
+      << "a worker that left a second ago is still listed";
+  EXPECT_FALSE(worker_info(farm, stayer.id()).is_null()) << "a worker that never left was dropped";
+}
+
 TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {
   Farm farm("proto-version", 0, {"--max-tile-size", "4096"});
   HttpClient http = farm.http(10s);

@@ -458,3 +458,40 @@ TEST_F(SchedulerTest, UnknownLeasesAndWorkers) {
 
 }  // namespace
 }  // namespace tessera
+
+namespace tessera {
+namespace {
+
+TEST_F(SchedulerTest, WorkersGoneOrLeftForAnHourLeaveTheListAndTheStore) {
+  const auto listed = [&](const std::string& id) {
+    for (const WorkerInfo& info : s().workers())
+      if (info.id == id) return true;
+    return false;
+  };
+  const std::string leaver = worker("leaver");
+  const std::string stayer = worker("stayer");
+  const std::int64_t hour = SchedulerConfig{}.forget_workers_after_ms;
+  s().worker_left(leaver);
+  clock_.advance_ms(hour - 1000);
+  s().expire_leases();
+  EXPECT_TRUE(listed(leaver)) << "forgotten before its hour";
+  clock_.advance_ms(2000);
+  s().touch_worker(stayer);  // one that talks stays, however long it has been around
+  s().expire_leases();
+  EXPECT_FALSE(listed(leaver));
+  EXPECT_TRUE(listed(stayer));
+
+  // Forgotten in the store too; and one silent since a restart goes after its hour.
+  reopen();
+  EXPECT_FALSE(listed(leaver));
+  ASSERT_TRUE(listed(stayer));
+  EXPECT_EQ(info_of(stayer).state, "gone");
+  clock_.advance_ms(hour + 1000);
+  s().expire_leases();
+  EXPECT_FALSE(listed(stayer));
+  reopen();
+  EXPECT_TRUE(s().workers().empty());
+}
+
+}  // namespace
+}  // namespace tessera
