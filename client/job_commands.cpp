@@ -159,38 +159,32 @@ void save_image(CoordinatorClient& api, const std::string& id, const std::string
   if (!format)
     fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
   // Opened before the download, so that a path that cannot be written costs no transfer;
-  // removed on any failure, so that nothing half-written is left behind.
-  const std::filesystem::path temp = output + ".part";
-  std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+  // removed however the command ends unless renamed into place, so that nothing
+  // half-written is left behind.
+  struct PartFile {
+    std::filesystem::path path;
+    bool kept = false;
+    ~PartFile() {
+      std::error_code ignored;
+      if (!kept) std::filesystem::remove(path, ignored);
+    }
+  } part{output + ".part"};
+  std::ofstream out(part.path, std::ios::binary | std::ios::trunc);
   if (!out) fail(kExitUsage, "cannot write " + output + ": " + std::strerror(errno));
-  const auto drop_temp = [&] {
-    out.close();
-    std::filesystem::remove(temp, ec);
-  };
   std::string bytes;
   try {
     bytes = api.image(id, *format, partial);
   } catch (const ApiError& e) {
-    drop_temp();
-    if (e.status() == 409 && !partial)
-      fail(kExitJobFailed, "job " + id + " has not completed; `tessera get " + id +
-                               " --partial -o " + output + "` gets the tiles rendered so far");
-    throw;
-  } catch (...) {
-    drop_temp();
-    throw;
+    if (e.status() != 409 || partial) throw;
+    fail(kExitJobFailed, "job " + id + " has not completed; `tessera get " + id + " --partial -o " +
+                             output + "` gets the tiles rendered so far");
   }
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.close();
-  if (!out) {
-    std::filesystem::remove(temp, ec);
-    fail(kExitJobFailed, "cannot write " + output + ": " + std::strerror(errno));
-  }
-  std::filesystem::rename(temp, output, ec);
-  if (ec) {
-    std::filesystem::remove(temp, ec);
-    fail(kExitJobFailed, "cannot write " + output + ": " + ec.message());
-  }
+  if (!out) fail(kExitJobFailed, "cannot write " + output + ": " + std::strerror(errno));
+  std::filesystem::rename(part.path, output, ec);
+  if (ec) fail(kExitJobFailed, "cannot write " + output + ": " + ec.message());
+  part.kept = true;
   std::printf("wrote %s\n", printable(std::filesystem::absolute(output).string()).c_str());
 }
 

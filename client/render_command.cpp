@@ -94,8 +94,8 @@ int run_render(const RenderOptions& options) {
   std::string text;
   try {
     text = read_text_file(options.scene_path);
-  } catch (const std::exception&
-               e) {  // a scene file that is missing or unreadable: usage, as for submit
+  } catch (const std::exception& e) {
+    // A scene file that is missing or unreadable: a usage error, as for submit.
     std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
     return 2;
   }

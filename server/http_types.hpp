@@ -52,6 +52,22 @@ inline std::string lower_ascii(std::string_view text) {
   return out;
 }
 
+// Header names and tokens (codings, media types) compare without regard to ASCII case.
+inline bool iequals_ascii(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (lower(a[i]) != lower(b[i])) return false;
+  return true;
+}
+
+// A header value without the optional white space (spaces and tabs) around it.
+inline std::string_view trim_ows(std::string_view text) {
+  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+  return text;
+}
+
 // Answers a request. May be called later and from any thread, but exactly once: a second
 // call is ignored, and dropping every copy without calling it answers 500.
 using Respond = std::function<void(HttpResponse)>;

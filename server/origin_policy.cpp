@@ -2,26 +2,11 @@
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 
-#include <algorithm>
-
 #include <boost/asio/ip/address.hpp>
 
 namespace tessera {
 
 namespace {
-
-std::string lower(std::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; });
-  return out;
-}
-
-std::string_view trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
 
 // "name:port", "1.2.3.4:port" or "[v6]:port" without the port and brackets.
 std::string_view host_name(std::string_view host) {
@@ -33,7 +18,7 @@ std::string_view host_name(std::string_view host) {
 }
 
 bool is_loopback_name(std::string_view host) {
-  const std::string name = lower(host_name(host));
+  const std::string name = lower_ascii(host_name(host));
   if (name == "localhost" || (name.size() > 10 && name.ends_with(".localhost"))) return true;
   boost::system::error_code ec;
   const auto address = boost::asio::ip::make_address(name, ec);
@@ -52,12 +37,12 @@ std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::stri
             std::string(host) +
             "'; give it --api-token and --worker-token to be reached by other names");
   if (!origin) return std::nullopt;
-  const std::string seen = lower(trim(*origin));
+  const std::string seen = lower_ascii(trim_ows(*origin));
   const std::size_t scheme_end = seen.find("://");
-  if (scheme_end != std::string::npos && seen.substr(scheme_end + 3) == lower(host))
+  if (scheme_end != std::string::npos && seen.substr(scheme_end + 3) == lower_ascii(host))
     return std::nullopt;  // the server's own pages
   for (const std::string& allowed : policy.allowed_origins)
-    if (lower(allowed) == seen) return std::nullopt;
+    if (iequals_ascii(allowed, seen)) return std::nullopt;
   return error_response(403, "origin_refused",
                         "requests from the web page of origin '" + std::string(*origin) +
                             "' are refused; start the server with --allowed-origin " +
@@ -68,8 +53,8 @@ std::optional<HttpResponse> content_type_problem(std::string_view method, std::s
                                                  std::string_view content_type) {
   if (wanted.empty() || (method != "POST" && method != "PUT" && method != "PATCH"))
     return std::nullopt;
-  const std::string_view media = trim(content_type.substr(0, content_type.find(';')));
-  if (lower(media) == lower(wanted)) return std::nullopt;
+  const std::string_view media = trim_ows(content_type.substr(0, content_type.find(';')));
+  if (iequals_ascii(media, wanted)) return std::nullopt;
   return error_response(
       415, "unsupported_media_type",
       "this route takes Content-Type: " + std::string(wanted) +

@@ -8,21 +8,6 @@ namespace tessera {
 
 namespace {
 
-bool iequals(std::string_view a, std::string_view b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
-    if (lower(a[i]) != lower(b[i])) return false;
-  }
-  return true;
-}
-
-std::string_view trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
-
 HttpResponse target_too_long(std::size_t max_target_bytes) {
   return error_response(
       414, "uri_too_long",
@@ -37,13 +22,13 @@ std::optional<HttpResponse> transfer_coding_problem(const RequestHead& head) {
   bool has_length = false;
   bool has_coding = false;
   for (const HeaderField& field : head.fields) {
-    if (iequals(field.name, "content-length")) has_length = true;
-    if (!iequals(field.name, "transfer-encoding")) continue;
+    if (iequals_ascii(field.name, "content-length")) has_length = true;
+    if (!iequals_ascii(field.name, "transfer-encoding")) continue;
     has_coding = true;
     std::string_view list = field.value;
     while (true) {
       const std::size_t comma = list.find(',');
-      codings.push_back(trim(list.substr(0, comma)));
+      codings.push_back(trim_ows(list.substr(0, comma)));
       if (comma == std::string_view::npos) break;
       list.remove_prefix(comma + 1);
     }
@@ -55,10 +40,10 @@ std::optional<HttpResponse> transfer_coding_problem(const RequestHead& head) {
     return bad_framing("a request may not have both Transfer-Encoding and Content-Length");
   for (std::string_view coding : codings)
     if (coding.empty()) return bad_framing("Transfer-Encoding has an empty coding");
-  if (!iequals(codings.back(), "chunked"))
+  if (!iequals_ascii(codings.back(), "chunked"))
     return bad_framing("Transfer-Encoding must end in chunked, so that the body's end is known");
   for (std::size_t i = 0; i + 1 < codings.size(); ++i) {
-    if (iequals(codings[i], "chunked"))
+    if (iequals_ascii(codings[i], "chunked"))
       return bad_framing("Transfer-Encoding applies chunked more than once");
   }
   if (codings.size() > 1)
@@ -84,7 +69,7 @@ bool valid_host(std::string_view host) {
 
 std::optional<std::string_view> RequestHead::field(std::string_view name) const {
   for (const HeaderField& f : fields)
-    if (iequals(f.name, name)) return f.value;
+    if (iequals_ascii(f.name, name)) return f.value;
   return std::nullopt;
 }
 
@@ -109,7 +94,7 @@ std::optional<HttpResponse> framing_problem(const RequestHead& head, std::size_t
   if (head.target.size() > max_target_bytes) return target_too_long(max_target_bytes);
   int hosts = 0;
   for (const HeaderField& field : head.fields) {
-    if (!iequals(field.name, "host")) continue;
+    if (!iequals_ascii(field.name, "host")) continue;
     ++hosts;
     if (!valid_host(field.value)) return bad_framing("the Host header is not a valid host");
   }
