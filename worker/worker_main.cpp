@@ -26,7 +26,7 @@ int run_daemon(const tessera::WorkerOptions& options, std::atomic<bool>& stop, s
   std::thread signal_thread([&signals, &stop, &daemon, &exiting] {
     int signal = 0;
     sigwait(&signals, &signal);
-    if (exiting) return;  // woken by main below
+    if (exiting) return;  // woken by the Joiner below, not by a signal
     spdlog::info("signal {}: finishing the tiles in hand, then exiting", signal);
     stop = true;
     daemon.interrupt();
