@@ -17,6 +17,7 @@
 #include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
+#include "server/worker_identity.hpp"
 #include "server/worker_limits.hpp"
 
 namespace tessera {
@@ -166,6 +167,8 @@ void note_refusal(ApiContext& context, const std::string& id, const HttpResponse
 
 // The request lives until the answer: its body holds the pixels the store thread writes.
 void upload(ApiContext& context, std::shared_ptr<HttpRequest> request, Respond respond) {
+  if (auto refused = check_lease_holder(context.scheduler, *request, request->params.at("id")))
+    return respond(std::move(*refused));
   Checked checked = check_upload(context, *request);
   const std::string id = request->params.at("id");
   if (auto* refused = std::get_if<HttpResponse>(&checked)) {
@@ -185,6 +188,8 @@ void upload(ApiContext& context, std::shared_ptr<HttpRequest> request, Respond r
 
 // The worker could not render that tile of its lease (`TileFailure`).
 void report_failure(ApiContext& context, const HttpRequest& request, Respond respond) {
+  if (auto refused = check_lease_holder(context.scheduler, request, request.params.at("id")))
+    return respond(std::move(*refused));
   auto failure = request_body<protocol::TileFailure>(request);
   if (auto* refused = std::get_if<HttpResponse>(&failure)) return respond(std::move(*refused));
   const auto& [tile, error] = std::get<protocol::TileFailure>(failure);
@@ -200,6 +205,8 @@ void add_lease_routes(Router& router, ApiContext& context) {
       "POST", std::string(route::lease_heartbeat),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
+        if (auto refused = check_lease_holder(context.scheduler, request, id))
+          return respond(std::move(*refused));
         auto lease = context.scheduler.heartbeat(id);
         if (lease.value) context.scheduler.touch_worker(lease.value->worker_id);
         respond_when_stored(
@@ -214,6 +221,8 @@ void add_lease_routes(Router& router, ApiContext& context) {
       "POST", std::string(route::lease_extend),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
+        if (auto refused = check_lease_holder(context.scheduler, request, id))
+          return respond(std::move(*refused));
         const auto max_tiles = max_tiles_of(context, request);
         if (!max_tiles) return respond(bad_max_tiles(context));
         auto lease = context.scheduler.extend(id, *max_tiles);
@@ -244,6 +253,8 @@ void add_lease_routes(Router& router, ApiContext& context) {
   router.add(
       "POST", std::string(route::lease_release),
       [&context](HttpRequest&& request, Respond respond) {
+        if (auto refused = check_lease_holder(context.scheduler, request, request.params.at("id")))
+          return respond(std::move(*refused));
         respond_when_stored(context.scheduler, context.scheduler.release(request.params.at("id")),
                             std::move(respond), no_content_when_stored("the change"));
       },

@@ -1,15 +1,18 @@
 #include "common/protocol/paths.hpp"
 #include "server/access.hpp"
 #include "server/api_routes.hpp"
+#include "server/worker_identity.hpp"
 
 namespace tessera {
 
 void add_scene_routes(Router& router, ApiContext& context) {
-  // The scene as submitted; workers cache it by its digest.
+  // The scene as submitted, for registered workers; they cache it by its digest.
   router.add(
       "GET", std::string(protocol::route::scene),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& digest = request.params.at("digest");
+        if (auto refused = check_any_worker(context.scheduler, request))
+          return respond(std::move(*refused));
         // Read on the store thread, and answered from there.
         context.scheduler.scene_json(
             digest, [digest, respond = std::move(respond)](std::optional<std::string> scene) {

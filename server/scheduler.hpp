@@ -95,9 +95,15 @@ class Scheduler {
   std::uint64_t refusals() const { return refusals_.load(); }
 
   // --- workers --------------------------------------------------------------
-  Pending<WorkerInfo> register_worker(const std::string& name, const std::string& host,
-                                      int threads);
+  // `secret_sha256`: the digest of the secret the worker was given, which its later calls
+  // prove (worker_with_secret()).
+  Pending<WorkerInfo> register_worker(const std::string& name, const std::string& host, int threads,
+                                      const std::string& secret_sha256 = "");
   bool worker_known(const std::string& worker_id) const;
+  // The worker whose secret has this digest, while it has not left; nothing otherwise.
+  std::optional<std::string> worker_with_secret(const std::string& secret_sha256) const;
+  // The worker that holds the lease, while the lease is live; nothing otherwise.
+  std::optional<std::string> lease_holder(const std::string& lease_id) const;
   // A worker that still holds a live lease gets that lease back (reconnect); otherwise a
   // new lease on up to `max_tiles` of the best pending tiles: highest priority job first,
   // then oldest job, tiles centre-first. The batch is cut to the worker's share of the
@@ -284,6 +290,9 @@ class Scheduler {
   // Workers that have not left ("gone"), for batch_size() on every claim.
   int present_workers_ = 0;
   std::unordered_map<std::string, std::unique_ptr<WorkerEntry>> workers_;
+  // Worker ids by the digest of their secret (workers of a store from before secrets have
+  // none, and cannot prove themselves: they register again).
+  std::unordered_map<std::string, std::string> secret_owners_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;
   StoreTicket last_write_ = 0;

@@ -68,6 +68,7 @@ struct WorkerEntry {
   WorkerInfo info;                     // current_job/current_tile mirror lease_id
   std::string lease_id;                // the live lease it holds; "" when none
   std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store
+  std::string secret_sha256;           // of the secret its registration gave it
 };
 
 // New values for records, gathered by one operation. Scheduler::commit writes them in one

@@ -85,6 +85,8 @@ void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
     worker->info.tiles_rendered = row.tiles_rendered;
     worker->info.last_seen_ms = row.last_seen_ms;
     worker->persisted_seen_ms = row.last_seen_ms;
+    worker->secret_sha256 = std::move(row.secret_sha256);
+    if (!worker->secret_sha256.empty()) secret_owners_[worker->secret_sha256] = row.id;
     present_workers_ += is_present(worker->info.state);
     workers_.emplace(row.id, std::move(worker));
   }

@@ -17,7 +17,7 @@ constexpr std::int64_t seen_write_interval_ms = 1000;
 }  // namespace
 
 Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const std::string& host,
-                                               int threads) {
+                                               int threads, const std::string& secret_sha256) {
   std::lock_guard lock(mutex_);
   const StoreTicket before = last_write_;
   auto worker = std::make_unique<WorkerEntry>();
@@ -30,6 +30,8 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
   info.threads = threads;
   info.state = worker_idle;
   info.last_seen_ms = clock_.now_ms();
+  worker->secret_sha256 = secret_sha256;
+  if (!secret_sha256.empty()) secret_owners_[secret_sha256] = info.id;
   queue_write([row = worker_row(*worker)](Store& store) { store.upsert_worker(row); });
   worker->persisted_seen_ms = info.last_seen_ms;
   const WorkerInfo result = info;
@@ -43,6 +45,24 @@ bool Scheduler::worker_known(const std::string& worker_id) const {
   std::lock_guard lock(mutex_);
   const WorkerEntry* worker = find_worker(worker_id);
   return worker && worker->info.state != worker_departed;
+}
+
+std::optional<std::string> Scheduler::worker_with_secret(const std::string& secret_sha256) const {
+  std::lock_guard lock(mutex_);
+  const auto owner = secret_owners_.find(secret_sha256);
+  if (owner == secret_owners_.end()) return std::nullopt;
+  const WorkerEntry* worker = find_worker(owner->second);
+  if (!worker || worker->info.state == worker_departed) return std::nullopt;
+  return owner->second;
+}
+
+std::optional<std::string> Scheduler::lease_holder(const std::string& lease_id) const {
+  std::lock_guard lock(mutex_);
+  const auto lease = leases_.find(lease_id);
+  if (lease == leases_.end() || lease->second.live.empty()) return std::nullopt;
+  const auto job = jobs_.find(lease->second.job_id);
+  if (job == jobs_.end()) return std::nullopt;
+  return job->second->tiles[lease->second.live.front()].worker_id;
 }
 
 Written Scheduler::touch_worker(const std::string& worker_id) {
@@ -100,6 +120,7 @@ void Scheduler::forget_workers_locked(std::int64_t now) {
     spdlog::info("worker {} ({}) forgotten: {} since {} s ago", it->first, worker.info.name,
                  worker.info.state, (now - worker.info.last_seen_ms) / 1000);
     queue_write([id = it->first](Store& store) { store.delete_worker(id); });
+    secret_owners_.erase(worker.secret_sha256);
     it = workers_.erase(it);
   }
 }

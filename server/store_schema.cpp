@@ -8,7 +8,7 @@
 namespace tessera {
 namespace {
 
-constexpr int schema_version = 5;
+constexpr int schema_version = 6;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -39,7 +39,8 @@ CREATE TABLE workers (
   threads INTEGER NOT NULL,
   state TEXT NOT NULL,
   tiles_rendered INTEGER NOT NULL DEFAULT 0,
-  last_seen_ms INTEGER NOT NULL
+  last_seen_ms INTEGER NOT NULL,
+  secret_sha256 TEXT NOT NULL DEFAULT ''  -- of the secret its registration was given
 );
 )sql";
 
@@ -123,6 +124,10 @@ void Store::create_schema() {
         "'$.render.output_transfer') FROM scenes s WHERE s.digest = jobs.scene_digest) = "
         "'linear'");
   }
+  // Before workers had secrets: a worker of an older store is no longer known, and
+  // registers again (the workers table is created with the column from version 6 on).
+  if (version >= 1 && version <= 5)
+    db_.exec("ALTER TABLE workers ADD COLUMN secret_sha256 TEXT NOT NULL DEFAULT ''");
   db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
   tx.commit();
 }

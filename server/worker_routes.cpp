@@ -5,6 +5,7 @@
 #include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
+#include "server/worker_identity.hpp"
 #include "server/worker_limits.hpp"
 
 namespace tessera {
@@ -30,14 +31,18 @@ void register_worker(ApiContext& context, const HttpRequest& request, Respond re
   // The peer's address without its port: "10.0.0.7:51234" -> "10.0.0.7".
   const std::string host = registration.host.value_or(
       request.remote_address.substr(0, request.remote_address.rfind(':')));
+  // Given here once; the coordinator keeps only its digest.
+  std::string secret = new_worker_secret();
+  // Registered before the answer's callback takes the secret (arguments have no order).
+  auto registered = context.scheduler.register_worker(
+      registration.name, host, registration.threads.value_or(1), worker_secret_digest(secret));
   respond_when_stored(
-      context.scheduler,
-      context.scheduler.register_worker(registration.name, host, registration.threads.value_or(1)),
-      std::move(respond), [&context](const WorkerInfo& worker, const std::string& error) {
+      context.scheduler, std::move(registered), std::move(respond),
+      [&context, secret = std::move(secret)](const WorkerInfo& worker, const std::string& error) {
         if (!error.empty()) return storage_failed("the worker", error);
         const SchedulerConfig& config = context.scheduler.config();
         return body_response(
-            201, protocol::Registration{worker.id, config.heartbeat_interval_ms / 1e3,
+            201, protocol::Registration{worker.id, secret, config.heartbeat_interval_ms / 1e3,
                                         config.lease_timeout_ms / 1e3, kWorkerProtocolVersion,
                                         protocol_limits(context)});
       });
@@ -48,6 +53,8 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
   if (!context.scheduler.worker_known(worker))
     return respond(
         error_response(404, "unknown_worker", "no worker " + worker + "; register again"));
+  if (auto refused = check_worker(context.scheduler, request, worker))
+    return respond(std::move(*refused));
   const auto max_tiles_or_none = max_tiles_of(context, request);
   if (!max_tiles_or_none) return respond(bad_max_tiles(context));
   const int max_tiles = *max_tiles_or_none;
@@ -101,6 +108,8 @@ void add_worker_routes(Router& router, ApiContext& context) {
         const std::string& id = request.params.at("id");
         if (!context.scheduler.worker_known(id))
           return respond(error_response(404, "unknown_worker", "no worker " + id));
+        if (auto refused = check_worker(context.scheduler, request, id))
+          return respond(std::move(*refused));
         respond_when_stored(context.scheduler, context.scheduler.worker_left(id),
                             std::move(respond), no_content_when_stored("the departure"));
       },

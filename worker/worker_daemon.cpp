@@ -140,6 +140,9 @@ bool WorkerDaemon::register_self() {
   limits_ = reply->limits;
   uploads_->set_limits(static_cast<std::size_t>(limits_.max_result_tiles), group_bytes());
   worker_id_ = reply->id;
+  // Every later call proves which worker it is, whichever client sends it.
+  heartbeat_client_.prove_as(reply->secret);
+  uploads_client_.prove_as(reply->secret);
   heartbeat_ = std::make_unique<LeaseHeartbeat>(
       heartbeat_client_,
       std::chrono::milliseconds(static_cast<long>(reply->heartbeat_interval_s * 1000)));
@@ -169,7 +172,9 @@ std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
       return control_.claim(worker_id_, options_.claim_wait_s, batch_tiles(tile_thread_seconds_));
     });
   } catch (const ApiError& e) {
-    if (e.status() == 404) {  // the coordinator forgot us (a new data dir): join again
+    // The coordinator forgot us (a new data dir), or no longer knows our secret (a store
+    // from before secrets): join again.
+    if (e.status() == 404 || (e.status() == 403 && e.code() == "wrong_worker")) {
       register_self();
       return std::nullopt;
     }

@@ -1,5 +1,6 @@
 #include "bench/coordinator_load/heartbeat_pool.hpp"
 #include "common/protocol/paths.hpp"
+#include "common/protocol/workers.hpp"
 
 namespace tessera::load {
 
@@ -13,8 +14,8 @@ HeartbeatPool::HeartbeatPool(boost::asio::io_context& io,
     links_.push_back(std::make_unique<Link>(HttpConnection(io, server, authorization)));
 }
 
-void HeartbeatPool::send(const std::string& lease_id) {
-  queue_.push_back(lease_id);
+void HeartbeatPool::send(const std::string& lease_id, const std::string& secret) {
+  queue_.emplace_back(lease_id, secret);
   for (auto& link : links_)
     if (!link->busy) return next(*link);
 }
@@ -25,7 +26,9 @@ void HeartbeatPool::next(Link& link) {
     return;
   }
   link.busy = true;
-  link.target = protocol::fill(protocol::route::lease_heartbeat, queue_.front());
+  link.target = protocol::fill(protocol::route::lease_heartbeat, queue_.front().first);
+  link.headers = "Content-Type: application/json\r\n" + std::string(protocol::kWorkerSecretHeader) +
+                 ": " + queue_.front().second + "\r\n";
   queue_.pop_front();
   post(link, false);
 }
@@ -40,7 +43,7 @@ void HeartbeatPool::post(Link& link, bool retried) {
     });
     return;
   }
-  link.http.request("POST", link.target, "Content-Type: application/json\r\n", {},
+  link.http.request("POST", link.target, link.headers, {},
                     [this, &link, retried](const error_code& ec, int status, std::string_view) {
                       if (state_.finished) return;
                       if (ec) {

@@ -8,6 +8,7 @@
 #include <deque>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/coordinator_load/http_connection.hpp"
@@ -19,8 +20,8 @@ class HeartbeatPool {
  public:
   HeartbeatPool(boost::asio::io_context& io, const boost::asio::ip::tcp::endpoint& server,
                 const std::string& authorization, LoadState& state, int connections);
-  // Queues POST /v1/leases/{lease_id}/heartbeat.
-  void send(const std::string& lease_id);
+  // Queues POST /v1/leases/{lease_id}/heartbeat, proven by the holder's `secret`.
+  void send(const std::string& lease_id, const std::string& secret);
   void stop();
 
  private:
@@ -30,13 +31,14 @@ class HeartbeatPool {
     bool busy = false;
     bool connected = false;  // lazily: the coordinator closes a connection idle from its start
     std::string target;
+    std::string headers;  // the request's, kept until it is answered
   };
   void next(Link& link);
   void post(Link& link, bool retried);
 
   LoadState& state_;
   std::vector<std::unique_ptr<Link>> links_;
-  std::deque<std::string> queue_;
+  std::deque<std::pair<std::string, std::string>> queue_;  // lease ids and secrets
 };
 
 }  // namespace tessera::load

@@ -103,7 +103,9 @@ class LoadRun {
         on_job_done();
     };
     state_.on_error = [this] { stop(); };
-    state_.heartbeat = [this](const std::string& lease_id) { heartbeats_.send(lease_id); };
+    state_.heartbeat = [this](const std::string& lease_id, const std::string& secret) {
+      heartbeats_.send(lease_id, secret);
+    };
     workers_.reserve(static_cast<std::size_t>(options_.workers));
     for (int i = 0; i < options_.workers; ++i) {
       workers_.push_back(

@@ -56,6 +56,9 @@ void SimulatedWorker::do_register() {
           return state_.fail(name_ + ": register: " + e.what());
         }
         id_ = reply.id;
+        secret_ = reply.secret;
+        claim_headers_ =
+            json_header + std::string(protocol::kWorkerSecretHeader) + ": " + secret_ + "\r\n";
         state_.heartbeat_interval =
             std::chrono::milliseconds(static_cast<long>(reply.heartbeat_interval_s * 1000));
         claim_target_ = protocol::claim_target(id_, state_.claim_wait_s, state_.max_tiles);
@@ -67,7 +70,7 @@ void SimulatedWorker::do_claim() {
   if (state_.finished) return;
   timed_ = state_.timing;
   claim_sent_ = std::chrono::steady_clock::now();
-  http_.request("POST", claim_target_, "Content-Type: application/json\r\n", {},
+  http_.request("POST", claim_target_, claim_headers_, {},
                 [this](const error_code& ec, int status, std::string_view body) {
                   if (state_.finished) return;
                   if (ec) return state_.fail(name_ + ": claim: " + ec.message());
@@ -116,7 +119,7 @@ void SimulatedWorker::schedule_heartbeat() {
   heartbeat_timer_.expires_after(state_.heartbeat_interval);
   heartbeat_timer_.async_wait([this, lease = lease_id_](const error_code& ec) {
     if (ec || state_.finished || lease != lease_id_ || next_tile_ == tiles_.size()) return;
-    state_.heartbeat(lease_id_);
+    state_.heartbeat(lease_id_, secret_);
     schedule_heartbeat();
   });
 }
@@ -142,7 +145,8 @@ void SimulatedWorker::do_upload() {
   upload_headers_ = "Content-Type: " + std::string(protocol::kPixelsContentType) + "\r\n" +
                     std::string(protocol::kTilesHeader) + ": " + protocol::number_list(indexes) +
                     "\r\n" + std::string(protocol::kRaysHeader) + ": " +
-                    protocol::number_list(rays) + "\r\n";
+                    protocol::number_list(rays) + "\r\n" +
+                    std::string(protocol::kWorkerSecretHeader) + ": " + secret_ + "\r\n";
   const std::span<const char> body(state_.pixels.data(), std::min(bytes, state_.pixels.size()));
   http_.request("PUT", lease_target_, upload_headers_, body,
                 [this](const error_code& ec, int status, std::string_view answer) {

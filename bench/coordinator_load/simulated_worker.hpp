@@ -39,11 +39,12 @@ struct LoadState {
   std::string first_error;
   std::vector<float> claim_latency_ms;  // timed claims answered with a lease
 
-  std::chrono::milliseconds heartbeat_interval{5000};          // from the registration's answer
-  std::function<void(const std::string& lease_id)> heartbeat;  // sends one
-  std::function<void()> on_parked;                             // a worker has sent its first claim
-  std::function<void()> on_uploaded;                           // tiles_accepted grew
-  std::function<void()> on_error;                              // the first error: the run stops
+  std::chrono::milliseconds heartbeat_interval{5000};  // from the registration's answer
+  // Sends one, proven by the worker's secret.
+  std::function<void(const std::string& lease_id, const std::string& secret)> heartbeat;
+  std::function<void()> on_parked;    // a worker has sent its first claim
+  std::function<void()> on_uploaded;  // tiles_accepted grew
+  std::function<void()> on_error;     // the first error: the run stops
   // Counts an error, unless the run has already stopped (its aborted requests fail too).
   void fail(const std::string& what);
   // Counts an error whatever the phase.
@@ -74,6 +75,8 @@ class SimulatedWorker {
   LoadState& state_;
   std::string name_;
   std::string id_;
+  std::string secret_;         // from the registration, sent with every later request
+  std::string claim_headers_;  // with the secret
   std::string claim_target_;
   bool parked_once_ = false;
   bool timed_ = false;

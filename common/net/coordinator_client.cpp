@@ -43,7 +43,19 @@ HttpResult checked(HttpResult result, std::initializer_list<int> accepted = {}) 
 
 HttpResult CoordinatorClient::call(std::string_view method, const std::string& target,
                                    std::string body, std::initializer_list<int> accepted) {
-  return checked(http_.request(method, target, std::move(body)), accepted);
+  return checked(http_.request(method, target, std::move(body), "application/json", identity()),
+                 accepted);
+}
+
+void CoordinatorClient::prove_as(std::string secret) {
+  std::lock_guard lock(secret_mutex_);
+  worker_secret_ = std::move(secret);
+}
+
+HttpClient::Headers CoordinatorClient::identity() const {
+  std::lock_guard lock(secret_mutex_);
+  if (worker_secret_.empty()) return {};
+  return {{std::string(protocol::kWorkerSecretHeader), worker_secret_}};
 }
 
 protocol::JobStatus CoordinatorClient::submit(const protocol::JobSubmission& submission) {
@@ -83,8 +95,10 @@ protocol::WorkerList CoordinatorClient::workers() {
 
 protocol::Registration CoordinatorClient::register_worker(
     const protocol::WorkerRegistration& registration) {
-  return read_body<protocol::Registration>(
+  auto answer = read_body<protocol::Registration>(
       call("POST", std::string(route::workers), protocol::to_json(registration).dump()).body);
+  prove_as(answer.secret);
+  return answer;
 }
 
 std::optional<protocol::Lease> CoordinatorClient::claim(std::string_view worker, double wait_s,
@@ -114,9 +128,9 @@ protocol::ResultAnswer CoordinatorClient::upload(std::string_view lease,
                                                  std::span<const std::uint64_t> tiles,
                                                  std::span<const std::uint64_t> rays,
                                                  std::string pixels) {
-  const HttpClient::Headers headers = {
-      {std::string(protocol::kTilesHeader), protocol::number_list(tiles)},
-      {std::string(protocol::kRaysHeader), protocol::number_list(rays)}};
+  HttpClient::Headers headers = identity();
+  headers.emplace_back(protocol::kTilesHeader, protocol::number_list(tiles));
+  headers.emplace_back(protocol::kRaysHeader, protocol::number_list(rays));
   return read_body<protocol::ResultAnswer>(
       checked(http_.request("PUT", fill(route::lease_result, lease), std::move(pixels),
                             protocol::kPixelsContentType, headers))

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <initializer_list>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -64,7 +65,12 @@ class CoordinatorClient {
 
   // The worker's routes. A registration of another protocol version throws ApiError 409
   // (protocol_mismatch); an answer of another version throws protocol::ProtocolMismatch.
+  // A registration makes this client send the secret it gave with every later request.
   protocol::Registration register_worker(const protocol::WorkerRegistration& registration);
+  // Sends `secret` (a Registration's) with every request from now on: for a worker's other
+  // clients. Safe while other threads use the client (a worker registers again after the
+  // coordinator forgot it).
+  void prove_as(std::string secret);
   // Nothing when no tile came within wait_s (204).
   std::optional<protocol::Lease> claim(std::string_view worker, double wait_s, int max_tiles);
   // Nothing when the lease is lost (410).
@@ -88,7 +94,11 @@ class CoordinatorClient {
   // The answer, when its status is below 400 or one of `accepted`; otherwise ApiError.
   HttpResult call(std::string_view method, const std::string& target, std::string body = {},
                   std::initializer_list<int> accepted = {});
+  // The worker's secret as a header, when it has one.
+  HttpClient::Headers identity() const;
   HttpClient http_;
+  mutable std::mutex secret_mutex_;
+  std::string worker_secret_;  // "" until registered (or told by prove_as())
 };
 
 }  // namespace tessera

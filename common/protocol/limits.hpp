@@ -17,8 +17,9 @@ namespace tessera {
 
 // The version of the worker protocol this build speaks. Raised whenever a worker of one
 // build could misread a coordinator of another: version 2 states the limits below at
-// registration; version 1 left them to constants written on each side.
-inline constexpr int kWorkerProtocolVersion = 2;
+// registration; version 1 left them to constants written on each side. Version 3 gives
+// each worker a secret at registration that its later calls send (kWorkerSecretHeader).
+inline constexpr int kWorkerProtocolVersion = 3;
 
 struct ProtocolLimits {
   // Tiles one result (PUT /v1/leases/{id}/result) may name in X-Tessera-Tiles.

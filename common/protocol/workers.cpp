@@ -51,6 +51,7 @@ Registration Registration::read(const FieldReader& body) {
   check_version(body, Reader::worker);
   Registration registration;
   registration.id = body.string("id");
+  registration.secret = body.string("secret");
   registration.heartbeat_interval_s = body.number("heartbeat_interval_s");
   registration.lease_timeout_s = body.number("lease_timeout_s");
   registration.limits = read_limits(body.object("limits"));
@@ -59,6 +60,7 @@ Registration Registration::read(const FieldReader& body) {
 
 json to_json(const Registration& r) {
   return {{"id", r.id},
+          {"secret", r.secret},
           {"heartbeat_interval_s", r.heartbeat_interval_s},
           {"lease_timeout_s", r.lease_timeout_s},
           {"protocol", r.protocol},

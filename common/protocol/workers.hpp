@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -33,9 +34,14 @@ struct WorkerRegistration {
 };
 nlohmann::json to_json(const WorkerRegistration& registration);
 
+// Every call a worker makes after registering sends the secret of its Registration in this
+// header: the worker token says a caller may be a worker, the secret which one it is.
+inline constexpr std::string_view kWorkerSecretHeader = "X-Tessera-Worker-Secret";
+
 // Its answer (`Registration`).
 struct Registration {
   std::string id;
+  std::string secret;  // given once, here; the coordinator keeps only its digest
   double heartbeat_interval_s = 5;
   double lease_timeout_s = 30;
   int protocol = kWorkerProtocolVersion;

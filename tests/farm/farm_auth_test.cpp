@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/protocol/limits.hpp"
 #include "tests/farm/farm_fixture.hpp"
 #include "tests/unit/server/openapi_routes.hpp"
 
@@ -69,11 +70,20 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
   Farm farm("auth-routes", 0, token_args(secrets));
   const auto routes = test::openapi_routes(fs::path(TESSERA_SOURCE_DIR) / "docs" / "openapi.yaml");
   ASSERT_GE(routes.size(), 10u);
+  // A registered worker's secret goes with every call: what is tested here is the token.
+  HttpClient registrar = farm.http(10s);
+  registrar.set_bearer_token(worker_token);
+  const HttpResult registered = registrar.request(
+      "POST", "/v1/workers", json{{"name", "w"}, {"protocol", kWorkerProtocolVersion}}.dump());
+  ASSERT_EQ(registered.status, 201) << registered.body;
+  const HttpClient::Headers secret = {
+      {"X-Tessera-Worker-Secret", json::parse(registered.body)["secret"].get<std::string>()}};
   const auto call = [&](const std::string& method, const std::string& path,
                         const std::string& token) {
     HttpClient http = farm.http(10s);
     http.set_bearer_token(token);
-    return http.request(method, concrete(path), method == "GET" || method == "DELETE" ? "" : "{}");
+    return http.request(method, concrete(path), method == "GET" || method == "DELETE" ? "" : "{}",
+                        "application/json", secret);
   };
   for (const auto& [route, role] : routes) {
     const auto& [method, path] = route;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/protocol/limits.hpp"
 #include "tests/farm/farm_fixture.hpp"
 
 namespace tessera {
@@ -72,6 +73,13 @@ std::vector<BadRequest> bad_requests() {
 TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
   Farm farm("hostile-storm", 0);
   const std::vector<BadRequest> requests = bad_requests();
+  // The lease routes' bad requests come from a registered worker, with its secret: what is
+  // tested there is the request, not who sends it.
+  const HttpResult registered = farm.http(10s).request(
+      "POST", "/v1/workers", json{{"name", "storm"}, {"protocol", kWorkerProtocolVersion}}.dump());
+  ASSERT_EQ(registered.status, 201) << registered.body;
+  const HttpClient::Headers secret = {
+      {"X-Tessera-Worker-Secret", json::parse(registered.body)["secret"].get<std::string>()}};
   std::atomic<int> wrong{0};
   std::atomic<int> answered{0};
   std::vector<std::thread> clients;
@@ -83,9 +91,9 @@ TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
         const BadRequest& bad = requests[random() % requests.size()];
         try {
           // Uploads are pixels; everything else that has a body is JSON.
-          const HttpResult result =
-              http.request(bad.method, bad.target, bad.body,
-                           bad.method == "PUT" ? "application/octet-stream" : "application/json");
+          const HttpResult result = http.request(
+              bad.method, bad.target, bad.body,
+              bad.method == "PUT" ? "application/octet-stream" : "application/json", secret);
           const json body = json::parse(result.body, nullptr, false);
           const bool shaped = body.is_object() && body.contains("error") &&
                               body["error"].contains("code") && body["error"].contains("message");

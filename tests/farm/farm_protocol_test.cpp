@@ -17,6 +17,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -64,7 +65,8 @@ std::string tile_body(int width, int height, float value) {
   return ::testing::AssertionSuccess();
 }
 
-// The test's own worker: registered on construction, one keep-alive connection.
+// The test's own worker: registered on construction, one keep-alive connection; every
+// later request proves it with the secret its registration gave.
 class RawWorker {
  public:
   RawWorker(const std::string& url, const std::string& name) : url_(url), http_(url, 30s) {
@@ -75,29 +77,37 @@ class RawWorker {
     if (reply.status != 201) throw std::runtime_error("register answered " + reply.body);
     registration_ = json::parse(reply.body);
     id_ = registration_["id"];
+    secret_ = registration_["secret"];
   }
 
   const std::string& id() const { return id_; }
+  const std::string& secret() const { return secret_; }
   const json& registration() const { return registration_; }
-  HttpResult leave() { return http_.request("DELETE", "/v1/workers/" + id_); }
+  HttpResult leave() { return send("DELETE", "/v1/workers/" + id_); }
 
   HttpResult claim(double wait_s, const std::string& more_query = "") {
-    return http_.request(
-        "POST", "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s) + more_query);
+    return send("POST",
+                "/v1/workers/" + id_ + "/claim?wait_s=" + std::to_string(wait_s) + more_query);
   }
   HttpResult heartbeat(const std::string& lease) {
-    return http_.request("POST", "/v1/leases/" + lease + "/heartbeat");
+    return send("POST", "/v1/leases/" + lease + "/heartbeat");
   }
   HttpResult upload(const std::string& lease, std::string body, std::uint64_t rays = 100) {
-    return http_.request("PUT", "/v1/leases/" + lease + "/result", std::move(body),
-                         "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
+    return send("PUT", "/v1/leases/" + lease + "/result", std::move(body),
+                "application/octet-stream", {{"X-Tessera-Rays", std::to_string(rays)}});
   }
   // Some of a batch lease's tiles in one request, as tessera-worker sends them.
   HttpResult upload_tiles(const std::string& lease, const std::string& tiles, std::string body,
                           const std::string& rays) {
-    return http_.request("PUT", "/v1/leases/" + lease + "/result", std::move(body),
-                         "application/octet-stream",
-                         {{"X-Tessera-Tiles", tiles}, {"X-Tessera-Rays", rays}});
+    return send("PUT", "/v1/leases/" + lease + "/result", std::move(body),
+                "application/octet-stream", {{"X-Tessera-Tiles", tiles}, {"X-Tessera-Rays", rays}});
+  }
+  // Any request, with this worker's secret.
+  HttpResult send(std::string_view method, const std::string& target, std::string body = {},
+                  std::string_view content_type = "application/json",
+                  HttpClient::Headers headers = {}) {
+    headers.emplace_back("X-Tessera-Worker-Secret", secret_);
+    return http_.request(method, target, std::move(body), content_type, headers);
   }
   // A new connection, as after a network blip: the worker id is all that carries over.
   void reconnect() { http_ = HttpClient(url_, 30s); }
@@ -107,6 +117,7 @@ class RawWorker {
   HttpClient http_;
   json registration_;
   std::string id_;
+  std::string secret_;
 };
 
 // The job's image so far as EXR bytes; partial, so it is served before completion too.
@@ -170,7 +181,7 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   EXPECT_LE(lease["expires_in_s"].get<double>(), 30);
   // The scene a worker renders is the one submitted, fetched by its digest.
   const HttpResult scene =
-      http.request("GET", "/v1/scenes/" + lease["scene_digest"].get<std::string>());
+      worker.send("GET", "/v1/scenes/" + lease["scene_digest"].get<std::string>());
   ASSERT_EQ(scene.status, 200);
   EXPECT_EQ(json::parse(scene.body), one_tile_scene());
   const json info = worker_info(farm, worker.id());
@@ -404,7 +415,8 @@ TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   std::thread beating([&, lease = rescuer_lease["id"].get<std::string>()] {
     HttpClient beats = farm.http(10s);
     while (!checked) {
-      beats.request("POST", "/v1/leases/" + lease + "/heartbeat");
+      beats.request("POST", "/v1/leases/" + lease + "/heartbeat", {}, "application/json",
+                    {{"X-Tessera-Worker-Secret", rescuer.secret()}});
       std::this_thread::sleep_for(200ms);
     }
   });
@@ -570,7 +582,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_TRUE(
       is_error(http.request("POST", "/v1/workers", "{\"threads\": 2}"), 400, "invalid_request"));
   RawWorker worker(farm.url(), "errors");
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/" + worker.id() + "/claim?wait_s=soon"),
+  EXPECT_TRUE(is_error(worker.send("POST", "/v1/workers/" + worker.id() + "/claim?wait_s=soon"),
                        400, "invalid_request"));
   EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs?state=sleeping"), 400, "invalid_request"));
 
@@ -578,7 +590,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_TRUE(is_error(http.request("GET", "/v1/nothing"), 404, "not_found"));
   EXPECT_TRUE(is_error(http.request("GET", "/v1/jobs/j-missing"), 404, "not_found"));
   EXPECT_TRUE(is_error(http.request("DELETE", "/v1/jobs/j-missing"), 404, "not_found"));
-  EXPECT_TRUE(is_error(http.request("GET", "/v1/scenes/0123abcd"), 404, "not_found"));
+  EXPECT_TRUE(is_error(worker.send("GET", "/v1/scenes/0123abcd"), 404, "not_found"));
   EXPECT_TRUE(is_error(http.request("POST", "/v1/workers/w-missing/claim?wait_s=0"), 404,
                        "unknown_worker"));
 
@@ -609,7 +621,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
       is_error(http.request("POST", "/v1/jobs/" + job_id + "/cancel"), 409, "already_finished"));
 
   // 410: no such lease (any more)
-  EXPECT_TRUE(is_error(http.request("POST", "/v1/leases/l-missing/heartbeat"), 410, "lease_lost"));
+  EXPECT_TRUE(is_error(worker.send("POST", "/v1/leases/l-missing/heartbeat"), 410, "lease_lost"));
 
   // 413, answered from the headers: the bodies announced here are never sent.
   for (const auto& [head, what] : {
@@ -659,6 +671,71 @@ TEST(FarmProtocol, AWorkerThatLeftRegistersAgainBeforeItClaims) {
   RawWorker again(farm.url(), "leaver");
   EXPECT_NE(again.id(), worker.id());
   EXPECT_EQ(again.claim(5).status, 200);
+}
+
+// The worker token says only that a caller may be some worker; the secret its registration
+// gave says which. Another worker's lease, and another worker's name, are refused with 403,
+// and none of the refused calls changes the lease.
+TEST(FarmProtocol, EveryWorkerCallProvesWhichWorkerItIs) {
+  Farm farm("proto-identity", 0);
+  const std::string job_id = farm.api().submit("one tile", 50, one_tile_scene())["id"];
+  RawWorker holder(farm.url(), "holder");
+  RawWorker other(farm.url(), "other");
+  EXPECT_EQ(holder.secret().size(), 64u);
+  EXPECT_NE(holder.secret(), other.secret());
+  const HttpResult claimed = holder.claim(5);
+  ASSERT_EQ(claimed.status, 200) << claimed.body;
+  const json lease = json::parse(claimed.body);
+  const std::string lease_id = lease["id"];
+  const std::string scene = "/v1/scenes/" + lease["scene_digest"].get<std::string>();
+  const std::string on_lease = "/v1/leases/" + lease_id;
+
+  // Another worker, with the worker token (none is set here) and its own secret.
+  for (const auto& [method, target, body, type] : {
+           std::tuple{"POST", on_lease + "/heartbeat", std::string(), "application/json"},
+           std::tuple{"POST", on_lease + "/extend?max_tiles=1", std::string(), "application/json"},
+           std::tuple{"PUT", on_lease + "/result", tile_body(16, 16, 0.5f),
+                      "application/octet-stream"},
+           std::tuple{"POST", on_lease + "/fail", json{{"tile", 0}, {"error", "no"}}.dump(),
+                      "application/json"},
+           std::tuple{"POST", on_lease + "/release", std::string(), "application/json"},
+           std::tuple{"POST", "/v1/workers/" + holder.id() + "/claim?wait_s=0", std::string(),
+                      "application/json"},
+           std::tuple{"DELETE", "/v1/workers/" + holder.id(), std::string(), "application/json"},
+       }) {
+    SCOPED_TRACE(std::string(method) + " " + target);
+    const HttpResult refused = other.send(method, target, body, type, {{"X-Tessera-Rays", "1"}});
+    EXPECT_TRUE(is_error(refused, 403, "wrong_worker")) << refused.body;
+    // With no secret at all, the same call is refused as unauthenticated.
+    HttpClient bare = farm.http(10s);
+    const HttpResult anonymous =
+        bare.request(method, target, body, type, {{"X-Tessera-Rays", "1"}});
+    EXPECT_TRUE(is_error(anonymous, 401, "missing_worker_secret")) << anonymous.body;
+  }
+  // A made-up secret fetches no scene; a registered worker's does.
+  HttpClient bare = farm.http(10s);
+  EXPECT_TRUE(is_error(bare.request("GET", scene, {}, "application/json",
+                                    {{"X-Tessera-Worker-Secret", std::string(64, 'a')}}),
+                       403, "wrong_worker"));
+  EXPECT_EQ(other.send("GET", scene).status, 200);
+
+  // Nothing of that touched the lease: its holder still owes the tile and delivers it.
+  EXPECT_EQ(worker_info(farm, holder.id())["state"], "rendering");
+  const HttpResult beat = holder.heartbeat(lease_id);
+  ASSERT_EQ(beat.status, 200) << beat.body;
+  EXPECT_EQ(json::parse(beat.body)["tiles"], lease["tiles"]);
+  const HttpResult delivered = holder.upload(lease_id, tile_body(16, 16, 0.5f));
+  EXPECT_EQ(delivered.status, 200) << delivered.body;
+  EXPECT_TRUE(
+      test::eventually([&] { return farm.api().job(job_id)["state"] == "completed"; }, 20s));
+
+  // The secret is given once: the workers list never shows it.
+  const HttpResult list = farm.http(10s).request("GET", "/v1/workers");
+  EXPECT_EQ(list.body.find(holder.secret()), std::string::npos) << list.body;
+  EXPECT_EQ(list.body.find("secret"), std::string::npos) << list.body;
+  // A worker that left proves nothing any more.
+  EXPECT_EQ(other.leave().status, 204);
+  EXPECT_TRUE(is_error(other.send("GET", scene), 403, "wrong_worker"));
 }
 
 TEST(FarmProtocol, AWorkerGoneLongerThanForgetWorkersAfterLeavesTheList) {

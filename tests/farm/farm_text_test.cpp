@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "common/net/coordinator_client.hpp"
+#include "common/protocol/limits.hpp"
 #include "tests/farm/farm_fixture.hpp"
 
 namespace tessera {
@@ -85,9 +86,13 @@ TEST(FarmText, TheServerLogAndTheCliEscapeWhatOthersWrote) {
 
   // An id taken from a URL reaches the log (a refused result is logged with its lease).
   HttpClient http = farm.http(10s);
+  const HttpResult registered = http.request(
+      "POST", "/v1/workers", json{{"name", "w"}, {"protocol", kWorkerProtocolVersion}}.dump());
+  ASSERT_EQ(registered.status, 201) << registered.body;
   const HttpResult refused =
       http.request("PUT", "/v1/leases/l%0A%5B2026-12-05%5D%20forged%1B%5B31m/result",
-                   std::string(13, '\0'), "application/octet-stream");
+                   std::string(13, '\0'), "application/octet-stream",
+                   {{"X-Tessera-Worker-Secret", json::parse(registered.body)["secret"]}});
   EXPECT_EQ(refused.status, 400);
   const auto log = [&] { return test::read_text(farm.dir() / "server.log"); };
   EXPECT_TRUE(eventually([&] { return log().find("forged") != std::string::npos; }, 10s)) << log();

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -39,7 +40,12 @@ class OtherCoordinator {
         return respond(HttpResponse{502, "text/html", "<html>502 Bad Gateway</html>", {}});
       respond(json_response(201, reply));
     });
-    router_.add("POST", "/v1/workers/{id}/claim", [this](HttpRequest&&, Respond respond) {
+    router_.add("POST", "/v1/workers/{id}/claim", [this](HttpRequest&& request, Respond respond) {
+      {
+        std::lock_guard lock(mutex_);
+        const auto secret = request.headers.find("x-tessera-worker-secret");
+        claim_secret_ = secret == request.headers.end() ? "" : secret->second;
+      }
       ++claims_;
       respond(HttpResponse{204, "", "", {}});
     });
@@ -58,6 +64,11 @@ class OtherCoordinator {
   }
   std::string url() const { return "http://127.0.0.1:" + std::to_string(server_->port()); }
   int claims() const { return claims_; }
+  // The worker secret the last claim sent.
+  std::string claim_secret() const {
+    std::lock_guard lock(mutex_);
+    return claim_secret_;
+  }
 
  private:
   boost::asio::io_context io_;
@@ -67,6 +78,8 @@ class OtherCoordinator {
   std::atomic<int> claims_{0};
   std::atomic<int> registrations_{0};
   int proxy_failures_;
+  mutable std::mutex mutex_;
+  std::string claim_secret_;
 };
 
 struct Outcome {
@@ -125,6 +138,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
   json limits = protocol::to_json(ProtocolLimits{});
   limits["max_result_tiles"] = 0;
   const Outcome outcome = run_worker_against({{"id", "w-1"},
+                                              {"secret", "s"},
                                               {"heartbeat_interval_s", 5},
                                               {"lease_timeout_s", 30},
                                               {"protocol", kWorkerProtocolVersion},
@@ -138,6 +152,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
 
 TEST(WorkerProtocol, AWorkerWaitsThroughAProxysBadGateway) {
   json reply = {{"id", "w-1"},
+                {"secret", "the-secret-of-w-1"},
                 {"heartbeat_interval_s", 5},
                 {"lease_timeout_s", 30},
                 {"protocol", kWorkerProtocolVersion}};
@@ -150,6 +165,8 @@ TEST(WorkerProtocol, AWorkerWaitsThroughAProxysBadGateway) {
   // Registered once the proxy let it through, and went on to claim.
   EXPECT_TRUE(test::eventually([&] { return coordinator.claims() > 0; }, 20s))
       << "the worker gave up at a 502";
+  EXPECT_EQ(coordinator.claim_secret(), "the-secret-of-w-1")
+      << "the claim did not prove the worker";
   worker.signal(SIGTERM);
   EXPECT_TRUE(worker.wait_for(20s).has_value());
 }

@@ -200,7 +200,8 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   check(api, api.schema("Worker"), full_worker());
   check(api, api.response("/v1/workers", "get", "200"), WorkerList{{full_worker()}});
   check(api, api.request("/v1/workers", "post"), WorkerRegistration{"a", "h", 4});
-  check(api, api.schema("Registration"), Registration{"w-1", 5, 30, kWorkerProtocolVersion, {}});
+  check(api, api.schema("Registration"),
+        Registration{"w-1", "0123abcd", 5, 30, kWorkerProtocolVersion, {}});
   check(api, api.schema("Lease"), Lease{"l-1", "j-1", "abc", {{3, 0, 8, 8, 8}}, 29.5});
   check(api, api.request("/v1/leases/{id}/fail", "post"), TileFailure{3, "broke"});
   check(api, api.response("/v1/leases/{id}/result", "put", "200"), ResultAnswer{});

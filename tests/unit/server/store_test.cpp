@@ -31,8 +31,15 @@ JobRow job_row(const std::string& id, const std::string& digest) {
   return job;
 }
 
-// Version 4 kept no facts of the scene on the job row.
+// Version 5 kept no digest of a worker's secret.
+void make_version_5(SqliteDb& db) {
+  db.exec("ALTER TABLE workers DROP COLUMN secret_sha256");
+  db.exec("PRAGMA user_version=5");
+}
+
+// Version 4 kept no facts of the scene on the job row either.
 void make_version_4(SqliteDb& db) {
+  make_version_5(db);
   db.exec("ALTER TABLE jobs DROP COLUMN output_transfer");
   db.exec("PRAGMA user_version=4");
 }
@@ -170,7 +177,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "pixels"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "5");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "6");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -189,7 +196,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
 void expect_upgraded(Store& store, const std::filesystem::path& db_file,
                      const std::vector<float>& pixels, bool with_failure) {
   SqliteDb db(db_file);
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "5");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "6");
   EXPECT_EQ(
       db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"),
       "0");
@@ -270,11 +277,29 @@ TEST_F(StoreTest, UpgradesAVersion4DatabaseReadingEachJobsOutputTransferFromItsS
     make_version_4(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "5");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "6");
   std::map<std::string, std::string> transfers;
   for (const JobRow& job : store_->load().jobs) transfers[job.id] = job.output_transfer;
   EXPECT_EQ(transfers, (std::map<std::string, std::string>{
                            {"j-1", "linear"}, {"j-2", "srgb"}, {"j-3", "srgb"}}));
+}
+
+// A worker of a version 5 store had no secret: it loads with none, so that it cannot prove
+// itself and registers again.
+TEST_F(StoreTest, UpgradesAVersion5DatabaseWhoseWorkersHadNoSecrets) {
+  store_->upsert_worker({"w-1", "box", "10.0.0.2", 4, "idle", 3, 1000, "will be dropped"});
+  store_.reset();
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_5(db);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "6");
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.workers.size(), 1u);
+  EXPECT_EQ(state.workers[0].name, "box");
+  EXPECT_EQ(state.workers[0].tiles_rendered, 3u);
+  EXPECT_EQ(state.workers[0].secret_sha256, "");
 }
 
 TEST_F(StoreTest, AJobKeepsItsOutputTransfer) {
@@ -452,7 +477,7 @@ TEST_F(StoreTest, JobsFailuresScenesAndWorkersSurviveAReopen) {
   running.started_at_ms = 1300;
   running.rays = (std::uint64_t{1} << 40) + 3;  // beyond 32 bits
   store_->update_job(running);
-  WorkerRow worker{"w-1", "box", "10.0.0.2", 16, "rendering", 5, 2000};
+  WorkerRow worker{"w-1", "box", "10.0.0.2", 16, "rendering", 5, 2000, "digest"};
   store_->upsert_worker(worker);
   worker.state = "idle";
   worker.tiles_rendered = 6;
@@ -482,6 +507,7 @@ TEST_F(StoreTest, JobsFailuresScenesAndWorkersSurviveAReopen) {
   EXPECT_EQ(state.workers[0].state, "idle");
   EXPECT_EQ(state.workers[0].tiles_rendered, 6u);
   EXPECT_EQ(state.workers[0].last_seen_ms, 2500);
+  EXPECT_EQ(state.workers[0].secret_sha256, "digest");
   EXPECT_EQ(store_->scene_json("d1"), R"({"scene":1})");
   EXPECT_FALSE(store_->scene_json("d2"));
 }

@@ -33,7 +33,7 @@ class StoreThreadTest : public ::testing::Test {
   }
 
   static StoreThread::Work add_worker(const std::string& id) {
-    return [id](Store& store) { store.upsert_worker({id, "name", "host", 1, "idle", 0, 0}); };
+    return [id](Store& store) { store.upsert_worker({id, "name", "host", 1, "idle", 0, 0, ""}); };
   }
   std::vector<std::string> stored_workers() {
     std::vector<std::string> ids;
