@@ -55,10 +55,17 @@ class BlockingScheduler {
   }
   void wait_for_images() { scheduler().wait_for_images(); }
 
-  WorkerInfo register_worker(const std::string& name, const std::string& host, int threads) {
-    return stored(scheduler().register_worker(name, host, threads));
+  WorkerInfo register_worker(const std::string& name, const std::string& host, int threads,
+                             const std::string& secret_sha256 = "") {
+    return stored(scheduler().register_worker(name, host, threads, secret_sha256));
   }
   bool worker_known(const std::string& id) const { return scheduler().worker_known(id); }
+  std::optional<std::string> worker_with_secret(const std::string& digest) const {
+    return scheduler().worker_with_secret(digest);
+  }
+  std::optional<std::string> lease_holder(const std::string& lease_id) const {
+    return scheduler().lease_holder(lease_id);
+  }
   std::optional<Lease> claim(const std::string& worker_id, int max_tiles = 1) {
     return stored(scheduler().claim(worker_id, max_tiles));
   }

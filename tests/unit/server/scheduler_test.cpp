@@ -493,5 +493,28 @@ TEST_F(SchedulerTest, WorkersGoneOrLeftForAnHourLeaveTheListAndTheStore) {
   EXPECT_TRUE(s().workers().empty());
 }
 
+// A worker's secret (kept as its digest) names it across a restart, until it leaves; a
+// lease names its holder while it is live.
+TEST_F(SchedulerTest, ASecretNamesItsWorkerAcrossARestartUntilItLeaves) {
+  const std::string a = s().register_worker("a", "host", 1, "digest-a").id;
+  const std::string b = s().register_worker("b", "host", 1, "digest-b").id;
+  EXPECT_EQ(s().worker_with_secret("digest-a"), a);
+  EXPECT_EQ(s().worker_with_secret("digest-b"), b);
+  EXPECT_EQ(s().worker_with_secret("digest-c"), std::nullopt);
+  submit(32, 32, 16);
+  const auto lease = s().claim(a);
+  ASSERT_TRUE(lease);
+  EXPECT_EQ(s().lease_holder(lease->id), a);
+  EXPECT_EQ(s().lease_holder("l-none"), std::nullopt);
+
+  reopen();
+  EXPECT_EQ(s().worker_with_secret("digest-a"), a) << "the secret did not outlive a restart";
+  EXPECT_EQ(s().lease_holder(lease->id), a);
+  s().worker_left(a);
+  EXPECT_EQ(s().worker_with_secret("digest-a"), std::nullopt) << "a worker that left proves";
+  EXPECT_EQ(s().lease_holder(lease->id), std::nullopt) << "its lease ended with it";
+  EXPECT_EQ(s().worker_with_secret("digest-b"), b);
+}
+
 }  // namespace
 }  // namespace tessera
