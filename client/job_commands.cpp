@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 
 #include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
@@ -23,6 +24,7 @@ struct Options {
   std::string server;
   std::string token;
   std::string token_file;
+  std::string ca_file;
   bool json_output = false;
   // submit
   std::string scene_path;
@@ -229,15 +231,21 @@ int run(const std::function<int(CoordinatorClient&)>& command, const Options& op
     say(e.what());
     return kExitUsage;
   }
+  std::optional<CoordinatorClient> api;
   try {
-    CoordinatorClient api(url, token);
-    return command(api);
-  } catch (const CommandFailed& failed) {
-    return failed.code;
+    api.emplace(url, token, std::chrono::seconds(60), TlsSettings{ca_file_or_env(options.ca_file)});
   } catch (const BadServerUrl& e) {
     say(std::string(e.what()) + " (from " +
         (options.server.empty() ? "$TESSERA_SERVER" : "--server") + ")");
-    return e.wants_tls() ? kExitUnreachable : kExitUsage;
+    return kExitUsage;
+  } catch (const std::exception& e) {  // a CA file that cannot be read
+    say(e.what());
+    return kExitUsage;
+  }
+  try {
+    return command(*api);
+  } catch (const CommandFailed& failed) {
+    return failed.code;
   } catch (const HttpError& e) {
     say("cannot reach the server at " + url + ": " + e.what());
     return kExitUnreachable;
@@ -247,6 +255,11 @@ int run(const std::function<int(CoordinatorClient&)>& command, const Options& op
           " without a Tessera error" +
           (e.from_gateway() ? " (a proxy in front of a coordinator it cannot reach?)" : ""));
       return e.from_gateway() ? kExitUnreachable : kExitJobFailed;
+    }
+    // http:// to a coordinator's TLS port: as a TLS failure.
+    if (e.code() == "tls_required" || e.code() == "tls_not_served") {
+      say("the server at " + url + " answered: " + e.what());
+      return kExitUnreachable;
     }
     const bool path_named =
         e.path().empty() || std::string(e.what()).find(e.path()) != std::string::npos;
@@ -372,6 +385,20 @@ void add_workers_command(CLI::App& app, const SharedOptions& options) {
   });
 }
 
+// Whether the coordinator answers GET /healthz: for container health checks, which may
+// have to speak TLS and have no curl.
+void add_health_command(CLI::App& app, const SharedOptions& options) {
+  on(app, options, "health", "Check that the coordinator is up (GET /healthz)",
+     [](const Options& o, CoordinatorClient& api) {
+       const protocol::Health health = api.health();
+       if (o.json_output)
+         print_json(protocol::to_json(health));
+       else
+         std::printf("ok\n");
+       return kExitOk;
+     });
+}
+
 }  // namespace
 
 void add_job_commands(CLI::App& app) {
@@ -383,11 +410,15 @@ void add_job_commands(CLI::App& app) {
                  "The server's API token (default: $TESSERA_API_TOKEN; --token-file keeps it "
                  "out of the process list)");
   app.add_option("--token-file", options->token_file, "Read the API token from this file");
+  app.add_option("--ca-file", options->ca_file,
+                 "Trust the CAs of this PEM file for an https:// server, instead of the "
+                 "system's (default: $TESSERA_CA_FILE)");
 
   add_submit_command(app, options);
   add_job_queries(app, options);
   add_job_changes(app, options);
   add_workers_command(app, options);
+  add_health_command(app, options);
 }
 
 }  // namespace tessera

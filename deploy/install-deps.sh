@@ -14,6 +14,8 @@ packages=(
   iproute2  # `ip netns`: the multi-host farm test (tests/farm/farm_netns_test.cpp)
   libyaml-cpp-dev shellcheck  # the checks of deploy/ and the protocol's contract with docs/openapi.yaml
   clang-format  # tests/format_check.sh: every C++ file as .clang-format writes it
+  ca-certificates  # the system's CAs, which https:// servers are checked against by default
+  openssl  # the TLS test makes its CA and certificates with it (tests/farm/farm_tls_test.cpp)
 )
 
 if [ "$(id -u)" -ne 0 ]; then

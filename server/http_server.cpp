@@ -8,6 +8,7 @@
 
 #include "server/http_session.hpp"
 #include "server/listener.hpp"
+#include "server/tls_context.hpp"
 
 namespace tessera {
 
@@ -37,6 +38,9 @@ HttpServer::HttpServer(net::io_context& io, const Router& router, HttpServerOpti
     : shared_(std::make_shared<ServerShared>(io, router, with_defaults(std::move(options)))) {
   if (shared_->options.min_body_rate == 0)
     throw std::invalid_argument("min_body_rate must be at least one byte per second");
+  if (shared_->options.tls_cert_file.empty() != shared_->options.tls_key_file.empty())
+    throw std::invalid_argument("TLS needs both a certificate and a key");
+  reload_tls();
   const net::ip::tcp::endpoint endpoint(parse_address(shared_->options.address),
                                         shared_->options.port);
   listener_ = std::make_shared<Listener>(io, endpoint, shared_);
@@ -51,6 +55,12 @@ void HttpServer::stop() {
   if (shared_->stopping.exchange(true)) return;
   listener_->stop();
   shut_down_sessions(*shared_);
+}
+
+void HttpServer::reload_tls() {
+  const HttpServerOptions& options = shared_->options;
+  if (options.tls_cert_file.empty()) return;
+  shared_->set_tls_context(make_server_tls_context(options.tls_cert_file, options.tls_key_file));
 }
 
 std::size_t HttpServer::connection_count() const { return shared_->connection_count.load(); }

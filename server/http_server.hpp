@@ -65,12 +65,16 @@ struct HttpServerOptions {
   std::function<std::optional<HttpResponse>(std::string_view role, std::string_view authorization)>
       authorize;
   OriginPolicy origins;  // which pages may call, under which Host names
+  // PEM files: with both set the server speaks TLS only (HTTPS), without, plain HTTP.
+  std::string tls_cert_file;
+  std::string tls_key_file;
 };
 
 class HttpServer {
  public:
-  // Binds and listens (throws boost::system::system_error when it cannot, or
-  // std::invalid_argument for a bad address) and starts accepting on `io`. `router` must
+  // Binds and listens (throws boost::system::system_error when it cannot,
+  // std::invalid_argument for a bad address, std::runtime_error for TLS files it cannot
+  // use) and starts accepting on `io`. `router` must
   // not change from here on, and must outlive every connection: keep it until io.run()
   // has returned.
   HttpServer(boost::asio::io_context& io, const Router& router, HttpServerOptions options);
@@ -89,6 +93,11 @@ class HttpServer {
 
   // Open connections, idle ones included.
   std::size_t connection_count() const;
+
+  // Reads the TLS certificate and key files again (after they were replaced, say) for the
+  // connections that come from now on. Throws std::runtime_error, keeping the ones in use,
+  // when they cannot be used; does nothing for a plain HTTP server.
+  void reload_tls();
 
  private:
   std::shared_ptr<ServerShared> shared_;

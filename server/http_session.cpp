@@ -14,8 +14,10 @@
 #include <spdlog/spdlog.h>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 
 #include "server/http_errors.hpp"
 #include "server/listener.hpp"
@@ -38,16 +40,49 @@ namespace {
 // so that closing does not reset the connection before the client has read the answer.
 constexpr std::chrono::seconds kLingerTime{2};
 
+using PlainStream = beast::tcp_stream;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
+
+// A TLS connection starts with a handshake record, whose first byte is 22; an HTTP request
+// never does.
+constexpr unsigned char kTlsHandshakeRecord = 22;
+
+// What a port answers a client speaking the other protocol, in plain HTTP, before closing:
+// the client can then say what is wrong rather than that the connection failed. (A TLS
+// client shows the plain answer as OpenSSL's "wrong version number".)
+std::string wrong_protocol_answer(bool port_speaks_tls) {
+  const std::string body =
+      port_speaks_tls ? R"({"error":{"code":"tls_required","message":"this port speaks TLS: )"
+                        R"(use https:// to reach this server"}})"
+                      : R"({"error":{"code":"tls_not_served","message":"this port speaks plain )"
+                        R"(HTTP: use http:// to reach this server"}})";
+  return "HTTP/1.1 400 Bad Request\r\nContent-Type: application/json\r\nConnection: close\r\n"
+         "Content-Length: " +
+         std::to_string(body.size()) + "\r\n\r\n" + body;
+}
+
 }  // namespace
 
-class HttpSession : public std::enable_shared_from_this<HttpSession> {
+// One connection over Stream: PlainStream, or TlsStream once its handshake is done.
+template <typename Stream>
+class BasicHttpSession : public HttpSession {
  public:
-  HttpSession(tcp::socket&& socket, std::shared_ptr<ServerShared> shared)
+  static constexpr bool kTls = std::is_same_v<Stream, TlsStream>;
+
+  BasicHttpSession(tcp::socket&& socket, std::shared_ptr<ServerShared> shared) requires(!kTls)
       : stream_(std::move(socket)), shared_(std::move(shared)) {
     ++shared_->connection_count;
   }
+  // The context is the one in use when the connection came: a reload changes later ones.
+  BasicHttpSession(tcp::socket&& socket, std::shared_ptr<ServerShared> shared,
+                   std::shared_ptr<net::ssl::context> tls) requires kTls
+      : tls_(std::move(tls)),
+        stream_(std::move(socket), *tls_),
+        shared_(std::move(shared)) {
+    ++shared_->connection_count;
+  }
 
-  ~HttpSession() {
+  ~BasicHttpSession() override {
     release_body_budget();
     {
       std::lock_guard lock(shared_->mutex);
@@ -58,37 +93,93 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void start() {
     error_code ec;
-    const auto endpoint = stream_.socket().remote_endpoint(ec);
+    const auto endpoint = lowest().socket().remote_endpoint(ec);
     if (!ec) remote_address_ = format_endpoint(endpoint);
     // Small requests and answers: do not let Nagle hold back the last segment.
-    stream_.socket().set_option(tcp::no_delay(true), ec);
+    lowest().socket().set_option(tcp::no_delay(true), ec);
     {
       std::lock_guard lock(shared_->mutex);
       shared_->sessions.emplace(this, weak_from_this());
     }
-    net::dispatch(stream_.get_executor(),
-                  [self = shared_from_this()] { self->do_wait_for_request(); });
+    net::dispatch(stream_.get_executor(), [self = self()] {
+      if constexpr (kTls)
+        self->do_tls_start();
+      else
+        self->do_wait_for_request();
+    });
   }
 
   // From any thread.
-  void shut_down() {
-    net::post(stream_.get_executor(), [self = shared_from_this()] { self->on_shut_down(); });
+  void shut_down() override {
+    net::post(stream_.get_executor(), [self = self()] { self->on_shut_down(); });
   }
 
   // Delivers a handler's answer, from any thread. A handler may hold the body until it
   // answers: its share of the body budget goes with the answer.
-  void deliver(HttpResponse response) {
-    net::post(stream_.get_executor(),
-              [self = shared_from_this(), response = std::move(response)]() mutable {
-                self->release_body_budget();
-                self->send(std::move(response), !self->keep_alive_);
-              });
+  void deliver(HttpResponse response) override {
+    net::post(stream_.get_executor(), [self = self(), response = std::move(response)]() mutable {
+      self->release_body_budget();
+      self->send(std::move(response), !self->keep_alive_);
+    });
   }
 
  private:
   enum class Phase { idle, header, body, handler, writing, closing, closed };
 
   bool stopping() const { return shared_->stopping.load(); }
+  std::shared_ptr<BasicHttpSession> self() {
+    return std::static_pointer_cast<BasicHttpSession>(shared_from_this());
+  }
+  // The TCP stream under TLS, if any: timeouts, the socket, close.
+  beast::tcp_stream& lowest() { return beast::get_lowest_layer(stream_); }
+
+  // The first bytes say whether the client speaks TLS; they are then handed to the
+  // handshake, which would otherwise wait to read them itself. All within header_timeout.
+  void do_tls_start() {
+    phase_ = Phase::header;
+    lowest().expires_after(shared_->options.header_timeout);
+    lowest().async_read_some(buffer_.prepare(4096),
+                             [self = self()](error_code ec, std::size_t bytes) {
+                               if (ec) return self->close();
+                               self->buffer_.commit(bytes);
+                               if (!self->starts_tls_handshake())
+                                 return self->refuse_other_protocol();
+                               self->do_handshake();
+                             });
+  }
+
+  void do_handshake() {
+    if constexpr (kTls) {
+      stream_.async_handshake(net::ssl::stream_base::server, buffer_.data(),
+                              [self = self()](error_code ec, std::size_t used) {
+                                if (ec) {
+                                  spdlog::debug("https {}: TLS handshake failed: {}",
+                                                self->remote_address_, ec.message());
+                                  return self->close();
+                                }
+                                self->buffer_.consume(used);
+                                self->do_wait_for_request();
+                              });
+    }
+  }
+
+  bool starts_tls_handshake() const {
+    return buffer_.size() > 0 &&
+           static_cast<unsigned char>(*static_cast<const char*>(buffer_.data().data())) ==
+               kTlsHandshakeRecord;
+  }
+
+  // Plain HTTP to a TLS port, or a TLS handshake to a plain one.
+  void refuse_other_protocol() {
+    phase_ = Phase::writing;
+    refusal_ = std::make_unique<std::string>(wrong_protocol_answer(kTls));
+    lowest().expires_after(shared_->options.write_timeout);
+    net::async_write(lowest(), net::buffer(*refusal_), [self = self()](error_code, std::size_t) {
+      // The rest of what it sent is in the other protocol, read by no one.
+      self->buffer_.consume(self->buffer_.size());
+      self->linger();
+    });
+  }
 
   // Waiting for a request's first byte is kept apart from reading its header, so that an
   // idle keep-alive connection has its own timeout and stop() can tell it is idle.
@@ -96,16 +187,18 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (stopping()) return close();
     if (buffer_.size() > 0) return do_read_header();  // pipelined: already here
     phase_ = Phase::idle;
-    stream_.expires_after(first_request_ ? shared_->options.header_timeout
-                                         : shared_->options.idle_timeout);
+    lowest().expires_after(first_request_ ? shared_->options.header_timeout
+                                          : shared_->options.idle_timeout);
     stream_.async_read_some(
         buffer_.prepare(4096),
-        beast::bind_front_handler(&HttpSession::on_wait_for_request, shared_from_this()));
+        beast::bind_front_handler(&BasicHttpSession::on_wait_for_request, self()));
   }
 
   void on_wait_for_request(error_code ec, std::size_t bytes) {
     if (ec) return close();  // the client went away, timed out, or stop() closed us
     buffer_.commit(bytes);
+    if constexpr (!kTls)
+      if (first_request_ && starts_tls_handshake()) return refuse_other_protocol();
     do_read_header();
   }
 
@@ -117,7 +210,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     // The route's limit is applied once the header says which route it is. (Not
     // boost::none: Beast 1.74 compares a Content-Length with an empty limit as exceeding it.)
     parser_->body_limit(std::numeric_limits<std::uint64_t>::max());
-    stream_.expires_after(shared_->options.header_timeout);
+    lowest().expires_after(shared_->options.header_timeout);
     header_scanned_ = 0;
     read_header_more();
   }
@@ -134,7 +227,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     }
     header_scanned_ = data.size();
     stream_.async_read_some(buffer_.prepare(std::min<std::size_t>(4096, limit - data.size())),
-                            [self = shared_from_this()](error_code ec, std::size_t bytes) {
+                            [self = self()](error_code ec, std::size_t bytes) {
                               if (ec) return self->on_read_error(ec, "header");
                               self->buffer_.commit(bytes);
                               self->read_header_more();
@@ -192,8 +285,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     const auto length = parser_->content_length();
     if (!length || *length <= shared_->options.budgeted_body_bytes) return read_body_now();
     // Waits, without a timer, until the body fits in the server's budget for bodies.
-    stream_.expires_never();
-    shared_->body_budget.acquire(*length, [self = shared_from_this(), bytes = *length] {
+    lowest().expires_never();
+    shared_->body_budget.acquire(*length, [self = self(), bytes = *length] {
       net::dispatch(self->stream_.get_executor(), [self, bytes] {
         self->budget_held_ = bytes;
         self->read_body_now();
@@ -216,9 +309,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void do_continue() {
     static constexpr std::string_view kContinue = "HTTP/1.1 100 Continue\r\n\r\n";
     phase_ = Phase::writing;
-    stream_.expires_after(shared_->options.write_timeout);
+    lowest().expires_after(shared_->options.write_timeout);
     net::async_write(stream_, net::buffer(kContinue.data(), kContinue.size()),
-                     [self = shared_from_this()](error_code ec, std::size_t) {
+                     [self = self()](error_code ec, std::size_t) {
                        if (ec) return self->close();
                        self->do_read_body();
                      });
@@ -233,9 +326,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   // The body's deadline moves out by what arrives at the minimum rate: an honest upload
   // of any size finishes, one that trickles in is cut off (as Apache's MinRate does).
   void read_body_more() {
-    stream_.expires_at(body_deadline_);
+    lowest().expires_at(body_deadline_);
     http::async_read_some(
-        stream_, buffer_, *parser_, [self = shared_from_this()](error_code ec, std::size_t bytes) {
+        stream_, buffer_, *parser_, [self = self()](error_code ec, std::size_t bytes) {
           if (ec || self->parser_->is_done()) return self->on_read_body(ec);
           self->body_deadline_ +=
               std::chrono::microseconds(bytes * 1'000'000 / self->shared_->options.min_body_rate);
@@ -285,10 +378,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   template <typename Message>
   void write(Message& message, bool close_after) {
     phase_ = Phase::writing;
-    stream_.expires_after(shared_->options.write_timeout);
-    http::async_write(
-        stream_, message,
-        beast::bind_front_handler(&HttpSession::on_write, shared_from_this(), close_after));
+    lowest().expires_after(shared_->options.write_timeout);
+    http::async_write(stream_, message,
+                      beast::bind_front_handler(&BasicHttpSession::on_write, self(), close_after));
   }
 
   void on_write(bool close_after, error_code ec, std::size_t) {
@@ -312,34 +404,37 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void linger() {
     phase_ = Phase::closing;
     error_code ec;
-    stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
+    lowest().socket().shutdown(tcp::socket::shutdown_send, ec);
     if (ec) return close();
-    stream_.expires_after(kLingerTime);
+    lowest().expires_after(kLingerTime);
     do_drain();
   }
 
   void do_drain() {
     if (!drain_) drain_ = std::make_unique<std::array<char, 4096>>();
-    stream_.async_read_some(net::buffer(*drain_),
-                            [self = shared_from_this()](error_code ec, std::size_t) {
-                              if (ec) return self->close();
-                              self->do_drain();
-                            });
+    // From the TCP stream even under TLS: what is discarded need not be decrypted, and a
+    // refused plain-HTTP client's bytes are no TLS at all.
+    lowest().async_read_some(net::buffer(*drain_), [self = self()](error_code ec, std::size_t) {
+      if (ec) return self->close();
+      self->do_drain();
+    });
   }
 
   void close() {
     phase_ = Phase::closed;
     error_code ec;
-    stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
-    stream_.close();
+    lowest().socket().shutdown(tcp::socket::shutdown_both, ec);
+    lowest().close();
   }
 
-  beast::tcp_stream stream_;
+  std::shared_ptr<net::ssl::context> tls_;  // before stream_, which uses it; null for plain
+  Stream stream_;
   std::shared_ptr<ServerShared> shared_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   std::optional<WireMessage> answer_;              // alive while being written
   std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
+  std::unique_ptr<std::string> refusal_;           // to a client of the other protocol
   std::size_t budget_held_ = 0;  // of shared_->body_budget, for the body being read or served
   std::string remote_address_;
   Phase phase_ = Phase::idle;
@@ -354,7 +449,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   RouteMatch route_;
 };
 
-void HttpSession::dispatch() {
+template <typename Stream>
+void BasicHttpSession<Stream>::dispatch() {
   phase_ = Phase::handler;
   HttpRequest request = plain_request(parser_->get());
   request.path = std::move(path_);
@@ -368,8 +464,7 @@ void HttpSession::dispatch() {
   if (buffer_.size() == 0) buffer_.shrink_to_fit();
 
   auto pending = std::make_shared<PendingResponse>(
-      [self = shared_from_this()](HttpResponse response) { self->deliver(std::move(response)); },
-      shared_->io);
+      [self = self()](HttpResponse response) { self->deliver(std::move(response)); }, shared_->io);
   Respond respond = [pending](HttpResponse response) { pending->answer(std::move(response)); };
   try {
     (*route_.handler)(std::move(request), std::move(respond));
@@ -381,7 +476,11 @@ void HttpSession::dispatch() {
 }
 
 void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {
-  std::make_shared<HttpSession>(std::move(socket), std::move(shared))->start();
+  if (auto tls = shared->tls_context())
+    return std::make_shared<BasicHttpSession<TlsStream>>(std::move(socket), std::move(shared),
+                                                         std::move(tls))
+        ->start();
+  std::make_shared<BasicHttpSession<PlainStream>>(std::move(socket), std::move(shared))->start();
 }
 
 void shut_down_sessions(ServerShared& shared) {

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <unordered_map>
 
 #include <boost/asio/io_context.hpp>
@@ -16,9 +17,21 @@
 #include "server/body_budget.hpp"
 #include "server/http_server.hpp"
 
+namespace boost::asio::ssl {
+class context;
+}
+
 namespace tessera {
 
-class HttpSession;
+// One HTTP/1.1 connection, plain or TLS (http_session.cpp).
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  virtual ~HttpSession() = default;
+  // Asks it to close once its current request, if any, is answered. From any thread.
+  virtual void shut_down() = 0;
+  // Delivers a handler's answer, from any thread.
+  virtual void deliver(HttpResponse response) = 0;
+};
 
 // What every connection needs from the server that accepted it. Shared, because
 // connections still finishing their last request may outlive the HttpServer object.
@@ -40,6 +53,20 @@ struct ServerShared {
   std::mutex mutex;
   // The open sessions, so that stop() can reach the idle ones. Guarded by `mutex`.
   std::unordered_map<const HttpSession*, std::weak_ptr<HttpSession>> sessions;
+
+  // The TLS context new connections take (null: plain HTTP). A reload replaces it;
+  // connections already open keep theirs.
+  std::shared_ptr<boost::asio::ssl::context> tls_context() {
+    std::lock_guard lock(mutex);
+    return tls;
+  }
+  void set_tls_context(std::shared_ptr<boost::asio::ssl::context> context) {
+    std::lock_guard lock(mutex);
+    tls = std::move(context);
+  }
+
+ private:
+  std::shared_ptr<boost::asio::ssl::context> tls;  // guarded by `mutex`
 };
 
 // Serves `socket` (whose executor must be a strand of its own) until it closes.

@@ -4,6 +4,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -47,6 +48,8 @@ struct ServerOptions {
   std::string api_token, api_token_file;
   std::string worker_token, worker_token_file;
   bool insecure = false;
+  std::string tls_cert;  // PEM; with tls_key, the coordinator speaks HTTPS
+  std::string tls_key;
   std::vector<std::string> allowed_origins;
 };
 
@@ -207,11 +210,42 @@ int run(const ServerOptions& options) {
   http.authorize = [&access](std::string_view role, std::string_view authorization) {
     return access.check(role, authorization);
   };
+  HttpServerOptions plain = http;  // for local workers, beside a TLS port
+  http.tls_cert_file = options.tls_cert;
+  http.tls_key_file = options.tls_key;
   HttpServer server(io, router, http);
-  spdlog::info("listening on http://{}:{} with data in {}", host, server.port(), options.data_dir);
+  const bool tls = !options.tls_cert.empty();
+  spdlog::info("listening on {}://{}:{} with data in {}", tls ? "https" : "http", host,
+               server.port(), options.data_dir);
   if (!options.port_file.empty()) write_port_file(options.port_file, server.port());
+  // Local workers reach a TLS coordinator over a plain port of their own on loopback, which
+  // never leaves this machine: the certificate need not name 127.0.0.1, nor its CA be
+  // trusted here.
+  std::unique_ptr<HttpServer> local_port;
+  if (tls && options.local_workers > 0) {
+    plain.address = "127.0.0.1";
+    plain.port = 0;
+    local_port = std::make_unique<HttpServer>(io, router, plain);
+  }
   const std::unique_ptr<LocalWorkers> workers =
-      start_local_workers(options, tokens, host, server.port());
+      start_local_workers(options, tokens, local_port ? "127.0.0.1" : host,
+                          local_port ? local_port->port() : server.port());
+  // SIGHUP: the TLS certificate and key are read again (renewed, say); open connections
+  // keep the ones they began with.
+  boost::asio::signal_set hangups(io, SIGHUP);
+  std::function<void()> await_hangup = [&] {
+    hangups.async_wait([&](const boost::system::error_code& ec, int) {
+      if (ec) return;
+      try {
+        server.reload_tls();
+        if (tls) spdlog::info("SIGHUP: TLS certificate and key reloaded");
+      } catch (const std::exception& e) {
+        spdlog::error("SIGHUP: {}; the certificate in use stays", e.what());
+      }
+      await_hangup();
+    });
+  };
+  await_hangup();
   boost::asio::steady_timer expiry(io);
   schedule_upkeep(expiry, scheduler, workers.get());
   // The Store is open and the Scheduler has reconciled it (its constructor): /readyz says so.
@@ -230,7 +264,12 @@ int run(const ServerOptions& options) {
       claims.close();  // parked claims answer now; the workers see their signal and leave
       job_waits.close();
       if (workers) workers->stop();
-      boost::asio::post(io, [&expiry] { expiry.cancel(); });  // timers belong to the io threads
+      // Timers and signal sets belong to the io threads.
+      boost::asio::post(io, [&expiry, &hangups] {
+        expiry.cancel();
+        hangups.cancel();
+      });
+      if (local_port) local_port->stop();
       server.stop();
     });
   });
@@ -333,6 +372,12 @@ void add_token_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--worker-token-file", options.worker_token_file,
                  "Read the worker token from this file");
   app.add_flag("--insecure", options.insecure, "Allow a non-loopback --listen without both tokens");
+  auto* tls_cert =
+      app.add_option("--tls-cert", options.tls_cert,
+                     "Serve HTTPS with this PEM certificate (chain); SIGHUP reloads it");
+  auto* tls_key = app.add_option("--tls-key", options.tls_key, "The PEM private key of --tls-cert");
+  tls_cert->needs(tls_key);
+  tls_key->needs(tls_cert);
   app.add_option("--allowed-origin", options.allowed_origins,
                  "A web page's origin (scheme://host:port) that may call this server besides its "
                  "own; repeat for more")

@@ -59,9 +59,12 @@ WorkerDaemon::WorkerDaemon(WorkerOptions options, const std::atomic<bool>& stop)
       stop_(stop),
       // A claim long-polls for claim_wait_s; the answer may take a while more.
       control_(options_.server_url, options_.token,
-               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000))),
-      heartbeat_client_(options_.server_url, options_.token, std::chrono::seconds(10)),
-      uploads_client_(options_.server_url, options_.token, kUploadTimeout) {
+               std::chrono::milliseconds(static_cast<long>((options_.claim_wait_s + 15) * 1000)),
+               TlsSettings{options_.ca_file}),
+      heartbeat_client_(options_.server_url, options_.token, std::chrono::seconds(10),
+                        TlsSettings{options_.ca_file}),
+      uploads_client_(options_.server_url, options_.token, kUploadTimeout,
+                      TlsSettings{options_.ca_file}) {
   if (options_.name.empty()) options_.name = host_name();
   if (options_.threads <= 0) options_.threads = tbb::this_task_arena::max_concurrency();
   arena_ = std::make_unique<tbb::task_arena>(options_.threads);
@@ -97,6 +100,10 @@ auto WorkerDaemon::with_retry(const char* what, F attempt) -> std::optional<decl
       return result;
     } catch (const HttpError& e) {
       if (e.kind() == HttpError::Kind::interrupted) return std::nullopt;  // stopping
+      // A certificate this worker does not trust will not become trusted by waiting: before
+      // the first registration it stops the worker. Later (a certificate being replaced, say)
+      // it is waited out as for a coordinator out of reach.
+      if (e.kind() == HttpError::Kind::tls && worker_id_.empty()) throw;
       report_reachable(false, what, e.what());
     } catch (const ApiError& e) {
       // A proxy in front of a coordinator it cannot reach (restarting, say) is as good as
@@ -116,11 +123,18 @@ bool WorkerDaemon::register_self() {
   std::optional<protocol::Registration> reply;
   try {
     reply = with_retry("register", [&] { return control_.register_worker(registration); });
+  } catch (const HttpError& e) {  // TLS (with_retry() waits out everything else)
+    spdlog::error("{}", e.what());
+    incompatible_ = true;
+    incompatible_code_ = 3;
+    return false;
   } catch (const ApiError& e) {
     spdlog::error("registration refused ({}): {}", e.status(), e.what());
     // A refusal (another protocol, a wrong token) stands; a coordinator that could not
     // answer (5xx) may next time.
     if (e.status() < 500) incompatible_ = true;
+    // http:// to a coordinator's TLS port: as a TLS failure, a server out of reach.
+    if (e.code() == "tls_required") incompatible_code_ = 3;
     return false;
   } catch (const protocol::ProtocolMismatch& e) {
     // A coordinator of another protocol (or one from before version 2, which states no
@@ -283,7 +297,7 @@ void WorkerDaemon::release(const std::string& lease_id) {
 }
 
 int WorkerDaemon::run() {
-  if (!register_self()) return stop_ ? 0 : 1;
+  if (!register_self()) return stop_ ? 0 : incompatible_ ? incompatible_code_ : 1;
   while (!stop_ && !incompatible_) {
     const auto tile = claim();
     if (!tile) continue;
@@ -310,7 +324,7 @@ int WorkerDaemon::run() {
     // Its leases expire and it shows as gone after a while.
   }
   spdlog::info("worker {} stopped after rendering {} tiles", worker_id_, tiles_rendered_.load());
-  return incompatible_ ? 1 : 0;
+  return incompatible_ ? incompatible_code_ : 0;
 }
 
 }  // namespace tessera

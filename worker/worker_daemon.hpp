@@ -24,9 +24,10 @@ namespace tessera {
 
 struct WorkerOptions {
   std::string server_url = "http://127.0.0.1:8640";
-  std::string name;   // default: the host name
-  std::string token;  // the coordinator's worker token; "" for none
-  int threads = 0;    // 0: one per core
+  std::string name;     // default: the host name
+  std::string token;    // the coordinator's worker token; "" for none
+  std::string ca_file;  // PEM CAs to trust for an https:// coordinator; "": the system's
+  int threads = 0;      // 0: one per core
   double claim_wait_s = 10;
   // Fault injection for the test suite: "crash:N" aborts the process, "error:N" reports
   // a failure, whenever tile N of any job is about to be rendered ("error:N,M" for
@@ -115,6 +116,7 @@ class WorkerDaemon {
   // The coordinator refused this worker at registration, or speaks another protocol: the
   // worker exits rather than retry what cannot work.
   bool incompatible_ = false;
+  int incompatible_code_ = 1;  // the exit code once incompatible_: 3 when TLS failed
   std::mutex refusal_mutex_;
   std::optional<std::pair<int, std::string>> refusal_;  // set by the upload threads
   std::unique_ptr<LeaseHeartbeat> heartbeat_;           // made at registration, with its interval

@@ -4,6 +4,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <thread>
 
 #include <spdlog/spdlog.h>
@@ -62,16 +63,21 @@ int main(int argc, char** argv) {
                  "The coordinator's worker token (default: $TESSERA_WORKER_TOKEN; --token-file "
                  "keeps it out of the process list)");
   app.add_option("--token-file", token_file, "Read the worker token from this file");
+  app.add_option("--ca-file", options.ca_file,
+                 "Trust the CAs of this PEM file for an https:// coordinator, instead of the "
+                 "system's (default: $TESSERA_CA_FILE)");
   app.set_version_flag("--version", "tessera-worker " TESSERA_VERSION);
   CLI11_PARSE(app, argc, argv);
   try {
     tessera::parse_base_url(options.server_url);
+    options.ca_file = tessera::ca_file_or_env(options.ca_file);
+    if (!options.ca_file.empty() && !std::ifstream(options.ca_file))
+      throw std::runtime_error("cannot read the CA file " + options.ca_file);
     options.token =
         tessera::resolve_secret(options.token, token_file, "TESSERA_WORKER_TOKEN", "worker token");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", tessera::printable(e.what()).c_str());
-    const auto* url = dynamic_cast<const tessera::BadServerUrl*>(&e);
-    return url && url->wants_tls() ? 3 : 2;  // as the CLI's: 3 is a server out of reach
+    return 2;
   }
   // Not a flag: only the test suite injects faults, and local workers inherit it from their
   // coordinator's environment.

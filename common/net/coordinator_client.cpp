@@ -9,8 +9,8 @@ using protocol::fill;
 using protocol::read_body;
 
 CoordinatorClient::CoordinatorClient(const std::string& server_url, const std::string& token,
-                                     std::chrono::milliseconds timeout)
-    : http_(server_url, timeout) {
+                                     std::chrono::milliseconds timeout, const TlsSettings& tls)
+    : http_(server_url, timeout, tls) {
   http_.set_bearer_token(token);
 }
 
@@ -91,6 +91,10 @@ std::string CoordinatorClient::image(std::string_view id, const ImageFormat& for
 
 protocol::WorkerList CoordinatorClient::workers() {
   return read_body<protocol::WorkerList>(call("GET", std::string(route::workers)).body);
+}
+
+protocol::Health CoordinatorClient::health() {
+  return read_body<protocol::Health>(call("GET", std::string(route::healthz)).body);
 }
 
 protocol::Registration CoordinatorClient::register_worker(

@@ -17,6 +17,7 @@
 #include "common/image_format.hpp"
 #include "common/net/http_client.hpp"
 #include "common/protocol/error.hpp"
+#include "common/protocol/health.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/leases.hpp"
 #include "common/protocol/workers.hpp"
@@ -46,9 +47,10 @@ class ApiError : public std::runtime_error {
 class CoordinatorClient {
  public:
   // `token`: the API or worker token to send, "" for none. Throws std::invalid_argument
-  // for a bad URL.
+  // for a bad URL, std::runtime_error for a CA file that cannot be read.
   CoordinatorClient(const std::string& server_url, const std::string& token,
-                    std::chrono::milliseconds timeout = std::chrono::seconds(60));
+                    std::chrono::milliseconds timeout = std::chrono::seconds(60),
+                    const TlsSettings& tls = {});
 
   // Each throws ApiError for an error answer (but those named), HttpError for none, and
   // protocol::ProtocolError for an answer not of the protocol's shape.
@@ -62,6 +64,7 @@ class CoordinatorClient {
   void remove(std::string_view id);
   std::string image(std::string_view id, const ImageFormat& format, bool partial);
   protocol::WorkerList workers();
+  protocol::Health health();  // GET /healthz
 
   // The worker's routes. A registration of another protocol version throws ApiError 409
   // (protocol_mismatch); an answer of another version throws protocol::ProtocolMismatch.

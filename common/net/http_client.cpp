@@ -7,17 +7,24 @@
 #include <cctype>
 #include <charconv>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <mutex>
 #include <optional>
 #include <set>
+#include <stdexcept>
 
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+#include <openssl/x509v3.h>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 
 namespace tessera {
 
@@ -39,9 +46,8 @@ std::string lower(beast::string_view text) {
   return out;
 }
 
-[[noreturn]] void bad_url(std::string_view url, std::string_view why, bool wants_tls = false) {
-  throw BadServerUrl("invalid server URL \"" + std::string(url) + "\": " + std::string(why),
-                     wants_tls);
+[[noreturn]] void bad_url(std::string_view url, std::string_view why) {
+  throw BadServerUrl("invalid server URL \"" + std::string(url) + "\": " + std::string(why));
 }
 
 // The server closed a kept-alive connection before (or while) we reused it: harmless,
@@ -49,20 +55,21 @@ std::string lower(beast::string_view text) {
 bool is_closed_by_peer(const error_code& ec) {
   return ec == http::error::end_of_stream || ec == net::error::eof ||
          ec == net::error::connection_reset || ec == net::error::broken_pipe ||
-         ec == net::error::connection_aborted;
+         ec == net::error::connection_aborted || ec == net::ssl::error::stream_truncated;
 }
 
 }  // namespace
 
 BaseUrl parse_base_url(std::string_view url) {
+  BaseUrl result;
   // A bare "host:port" means http://, as for curl.
   const std::size_t scheme_end = url.find("://");
   if (scheme_end != std::string_view::npos) {
     const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
-    if (scheme == "https")
-      bad_url(url, "this build speaks plain http:// only; reach the coordinator over http://",
-              true);
-    if (scheme != "http") bad_url(url, "expected http://host[:port]");
+    if (scheme != "http" && scheme != "https")
+      bad_url(url, "expected http://host[:port] or https://host[:port]");
+    result.tls = scheme == "https";
+    if (result.tls) result.port = 443;
   }
   std::string_view authority =
       scheme_end == std::string_view::npos ? url : url.substr(scheme_end + 3);
@@ -73,7 +80,6 @@ BaseUrl parse_base_url(std::string_view url) {
     authority = authority.substr(0, slash);
   }
 
-  BaseUrl result;
   std::string_view port_text;
   if (authority.starts_with('[')) {  // IPv6 literal
     const std::size_t close = authority.find(']');
@@ -114,11 +120,63 @@ std::string host_header_of(const BaseUrl& url) {
   return (v6 ? "[" + url.host + "]" : url.host) + ":" + std::to_string(url.port);
 }
 
+std::string where_of(const BaseUrl& url) {
+  return (url.tls ? "https://" : "http://") + host_header_of(url);
+}
+
+// Peers are verified against `ca_file`, or the system's store; TLS 1.2 at least.
+std::shared_ptr<net::ssl::context> client_tls_context(const std::string& ca_file) {
+  auto context = std::make_shared<net::ssl::context>(net::ssl::context::tls_client);
+  context->set_options(net::ssl::context::default_workarounds | net::ssl::context::no_sslv2 |
+                       net::ssl::context::no_sslv3 | net::ssl::context::no_tlsv1 |
+                       net::ssl::context::no_tlsv1_1);
+  context->set_verify_mode(net::ssl::verify_peer);
+  error_code ec;
+  if (ca_file.empty())
+    context->set_default_verify_paths(ec);
+  else
+    context->load_verify_file(ca_file, ec);
+  if (ec)
+    throw std::runtime_error(
+        ca_file.empty() ? "cannot load the system's CA certificates: " + ec.message()
+                        : "cannot read CA certificates from " + ca_file + ": " + ec.message());
+  return context;
+}
+
+// Why a handshake failed, in words a user can act on.
+std::string handshake_failure(SSL* ssl, const error_code& ec, const std::string& where) {
+  const long verified = SSL_get_verify_result(ssl);
+  if (verified != X509_V_OK)
+    return "the certificate of " + where +
+           " is not trusted: " + X509_verify_cert_error_string(verified) +
+           (verified == X509_V_ERR_HOSTNAME_MISMATCH || verified == X509_V_ERR_IP_ADDRESS_MISMATCH
+                ? ""
+                : " (give the CA that signed it with --ca-file or $TESSERA_CA_FILE)");
+  std::string reason = ec.message();
+  // OpenSSL's words for a server that answered in plain HTTP.
+  const bool plain = reason.find("wrong version number") != std::string::npos ||
+                     reason.find("http request") != std::string::npos ||
+                     reason.find("packet length too long") != std::string::npos;
+  return "TLS handshake with " + where + " failed: " + reason +
+         (plain ? " (the server speaks plain http:// there, not https://)" : "");
+}
+
 }  // namespace
 
+std::string ca_file_or_env(const std::string& option) {
+  if (!option.empty()) return option;
+  if (const char* env = std::getenv("TESSERA_CA_FILE"); env && *env) return env;
+  return "";
+}
+
 struct HttpClient::Connection {
-  Connection(BaseUrl base, std::chrono::milliseconds limit)
-      : url(std::move(base)), host_header(host_header_of(url)), timeout(limit), stream(io) {}
+  Connection(BaseUrl base, std::chrono::milliseconds limit,
+             std::shared_ptr<net::ssl::context> tls_context)
+      : url(std::move(base)),
+        host_header(host_header_of(url)),
+        timeout(limit),
+        tls(std::move(tls_context)),
+        plain(io) {}
 
   // Runs one asynchronous operation to completion on the private io_context: the
   // asynchronous form is what gives tcp_stream its timeouts.
@@ -131,7 +189,15 @@ struct HttpClient::Connection {
     return result;
   }
 
-  std::string where() const { return "http://" + host_header; }
+  std::string where() const { return where_of(url); }
+
+  // The TCP stream under everything: timeouts, cancel, close.
+  beast::tcp_stream& lowest() { return secure ? beast::get_lowest_layer(*secure) : plain; }
+  // Calls f with the stream requests go over: TLS or plain.
+  template <typename F>
+  auto with_stream(F&& f) {
+    return secure ? f(*secure) : f(plain);
+  }
 
   void connect() {
     tcp::resolver resolver(io);
@@ -140,23 +206,56 @@ struct HttpClient::Connection {
     if (ec)
       throw HttpError(HttpError::Kind::connect_failed,
                       "cannot resolve " + url.host + ": " + ec.message());
-    stream.expires_after(timeout);
-    ec = run([&](auto handler) { stream.async_connect(endpoints, std::move(handler)); });
+    // A TLS session is not reused across connections: each gets a stream of its own.
+    if (tls) secure.emplace(io, *tls);
+    lowest().expires_after(timeout);
+    ec = run([&](auto handler) { lowest().async_connect(endpoints, std::move(handler)); });
     if (ec == beast::error::timeout)
       throw HttpError(HttpError::Kind::timeout, "connecting to " + where() + " timed out after " +
                                                     std::to_string(timeout.count()) + " ms");
     if (ec)
       throw HttpError(HttpError::Kind::connect_failed,
                       "cannot connect to " + where() + ": " + ec.message());
-    stream.socket().set_option(tcp::no_delay(true), ec);
+    lowest().socket().set_option(tcp::no_delay(true), ec);
+    if (secure) handshake();
     buffer.clear();
     open = true;
   }
 
+  // Verifies the peer's chain (the context's verify_peer) and that it names url.host.
+  void handshake() {
+    SSL* ssl = secure->native_handle();
+    error_code ec;
+    net::ip::make_address(url.host, ec);  // fails for a DNS name
+    X509_VERIFY_PARAM* param = SSL_get0_param(ssl);
+    X509_VERIFY_PARAM_set_hostflags(param, X509_CHECK_FLAG_NO_PARTIAL_WILDCARDS);
+    const bool named = ec ? X509_VERIFY_PARAM_set1_host(param, url.host.c_str(), 0) == 1
+                          : X509_VERIFY_PARAM_set1_ip_asc(param, url.host.c_str()) == 1;
+    // SNI, for a proxy that serves several names; not for an address.
+    if (!named || (ec && SSL_set_tlsext_host_name(ssl, url.host.c_str()) != 1)) {
+      close();
+      throw HttpError(HttpError::Kind::tls, "cannot set up TLS for " + where());
+    }
+    lowest().expires_after(timeout);
+    ec = run([&](auto handler) {
+      secure->async_handshake(net::ssl::stream_base::client, std::move(handler));
+    });
+    if (!ec) return;
+    const std::string why = ec == beast::error::timeout
+                                ? "TLS handshake with " + where() + " timed out"
+                                : handshake_failure(ssl, ec, where());
+    close();
+    throw HttpError(ec == beast::error::timeout ? HttpError::Kind::timeout : HttpError::Kind::tls,
+                    why);
+  }
+
   void close() {
     error_code ignored;
-    stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
-    stream.close();
+    // No TLS close_notify: the connection is dropped either way, and waiting for the
+    // peer's would only add a round trip.
+    lowest().socket().shutdown(tcp::socket::shutdown_both, ignored);
+    lowest().close();
+    secure.reset();
     buffer.clear();
     open = false;
   }
@@ -169,9 +268,10 @@ struct HttpClient::Connection {
 
   Outcome exchange(const http::request<http::string_body>& request) {
     Outcome outcome;
-    stream.expires_after(timeout);  // covers the write and the read together
-    const error_code write_error =
-        run([&](auto handler) { http::async_write(stream, request, std::move(handler)); });
+    lowest().expires_after(timeout);  // covers the write and the read together
+    const error_code write_error = run([&](auto handler) {
+      with_stream([&](auto& stream) { http::async_write(stream, request, std::move(handler)); });
+    });
     if (write_error == beast::error::timeout) {
       outcome.error = write_error;
       return outcome;
@@ -183,8 +283,10 @@ struct HttpClient::Connection {
     parser.body_limit(std::numeric_limits<std::uint64_t>::max());
     parser.header_limit(64 * 1024);
     if (request.method() == http::verb::head) parser.skip(true);
-    const error_code read_error =
-        run([&](auto handler) { http::async_read(stream, buffer, parser, std::move(handler)); });
+    const error_code read_error = run([&](auto handler) {
+      with_stream(
+          [&](auto& stream) { http::async_read(stream, buffer, parser, std::move(handler)); });
+    });
     if (read_error) {
       outcome.error = write_error ? write_error : read_error;
       if (read_error == beast::error::timeout) outcome.error = read_error;
@@ -207,8 +309,10 @@ struct HttpClient::Connection {
   BaseUrl url;
   std::string host_header;
   std::chrono::milliseconds timeout;
+  std::shared_ptr<net::ssl::context> tls;  // null for http://
   net::io_context io;
-  beast::tcp_stream stream;  // after io, which it uses
+  beast::tcp_stream plain;                                     // http://; after io, which it uses
+  std::optional<beast::ssl_stream<beast::tcp_stream>> secure;  // https://, while connected
   beast::flat_buffer buffer;
   bool open = false;
 };
@@ -216,8 +320,11 @@ struct HttpClient::Connection {
 // The connections of one client: those kept alive between requests, and those a request
 // is using, which interrupt() reaches.
 struct HttpClient::Pool {
-  explicit Pool(BaseUrl base, std::chrono::milliseconds limit)
-      : url(std::move(base)), where("http://" + host_header_of(url)), timeout(limit) {}
+  Pool(BaseUrl base, std::chrono::milliseconds limit, const TlsSettings& settings)
+      : url(std::move(base)),
+        where(where_of(url)),
+        timeout(limit),
+        tls(url.tls ? client_tls_context(settings.ca_file) : nullptr) {}
 
   // Also the interrupt generation it is taken in, which give_back() compares.
   std::unique_ptr<Connection> take(std::uint64_t& taken_in) {
@@ -229,7 +336,7 @@ struct HttpClient::Pool {
         idle.pop_back();
       }
     }
-    if (!c) c = std::make_unique<Connection>(url, timeout.load());
+    if (!c) c = std::make_unique<Connection>(url, timeout.load(), tls);
     c->timeout = timeout.load();
     std::lock_guard lock(mutex);
     busy.insert(c.get());
@@ -250,14 +357,16 @@ struct HttpClient::Pool {
   std::uint64_t interrupts = 0;  // interrupt() calls so far, under the mutex
   std::atomic<std::chrono::milliseconds> timeout;
   std::atomic<bool> interrupted{false};
+  std::shared_ptr<net::ssl::context> tls;  // one for every connection; null for http://
   std::mutex mutex;
   std::vector<std::unique_ptr<Connection>> idle;
   std::set<Connection*> busy;
 };
 
-HttpClient::HttpClient(std::string base_url, std::chrono::milliseconds timeout)
+HttpClient::HttpClient(std::string base_url, std::chrono::milliseconds timeout,
+                       const TlsSettings& tls)
     : base_url_(std::move(base_url)),
-      pool_(std::make_unique<Pool>(parse_base_url(base_url_), timeout)) {}
+      pool_(std::make_unique<Pool>(parse_base_url(base_url_), timeout, tls)) {}
 
 HttpClient::~HttpClient() = default;
 HttpClient::HttpClient(HttpClient&&) noexcept = default;
@@ -275,7 +384,7 @@ void HttpClient::interrupt() {
   ++pool_->interrupts;
   // Posting is what io_context allows from another thread; the cancel then runs on the
   // requesting thread, inside its run(), and aborts the operation under way.
-  for (Connection* c : pool_->busy) net::post(c->io, [c] { c->stream.cancel(); });
+  for (Connection* c : pool_->busy) net::post(c->io, [c] { c->lowest().cancel(); });
   pool_->idle.clear();
 }
 

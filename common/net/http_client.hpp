@@ -1,8 +1,9 @@
 // A small synchronous HTTP/1.1 client for talking to the coordinator: the CLI, the worker
 // daemon and the tests. Safe to share between threads: each request takes a kept-alive
 // connection that no other request is using, or opens one, so threads that send at once
-// each have their own (a worker's two upload senders share one client). No Asio or Beast in
-// this header; they stay in http_client.cpp, the one place that would take TLS.
+// each have their own (a worker's two upload senders share one client). Speaks https:// too,
+// verifying the server's certificate. No Asio, Beast or OpenSSL in this header; they stay in
+// http_client.cpp.
 #pragma once
 
 #include <chrono>
@@ -33,6 +34,7 @@ class HttpError : public std::runtime_error {
     timeout,         // no complete answer within the client's timeout
     protocol,        // the connection failed or the answer was not valid HTTP
     interrupted,     // interrupt() was called
+    tls,             // TLS failed: an untrusted or mismatched certificate, or no TLS there
   };
   HttpError(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
   Kind kind() const noexcept { return kind_; }
@@ -44,31 +46,35 @@ class HttpError : public std::runtime_error {
 struct BaseUrl {
   std::string host;  // without brackets for an IPv6 literal
   std::uint16_t port = 80;
+  bool tls = false;  // https://
 };
 
 // A server URL this client cannot use, with what is wrong with it.
 class BadServerUrl : public std::invalid_argument {
  public:
-  BadServerUrl(const std::string& message, bool wants_tls)
-      : std::invalid_argument(message), wants_tls_(wants_tls) {}
-  // An https:// URL: a server behind TLS, which this client cannot speak to yet.
-  bool wants_tls() const { return wants_tls_; }
-
- private:
-  bool wants_tls_;
+  using std::invalid_argument::invalid_argument;
 };
 
-// "http://host[:port][/]", or "host[:port]" for the same. Throws BadServerUrl for anything
-// else, https included.
+// "http://host[:port][/]" (port 80 by default), "https://host[:port][/]" (443), or
+// "host[:port]" for http. Throws BadServerUrl for anything else.
 BaseUrl parse_base_url(std::string_view url);
+
+// How an https:// server is checked: its certificate must chain to a CA trusted here and
+// name the URL's host (a DNS name or an IP address).
+struct TlsSettings {
+  std::string ca_file;  // PEM file of the CAs to trust; "": the system's CA store
+};
+// `option` when given, else $TESSERA_CA_FILE, else "" (the system's store).
+std::string ca_file_or_env(const std::string& option);
 
 class HttpClient {
  public:
   using Headers = std::vector<std::pair<std::string, std::string>>;
 
-  // Throws std::invalid_argument for a bad URL; connects on the first request. `timeout`
-  // bounds connecting, and separately each whole request: sending it and reading the answer.
-  HttpClient(std::string base_url, std::chrono::milliseconds timeout);
+  // Throws std::invalid_argument for a bad URL, and std::runtime_error for a CA file that
+  // cannot be read; connects on the first request. `timeout` bounds connecting (the TLS
+  // handshake included), and separately each whole request: sending it and reading the answer.
+  HttpClient(std::string base_url, std::chrono::milliseconds timeout, const TlsSettings& tls = {});
   ~HttpClient();
   HttpClient(HttpClient&&) noexcept;
   HttpClient& operator=(HttpClient&&) noexcept;

@@ -19,6 +19,7 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cp -r "$source_dir/deploy/k8s" "$work/k8s"
+cp -r "$source_dir/deploy/k8s-tls" "$work/k8s-tls"
 for token in api worker; do
   echo "stand-in-$token-token" >"$work/k8s/$token.token"
 done
@@ -46,5 +47,25 @@ fi
 for kind in Namespace Secret Service StatefulSet Deployment HorizontalPodAutoscaler; do
   grep -q "^kind: $kind\$" "$work/rendered.yaml" || { echo "FAIL: no $kind rendered"; failed=1; }
 done
-[ "$failed" -eq 0 ] && echo "ok: ${render[*]} renders deploy/k8s; the workloads use Secret $secret"
+
+# The TLS overlay beside it: the coordinator gets its certificate and key, the workers only the CA,
+# and both speak https://.
+for file in tls.crt tls.key ca.crt; do
+  echo "stand-in $file" >"$work/k8s-tls/$file"
+done
+if ! "${render[@]}" "$work/k8s-tls" >"$work/tls.yaml" 2>"$work/errors"; then
+  echo "FAIL: ${render[*]} deploy/k8s-tls:"
+  cat "$work/errors"
+  exit 1
+fi
+tls_secret=$(sed -n 's/^  name: \(tessera-tls-[a-z0-9]\{6,\}\)$/\1/p' "$work/tls.yaml")
+for wanted in "secretName: $tls_secret" "--tls-cert" "/run/secrets/tessera-tls/tls.crt" \
+  "https://tessera-coordinator:8640" "scheme: HTTPS" "key: ca.crt"; do
+  grep -q -- "$wanted" "$work/tls.yaml" || { echo "FAIL: deploy/k8s-tls renders no \"$wanted\""; failed=1; }
+done
+if [ -z "$tls_secret" ] || [ "$(grep -c "secretName: $tls_secret\$" "$work/tls.yaml")" -ne 2 ]; then
+  echo "FAIL: the coordinator and the workers do not both mount Secret tessera-tls-HASH"
+  failed=1
+fi
+[ "$failed" -eq 0 ] && echo "ok: ${render[*]} renders deploy/k8s and deploy/k8s-tls; the workloads use Secret $secret"
 exit "$failed"

@@ -629,14 +629,19 @@ TEST(HttpClientTest, ParsesBaseUrls) {
   const BaseUrl v6 = parse_base_url("HTTP://[::1]:9000");
   EXPECT_EQ(v6.host, "::1");
   EXPECT_EQ(v6.port, 9000);
+  EXPECT_FALSE(local.tls);
+  const BaseUrl secure = parse_base_url("HTTPS://farm.example");
+  EXPECT_TRUE(secure.tls);
+  EXPECT_EQ(secure.host, "farm.example");
+  EXPECT_EQ(secure.port, 443);
+  EXPECT_EQ(parse_base_url("https://farm.example:8443/").port, 8443);
+  // A CA file that cannot be read is refused when the client is made, naming it.
   try {
-    parse_base_url("https://farm.example:443");
-    FAIL() << "https accepted";
-  } catch (const BadServerUrl& e) {
-    EXPECT_TRUE(e.wants_tls());
-    EXPECT_NE(std::string(e.what()).find("plain http:// only"), std::string::npos);
+    HttpClient("https://x", 1s, TlsSettings{"/nonexistent/ca.pem"});
+    FAIL() << "an unreadable CA file was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/ca.pem"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(HttpClient("https://x", 1s), BadServerUrl);
   // A bare host:port is http://, as for curl.
   const BaseUrl bare = parse_base_url("127.0.0.1:8641");
   EXPECT_EQ(bare.host, "127.0.0.1");
