@@ -177,6 +177,10 @@ inline ::testing::AssertionResult same_pixels(const Image& actual, const Image& 
   return ::testing::AssertionSuccess();
 }
 
+inline bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
 // A finished tessera CLI run: its exit code and everything it printed (stdout and stderr).
 struct CliRun {
   int exit_code = -1;

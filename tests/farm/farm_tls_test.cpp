@@ -21,13 +21,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-using nlohmann::json;
 using test::CliRun;
+using test::contains;
 using test::Farm;
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 // Runs the openssl command; false when it fails.
 bool openssl(const std::string& arguments, const fs::path& log) {
@@ -119,7 +115,7 @@ TEST(FarmTls, AJobRendersOverHttpsBitForBitAndEveryMistakeIsOneLineAndExitThree)
                        farm.dir() / "worker.log");
 
   // A job submitted and fetched over HTTPS is bit for bit the local render.
-  const json scene = test::showcase(64, 48, 2, 16);
+  const nlohmann::json scene = test::showcase(64, 48, 2, 16);
   const fs::path scene_file = farm.dir() / "scene.json";
   test::write_text(scene_file, scene.dump());
   const fs::path farm_exr = farm.dir() / "farm.exr";
