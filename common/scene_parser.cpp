@@ -7,6 +7,7 @@
 
 #include "common/output_transfer.hpp"
 #include "common/scene_parser_parts.hpp"
+#include "common/scene_stream.hpp"
 
 namespace tessera {
 namespace {
@@ -69,21 +70,8 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
   return render;
 }
 
-}  // namespace
-
-Limits Limits::none() {
-  constexpr int most = std::numeric_limits<int>::max();
-  constexpr std::size_t many = std::numeric_limits<std::size_t>::max();
-  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most, many, many,
-                many, many};
-}
-
-Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
-  return parse_scene(document, limits, nullptr);
-}
-
-Scene parse_scene(const nlohmann::json& document, const Limits& limits,
-                  const LiftedArrays* lifted) {
+Scene read_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
+                 const ObjectTexts* apart) {
   const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
   // Before the key check: a future version may well have keys this one does not know.
   if (const auto version = root.find("version")) {
@@ -103,10 +91,37 @@ Scene parse_scene(const nlohmann::json& document, const Limits& limits,
   MaterialTable materials(limits);
   if (const auto named = root.find("materials")) materials.add_named(*named);
   if (const auto lights = root.find("lights")) scene.lights = parse_lights(*lights, limits);
-  if (const auto objects = root.find("objects"))
-    scene.objects = parse_objects(*objects, materials, limits);
+  if (const auto objects = root.find("objects")) {
+    if (apart && objects->json().is_array())
+      check_objects(*objects, *apart, materials, limits);
+    else
+      scene.objects = parse_objects(*objects, materials, limits);
+  }
   scene.materials = std::move(materials).take();
   return scene;
+}
+
+}  // namespace
+
+Limits Limits::none() {
+  constexpr int most = std::numeric_limits<int>::max();
+  constexpr std::size_t many = std::numeric_limits<std::size_t>::max();
+  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most, many, many,
+                many, many};
+}
+
+Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
+  return parse_scene(document, limits, nullptr);
+}
+
+Scene parse_scene(const nlohmann::json& document, const Limits& limits,
+                  const LiftedArrays* lifted) {
+  return read_scene(document, limits, lifted, nullptr);
+}
+
+Scene check_scene(const nlohmann::json& document, const Limits& limits,
+                  const ObjectTexts& objects) {
+  return read_scene(document, limits, nullptr, &objects);
 }
 
 }  // namespace tessera

@@ -14,6 +14,19 @@
 
 namespace tessera {
 
+// --- json_reader.cpp ---
+
+// Scenes need about five levels; anything far deeper is a mistake or an attack, and every
+// later walk of the tree (dump, comparison) would recurse that deep.
+constexpr int max_json_nesting = 64;
+
+// Throws parse_json_text()'s SceneError for a text nested deeper than max_json_nesting,
+// naming the line and column where it goes too deep; returns for any other text.
+void check_nesting(std::string_view text);
+// parse_json_text()'s SceneError for the syntax error nlohmann's parser reported at
+// `position` (the 1-based index of the last character it read) with the message `what`.
+SceneError json_syntax_error(std::string_view text, std::size_t position, std::string_view what);
+
 // --- material_parser.cpp ---
 
 Material parse_material(const ValueReader& value);
@@ -45,6 +58,11 @@ std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits)
 
 std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
                                   const Limits& limits);
+class ObjectTexts;
+// parse_objects() for the objects kept apart from `objects` (scene_stream.hpp), an empty
+// array standing for them: each is checked as it would be there, then dropped.
+void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
+                   const Limits& limits);
 Mat4 parse_transform(const ValueReader& steps);
 
 // --- shape_parser.cpp ---
