@@ -150,9 +150,22 @@ void check_objects(const ValueReader& objects, const ObjectTexts& texts, Materia
                    const Limits& limits) {
   check_object_count(objects, texts.size(), limits);
   std::size_t triangles = 0;
+  LiftedArrays lifted;
   for (std::size_t i = 0; i < texts.size(); ++i) {
+    const std::string pointer = objects.pointer() + "/" + std::to_string(i);
+    // A mesh's arrays lifted, as parse_scene_text() does: a shape parsed before the
+    // material, so that a refusal there has added nothing to the table.
+    if (const auto value = texts.element_lifted(i, pointer, lifted)) {
+      try {
+        const ValueReader element(*value, pointer, &lifted);
+        add_triangles(objects, element, parse_object(element, materials), triangles, limits);
+        continue;
+      } catch (const LiftedArrayRefused&) {
+        // Read again below, the ordinary way, for the error's words.
+      }
+    }
     const nlohmann::json value = texts.element(i);
-    const ValueReader element(value, objects.pointer() + "/" + std::to_string(i));
+    const ValueReader element(value, pointer);
     add_triangles(objects, element, parse_object(element, materials), triangles, limits);
   }
 }

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/json_fast_parse.hpp"
 #include "common/scene.hpp"
 
 namespace tessera {
@@ -23,11 +24,17 @@ class ObjectTexts {
   // memory).
   void reserve(std::size_t bytes) { text_.reserve(bytes); }
   void clear();
-  void add(const nlohmann::json& element);
+  void add_text(std::string_view element);  // an element's dump()
+  void add(const nlohmann::json& element) { add_text(element.dump()); }
 
   std::size_t size() const { return ends_.size(); }
   std::string_view text(std::size_t index) const;
   nlohmann::json element(std::size_t index) const;  // parsed again from text(index)
+  // A mesh's element parsed again with its big arrays in `lifted` (json_fast_parse.hpp,
+  // keyed under `pointer`, the element's JSON Pointer), or nothing for any other element, or
+  // one whose arrays are not all of three numbers: element() then.
+  std::optional<nlohmann::json> element_lifted(std::size_t index, const std::string& pointer,
+                                               LiftedArrays& lifted) const;
 
   // The joined texts, leaving this empty.
   std::string take() &&;
@@ -38,10 +45,10 @@ class ObjectTexts {
 };
 
 // nlohmann::json::parse(text), but the elements of the scene's "objects" array go into
-// `objects` as they are read, and that array stays empty in the document: only one object
-// is ever in nodes. `scene_member` as for scan_scene_limits(), which should have passed
-// `text` first (this one refuses too deep a text, but builds what comes before it).
-// Throws parse_json_text()'s SceneError for a syntax error.
+// `objects` as their dump() is written from what the parser reads, and that array stays
+// empty in the document: no object is ever in nodes. `scene_member` as for scan_scene_limits(),
+// which should have passed `text` first (this one refuses too deep a text, but builds what comes
+// before it). Throws parse_json_text()'s SceneError for a syntax error.
 nlohmann::json parse_json_objects_apart(std::string_view text,
                                         std::optional<std::string_view> scene_member,
                                         ObjectTexts& objects);

@@ -216,6 +216,27 @@ TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
   texts.push_back(R"({"objects": [{"type": "sphere", "radius": -1}],
                       "camera": {"eye": [0,0,1], "look_at": [0,0,0]},
                       "image": {"width": 2, "height": 2}})");
+  // Meshes, whose arrays are lifted out when checked: valid, and broken in the ways the
+  // lifted arrays hand back to the ordinary path.
+  json big = mesh(200);
+  big["positions"] = {{0, 0, 0}, {1.5, 0, 0}, {0, 1, -0.25}, {2, 2, 2}};
+  big["normals"] = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}};
+  big["material"] = {{"diffuse", 0.5}};
+  texts.push_back(scene_with("objects", {sphere(), big, big}).dump());
+  for (const auto& [pointer, value] :
+       std::vector<std::pair<std::string, json>>{{"/triangles/7", {0, 1, 4}},
+                                                 {"/triangles/7", {0, 1, 1}},
+                                                 {"/triangles/7", {0, 1}},
+                                                 {"/triangles/7", {0, 1, 2.0}},
+                                                 {"/positions/1", {1, 0}},
+                                                 {"/positions/1", "x"},
+                                                 {"/normals/2", {0, 0, 0}},
+                                                 {"/normals", {{0, 0, 1}}},
+                                                 {"/thin", 3}}) {
+    json broken = big;
+    broken[json::json_pointer(pointer)] = value;
+    texts.push_back(scene_with("objects", {big, broken}).dump());
+  }
   for (const std::string& text : texts) {
     const json whole = parse_json_text(text);
     for (const bool enveloped : {false, true}) {
@@ -245,6 +266,19 @@ TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
       EXPECT_EQ(dump_scene(document, std::move(objects)), whole.dump()) << text.substr(0, 200);
     }
   }
+}
+
+TEST(SceneStream, AMeshIsCheckedWithItsArraysLifted) {
+  ObjectTexts objects;
+  objects.add(mesh(100));
+  objects.add(sphere());
+  LiftedArrays lifted;
+  const auto value = objects.element_lifted(0, "/objects/0", lifted);
+  ASSERT_TRUE(value);
+  EXPECT_EQ((*value)["triangles"], json::array());
+  EXPECT_EQ(lifted.at("/objects/0/triangles").indices.size(), 300u);
+  EXPECT_EQ(lifted.at("/objects/0/positions").numbers.size(), 9u);
+  EXPECT_FALSE(objects.element_lifted(1, "/objects/1", lifted));
 }
 
 }  // namespace
