@@ -78,8 +78,7 @@ Scene read_scene(const nlohmann::json& document, const Limits& limits, const Lif
     if (version->integer() != 1)
       version->fail("must be 1, the only scene format version, got " + describe(version->json()));
   }
-  root.allow_only({"version", "image", "camera", "render", "background", "ambient_light",
-                   "materials", "lights", "objects"});
+  root.allow_only(scene_keys);
 
   Scene scene;
   parse_image(root.require("image"), limits, scene);

@@ -1,6 +1,7 @@
 // Internal to the scene parser: the pieces of parse_scene that live in their own files.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -26,6 +27,13 @@ void check_nesting(std::string_view text);
 // parse_json_text()'s SceneError for the syntax error nlohmann's parser reported at
 // `position` (the 1-based index of the last character it read) with the message `what`.
 SceneError json_syntax_error(std::string_view text, std::size_t position, std::string_view what);
+
+// --- scene_parser.cpp ---
+
+// The keys of a scene's root object; any other is refused.
+inline constexpr std::array<std::string_view, 9> scene_keys = {
+    "version",       "image",     "camera", "render", "background",
+    "ambient_light", "materials", "lights", "objects"};
 
 // --- material_parser.cpp ---
 

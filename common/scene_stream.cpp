@@ -1,6 +1,8 @@
 #include "common/scene_stream.hpp"
 
+#include <algorithm>
 #include <map>
+#include <span>
 #include <utility>
 
 #include "common/scene_parser_parts.hpp"
@@ -79,8 +81,9 @@ class CanonicalWriter {
 // elements of the scene's "objects" go.
 class ApartBuilder {
  public:
-  ApartBuilder(std::optional<std::string_view> scene_member, ObjectTexts& objects)
-      : scene_member_(scene_member), objects_(objects) {}
+  ApartBuilder(std::optional<std::string_view> scene_member,
+               std::span<const std::string_view> envelope_keys, ObjectTexts& objects)
+      : scene_member_(scene_member), envelope_keys_(envelope_keys), objects_(objects) {}
 
   json root;
   bool nested_too_deep = false;
@@ -101,6 +104,7 @@ class ApartBuilder {
   bool start_array(std::size_t) { return open(json::array(), true); }
 
   bool key(json::string_t& key) {
+    if (skipped_ > 0) return true;
     if (element_.active())
       element_.key(std::move(key));
     else
@@ -119,8 +123,11 @@ class ApartBuilder {
 
  private:
   bool scalar(json&& value) {
+    if (skipped_ > 0) return true;
     if (element_.active()) {
       element_.scalar(value);
+    } else if (unknown_member()) {
+      place(json(nullptr));
     } else if (!stack_.empty() && stack_.back().role == Role::objects) {
       objects_.add_text(value.dump());
     } else {
@@ -130,9 +137,13 @@ class ApartBuilder {
   }
 
   bool open(json&& container, bool array) {
-    if (stack_.size() + element_.depth() >= static_cast<std::size_t>(max_json_nesting)) {
+    if (stack_.size() + element_.depth() + skipped_ >= static_cast<std::size_t>(max_json_nesting)) {
       nested_too_deep = true;
       return false;
+    }
+    if (skipped_ > 0 || unknown_member()) {
+      if (skipped_++ == 0) place(json(nullptr));
+      return true;
     }
     // An element of "objects", and all within it, is written as text rather than built.
     if (element_.active() || (!stack_.empty() && stack_.back().role == Role::objects)) {
@@ -144,12 +155,27 @@ class ApartBuilder {
   }
 
   bool close() {
-    if (!element_.active()) {
+    if (skipped_ > 0) {
+      --skipped_;
+    } else if (!element_.active()) {
       stack_.pop_back();
     } else if (auto text = element_.close()) {
       objects_.add_text(*text);
     }
     return true;
+  }
+
+  // A member of the scene, or of the envelope, that their parsers refuse by its key alone:
+  // its value is not built (null stands for it), so that junk costs nothing before the
+  // refusal.
+  bool unknown_member() const {
+    if (stack_.empty()) return false;
+    const Frame& parent = stack_.back();
+    const auto known = [&](std::span<const std::string_view> keys) {
+      return std::find(keys.begin(), keys.end(), parent.key) != keys.end();
+    };
+    if (parent.role == Role::scene) return !known(scene_keys);
+    return parent.role == Role::envelope && !envelope_keys_.empty() && !known(envelope_keys_);
   }
 
   Role role_of_child(bool array) const {
@@ -192,9 +218,11 @@ class ApartBuilder {
   }
 
   const std::optional<std::string_view> scene_member_;
+  const std::span<const std::string_view> envelope_keys_;
   ObjectTexts& objects_;
   std::vector<Frame> stack_;
   CanonicalWriter element_;  // the element of "objects" being read, if any
+  std::size_t skipped_ = 0;  // open containers of an unknown member's value
 };
 
 // An element of "objects" read back from its text for checking, as json::parse() would, but
@@ -369,9 +397,10 @@ std::string ObjectTexts::take() && {
 }
 
 json parse_json_objects_apart(std::string_view text, std::optional<std::string_view> scene_member,
-                              ObjectTexts& objects) {
+                              ObjectTexts& objects,
+                              std::span<const std::string_view> envelope_keys) {
   objects.clear();
-  ApartBuilder builder(scene_member, objects);
+  ApartBuilder builder(scene_member, envelope_keys, objects);
   if (json::sax_parse(text.begin(), text.end(), &builder)) return std::move(builder.root);
   if (builder.nested_too_deep) {
     check_nesting(text);

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,12 +47,16 @@ class ObjectTexts {
 
 // nlohmann::json::parse(text), but the elements of the scene's "objects" array go into
 // `objects` as their dump() is written from what the parser reads, and that array stays
-// empty in the document: no object is ever in nodes. `scene_member` as for scan_scene_limits(),
-// which should have passed `text` first (this one refuses too deep a text, but builds what comes
-// before it). Throws parse_json_text()'s SceneError for a syntax error.
+// empty in the document: no object is ever in nodes. A member of the scene that
+// parse_scene() refuses by its key alone, or of the root that is not in `envelope_keys`
+// (when given), has null for its value, not built. `scene_member` as for
+// scan_scene_limits(), which should have passed `text` first (this one refuses too deep a
+// text, but builds what comes before it). Throws parse_json_text()'s SceneError for a
+// syntax error.
 nlohmann::json parse_json_objects_apart(std::string_view text,
                                         std::optional<std::string_view> scene_member,
-                                        ObjectTexts& objects);
+                                        ObjectTexts& objects,
+                                        std::span<const std::string_view> envelope_keys = {});
 
 // parse_scene(), with the same errors, for a scene whose "objects" are `objects` (an empty
 // "objects" array in `document` stands for them). The Scene has no objects: each is

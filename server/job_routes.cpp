@@ -89,10 +89,16 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   // Declared before the body, so that it gives memory back after the body is freed.
   auto memory = std::make_shared<SubmissionMemory>(request.body.size() >= kTrimAfterBytes);
   std::string body = std::move(request.body);
+  // The budget's share goes back before the answer, so that a client that sends its next
+  // submission as soon as it has this one's answer finds the share free.
+  const auto answer = [&memory, &respond](HttpResponse response) {
+    memory->hold.reset();
+    respond(std::move(response));
+  };
   if (context.submit_budget) {
     const std::size_t needed = body.size() * kSubmitBytesPerBodyByte;
     auto hold = context.submit_budget->try_hold(needed);
-    if (!hold) return respond(busy(*context.submit_budget, needed));
+    if (!hold) return answer(busy(*context.submit_budget, needed));
     memory->hold.emplace(std::move(*hold));
   }
   ObjectTexts objects;
@@ -100,24 +106,26 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   try {
     scan_scene_limits(body, context.limits, "scene");
     objects.reserve(body.size());  // room only: untouched, it costs nothing
-    envelope = parse_json_objects_apart(body, "scene", objects);
+    // JobSubmission's keys: any other is refused by its name, and its value not built.
+    static constexpr std::string_view envelope_keys[] = {"name", "priority", "scene"};
+    envelope = parse_json_objects_apart(body, "scene", objects, envelope_keys);
   } catch (const SceneError& e) {
     // Only a syntax error is not the scene's: the scan puts it at the document ("").
-    if (e.limit().empty()) return respond(error_response(400, "malformed_json", e.detail()));
-    return respond(scene_refused(e));
+    if (e.limit().empty()) return answer(error_response(400, "malformed_json", e.detail()));
+    return answer(scene_refused(e));
   }
   std::string().swap(body);  // all of it is in `envelope` and `objects` now
   protocol::JobSubmission submission;
   try {
     submission = protocol::JobSubmission::take(envelope);
   } catch (const protocol::ProtocolError& e) {
-    return respond(invalid_request(e));
+    return answer(invalid_request(e));
   }
   Scene scene;
   try {
     scene = check_scene(submission.scene, context.limits, objects);
   } catch (const SceneError& e) {
-    return respond(scene_refused(e));
+    return answer(scene_refused(e));
   }
   // The stored text is the scene's dump(), byte for byte: its digest is what workers ask
   // for, and the same scene sent twice is stored once.
@@ -127,6 +135,7 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
       submission.name, submission.priority, scene, std::move(scene_json),
       [&context, memory, respond = std::move(respond)](std::optional<JobStatus> job,
                                                        const std::string& error) {
+        memory->hold.reset();  // before the answer, as above
         // The store refused (a full disk, say): nothing was created.
         if (!job) return respond(storage_failed("the job", error));
         HttpResponse response = body_response(201, status_of(*job, context.clock.now_ms()));

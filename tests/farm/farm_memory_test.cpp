@@ -100,6 +100,21 @@ TEST(FarmMemory, RefusedSceneCostsNoMoreThanItsBody) {
   EXPECT_TRUE(idle_comes_back(farm, growth.before_kib));
 }
 
+// Refused for its key alone, an unknown member's value is never built.
+TEST(FarmMemory, RefusedJunkCostsNoMoreThanItsBody) {
+  Farm farm("mem-junk", 0);
+  if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
+  std::string body = submission_with_spheres(10);
+  std::string junk = R"(,"extra":[)";
+  for (int i = 0; i < 700'000; ++i) junk += (i ? ",[" : "[") + std::to_string(i) + ",1.5,-2]";
+  body.insert(body.rfind("}}"), junk + "]");
+  const Growth growth = post_measuring(farm, body);
+  ASSERT_EQ(growth.status, 400) << growth.body;
+  EXPECT_EQ(json::parse(growth.body)["error"]["path"], "/scene/extra");
+  RecordProperty("peak_growth_per_body_byte", std::to_string(growth.peak_per_body_byte));
+  EXPECT_LT(growth.peak_per_body_byte, 4.0) << body.size() << " bytes";
+}
+
 TEST(FarmMemory, AcceptedSceneCostsAFewTimesItsBody) {
   Farm farm("mem-accepted", 0);
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";

@@ -237,6 +237,12 @@ TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
     broken[json::json_pointer(pointer)] = value;
     texts.push_back(scene_with("objects", {big, broken}).dump());
   }
+  // Unknown keys, whose values are not built: the same error all the same.
+  json junk = scene_with("objects", {sphere()});
+  junk["extra"] = {{1, 2, {{"a", many(light(), 50)}}}, "x"};
+  texts.push_back(junk.dump());
+  junk["version"] = 2;
+  texts.push_back(junk.dump());
   for (const std::string& text : texts) {
     const json whole = parse_json_text(text);
     for (const bool enveloped : {false, true}) {
@@ -263,9 +269,27 @@ TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
       EXPECT_EQ(got.width, expected.width);
       EXPECT_EQ(got.materials.size(), expected.materials.size());
       EXPECT_TRUE(got.objects.empty());
-      EXPECT_EQ(dump_scene(document, std::move(objects)), whole.dump()) << text.substr(0, 200);
+      // Only a valid scene is stored; an unknown member's value is not even built.
+      if (expected_error.empty()) {
+        EXPECT_EQ(dump_scene(document, std::move(objects)), whole.dump()) << text.substr(0, 200);
+      }
     }
   }
+}
+
+TEST(SceneStream, UnknownMembersAreNotBuilt) {
+  const std::string_view keys[] = {"name", "scene"};
+  ObjectTexts objects;
+  const json document = parse_json_objects_apart(
+      R"({"name": "n", "junk": [[1, [2]], {"a": 3}], "scene": {"more": {"b": [4]},
+          "objects": [{"type": "sphere"}], "image": {"width": 1}}})",
+      "scene", objects, keys);
+  EXPECT_EQ(document["junk"], nullptr);
+  EXPECT_EQ(document["name"], "n");
+  EXPECT_EQ(document["scene"]["more"], nullptr);
+  EXPECT_EQ(document["scene"]["image"], json({{"width", 1}}));
+  EXPECT_EQ(document["scene"]["objects"], json::array());
+  EXPECT_EQ(objects.size(), 1u);
 }
 
 TEST(SceneStream, AMeshIsCheckedWithItsArraysLifted) {
