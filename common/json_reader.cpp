@@ -13,13 +13,10 @@
 
 #include "common/json_fast_parse.hpp"
 #include "common/scene_parser.hpp"
+#include "common/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {
-
-// Scenes need about five levels; anything far deeper is a mistake or an attack, and every
-// later walk of the tree (dump, comparison) would recurse that deep.
-constexpr int max_nesting = 64;
 
 // Smaller arrays cost little as nodes, and stay in the document for any other reader.
 constexpr std::size_t lifted_array_min_size = 64;
@@ -42,6 +39,8 @@ std::string describe_position(std::string_view text, std::size_t offset) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
 }
 
+}  // namespace
+
 // A pre-scan rather than a parser callback, so that nothing is built for a document that
 // will be refused anyway.
 void check_nesting(std::string_view text) {
@@ -60,8 +59,8 @@ void check_nesting(std::string_view text) {
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
-      if (++depth > max_nesting) {
-        throw SceneError("", "JSON nesting is deeper than " + std::to_string(max_nesting) +
+      if (++depth > max_json_nesting) {
+        throw SceneError("", "JSON nesting is deeper than " + std::to_string(max_json_nesting) +
                                  " levels at " + describe_position(text, i));
       }
     } else if ((c == ']' || c == '}') && depth > 0) {
@@ -69,6 +68,8 @@ void check_nesting(std::string_view text) {
     }
   }
 }
+
+namespace {
 
 // nlohmann's message carries its own prefix and position ("[json.exception.parse_error.101]
 // parse error at line 1, column 7: syntax error ..."); keep only the explanation.
@@ -113,10 +114,17 @@ class ErrorLocator : public nlohmann::json_sax<nlohmann::json> {
 
 }  // namespace
 
+SceneError json_syntax_error(std::string_view text, std::size_t position, std::string_view what) {
+  // `position` is the 1-based index of the last character read: the offending one.
+  const std::size_t offset = position > 0 ? position - 1 : 0;
+  return SceneError(
+      "", "invalid JSON at " + describe_position(text, offset) + ": " + explanation(what));
+}
+
 nlohmann::json parse_json_text(std::string_view text) {
   // simdjson refuses any text nested deeper than the limit itself, so only a text it
   // refuses needs the pre-scan, a pass over every byte of what may be tens of megabytes.
-  if (auto parsed = parse_json_fast(text, max_nesting)) return std::move(*parsed);
+  if (auto parsed = parse_json_fast(text, max_json_nesting)) return std::move(*parsed);
   check_nesting(text);
   try {
     return nlohmann::json::parse(text);
@@ -124,16 +132,13 @@ nlohmann::json parse_json_text(std::string_view text) {
     ErrorLocator locator;
     nlohmann::json::sax_parse(text, &locator);
     if (locator.what.empty()) locator.what = error.what();
-    // `byte` is the 1-based index of the last character read: the offending one.
-    const std::size_t offset = locator.byte > 0 ? locator.byte - 1 : 0;
-    throw SceneError("", "invalid JSON at " + describe_position(text, offset) + ": " +
-                             explanation(locator.what));
+    throw json_syntax_error(text, locator.byte, locator.what);
   }
 }
 
 Scene parse_scene_text(std::string_view text, const Limits& limits,
                        const std::function<void(nlohmann::json&)>& edit) {
-  if (auto fast = parse_json_fast_lifted(text, max_nesting, lifted_array_min_size)) {
+  if (auto fast = parse_json_fast_lifted(text, max_json_nesting, lifted_array_min_size)) {
     if (edit) edit(fast->document);
     try {
       return parse_scene(fast->document, limits, &fast->lifted);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/scene_parser_parts.hpp"
+#include "common/scene_stream.hpp"
 #include "common/transform.hpp"
 
 namespace tessera {
@@ -90,6 +91,26 @@ Object parse_object(const ValueReader& value, MaterialTable& materials) {
   return object;
 }
 
+void check_object_count(const ValueReader& objects, std::size_t count, const Limits& limits) {
+  if (count > limits.max_objects) {
+    objects.fail_limit("must have <= " + std::to_string(limits.max_objects) +
+                           " elements (limit max_objects), got " + std::to_string(count),
+                       "max_objects", limits.max_objects);
+  }
+}
+
+// Adds `object`'s triangles to `triangles`, the sum over the objects so far.
+void add_triangles(const ValueReader& objects, const ValueReader& element, const Object& object,
+                   std::size_t& triangles, const Limits& limits) {
+  triangles += triangle_count(object.shape);
+  if (triangles > limits.max_triangles) {
+    objects.fail_limit("must have <= " + std::to_string(limits.max_triangles) +
+                           " triangles in total (limit max_triangles), got " +
+                           std::to_string(triangles) + " counting up to " + element.pointer(),
+                       "max_triangles", limits.max_triangles);
+  }
+}
+
 }  // namespace
 
 Mat4 parse_transform(const ValueReader& steps) {
@@ -113,26 +134,40 @@ Mat4 parse_transform(const ValueReader& steps) {
 std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
                                   const Limits& limits) {
   const std::size_t count = objects.array_size("an array of objects");
-  if (count > limits.max_objects) {
-    objects.fail_limit("must have <= " + std::to_string(limits.max_objects) +
-                           " elements (limit max_objects), got " + std::to_string(count),
-                       "max_objects", limits.max_objects);
-  }
+  check_object_count(objects, count, limits);
   std::vector<Object> result;
   result.reserve(count);
   std::size_t triangles = 0;
   for (std::size_t i = 0; i < count; ++i) {
-    result.push_back(parse_object(objects.element(i), materials));
-    triangles += triangle_count(result.back().shape);
-    if (triangles > limits.max_triangles) {
-      objects.fail_limit("must have <= " + std::to_string(limits.max_triangles) +
-                             " triangles in total (limit max_triangles), got " +
-                             std::to_string(triangles) + " counting up to " +
-                             objects.element(i).pointer(),
-                         "max_triangles", limits.max_triangles);
-    }
+    const ValueReader element = objects.element(i);
+    result.push_back(parse_object(element, materials));
+    add_triangles(objects, element, result.back(), triangles, limits);
   }
   return result;
+}
+
+void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
+                   const Limits& limits) {
+  check_object_count(objects, texts.size(), limits);
+  std::size_t triangles = 0;
+  LiftedArrays lifted;
+  for (std::size_t i = 0; i < texts.size(); ++i) {
+    const std::string pointer = objects.pointer() + "/" + std::to_string(i);
+    // A mesh's arrays lifted, as parse_scene_text() does: a shape parsed before the
+    // material, so that a refusal there has added nothing to the table.
+    if (const auto value = texts.element_lifted(i, pointer, lifted)) {
+      try {
+        const ValueReader element(*value, pointer, &lifted);
+        add_triangles(objects, element, parse_object(element, materials), triangles, limits);
+        continue;
+      } catch (const LiftedArrayRefused&) {
+        // Read again below, the ordinary way, for the error's words.
+      }
+    }
+    const nlohmann::json value = texts.element(i);
+    const ValueReader element(value, pointer);
+    add_triangles(objects, element, parse_object(element, materials), triangles, limits);
+  }
 }
 
 }  // namespace tessera

@@ -7,6 +7,7 @@
 
 #include "common/output_transfer.hpp"
 #include "common/scene_parser_parts.hpp"
+#include "common/scene_stream.hpp"
 
 namespace tessera {
 namespace {
@@ -69,6 +70,36 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
   return render;
 }
 
+Scene read_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
+                 const ObjectTexts* apart) {
+  const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
+  // Before the key check: a future version may well have keys this one does not know.
+  if (const auto version = root.find("version")) {
+    if (version->integer() != 1)
+      version->fail("must be 1, the only scene format version, got " + describe(version->json()));
+  }
+  root.allow_only(scene_keys);
+
+  Scene scene;
+  parse_image(root.require("image"), limits, scene);
+  scene.camera = parse_camera(root.require("camera"));
+  if (const auto render = root.find("render")) scene.render = parse_render(*render, limits);
+  scene.background = root.color_or("background", scene.background);
+  scene.ambient_light = root.color_or("ambient_light", scene.ambient_light);
+
+  MaterialTable materials(limits);
+  if (const auto named = root.find("materials")) materials.add_named(*named);
+  if (const auto lights = root.find("lights")) scene.lights = parse_lights(*lights, limits);
+  if (const auto objects = root.find("objects")) {
+    if (apart && objects->json().is_array())
+      check_objects(*objects, *apart, materials, limits);
+    else
+      scene.objects = parse_objects(*objects, materials, limits);
+  }
+  scene.materials = std::move(materials).take();
+  return scene;
+}
+
 }  // namespace
 
 Limits Limits::none() {
@@ -84,29 +115,12 @@ Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits,
                   const LiftedArrays* lifted) {
-  const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
-  // Before the key check: a future version may well have keys this one does not know.
-  if (const auto version = root.find("version")) {
-    if (version->integer() != 1)
-      version->fail("must be 1, the only scene format version, got " + describe(version->json()));
-  }
-  root.allow_only({"version", "image", "camera", "render", "background", "ambient_light",
-                   "materials", "lights", "objects"});
+  return read_scene(document, limits, lifted, nullptr);
+}
 
-  Scene scene;
-  parse_image(root.require("image"), limits, scene);
-  scene.camera = parse_camera(root.require("camera"));
-  if (const auto render = root.find("render")) scene.render = parse_render(*render, limits);
-  scene.background = root.color_or("background", scene.background);
-  scene.ambient_light = root.color_or("ambient_light", scene.ambient_light);
-
-  MaterialTable materials(limits);
-  if (const auto named = root.find("materials")) materials.add_named(*named);
-  if (const auto lights = root.find("lights")) scene.lights = parse_lights(*lights, limits);
-  if (const auto objects = root.find("objects"))
-    scene.objects = parse_objects(*objects, materials, limits);
-  scene.materials = std::move(materials).take();
-  return scene;
+Scene check_scene(const nlohmann::json& document, const Limits& limits,
+                  const ObjectTexts& objects) {
+  return read_scene(document, limits, nullptr, &objects);
 }
 
 }  // namespace tessera

@@ -1,6 +1,7 @@
 // Internal to the scene parser: the pieces of parse_scene that live in their own files.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -13,6 +14,26 @@
 #include "common/value_reader.hpp"
 
 namespace tessera {
+
+// --- json_reader.cpp ---
+
+// Scenes need about five levels; anything far deeper is a mistake or an attack, and every
+// later walk of the tree (dump, comparison) would recurse that deep.
+constexpr int max_json_nesting = 64;
+
+// Throws parse_json_text()'s SceneError for a text nested deeper than max_json_nesting,
+// naming the line and column where it goes too deep; returns for any other text.
+void check_nesting(std::string_view text);
+// parse_json_text()'s SceneError for the syntax error nlohmann's parser reported at
+// `position` (the 1-based index of the last character it read) with the message `what`.
+SceneError json_syntax_error(std::string_view text, std::size_t position, std::string_view what);
+
+// --- scene_parser.cpp ---
+
+// The keys of a scene's root object; any other is refused.
+inline constexpr std::array<std::string_view, 9> scene_keys = {
+    "version",       "image",     "camera", "render", "background",
+    "ambient_light", "materials", "lights", "objects"};
 
 // --- material_parser.cpp ---
 
@@ -45,6 +66,11 @@ std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits)
 
 std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
                                   const Limits& limits);
+class ObjectTexts;
+// parse_objects() for the objects kept apart from `objects` (scene_stream.hpp), an empty
+// array standing for them: each is checked as it would be there, then dropped.
+void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
+                   const Limits& limits);
 Mat4 parse_transform(const ValueReader& steps);
 
 // --- shape_parser.cpp ---

@@ -12,6 +12,7 @@
 #include "server/readiness.hpp"
 #include "server/router.hpp"
 #include "server/scheduler.hpp"
+#include "server/submit_budget.hpp"
 
 namespace tessera {
 
@@ -29,6 +30,8 @@ struct ApiContext {
   std::function<void(std::function<void()>)> run_blocking = [](const std::function<void()>& work) {
     work();
   };
+  // The memory job submissions being read may take together; none: no cap.
+  SubmitBudget* submit_budget = nullptr;
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.

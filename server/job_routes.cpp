@@ -1,13 +1,21 @@
 #include <chrono>
 #include <memory>
+#include <optional>
+
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include "common/image_format.hpp"
 #include "common/image_io.hpp"
 #include "common/protocol/paths.hpp"
+#include "common/scene_limits_scan.hpp"
 #include "common/scene_parser.hpp"
+#include "common/scene_stream.hpp"
 #include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
+#include "server/submit_budget.hpp"
 
 namespace tessera {
 namespace {
@@ -18,32 +26,116 @@ HttpResponse not_found(const std::string& id) {
   return error_response(404, "not_found", "no job " + id);
 }
 
-// The submission envelope around the scene (`JobSubmission`).
-void submit(ApiContext& context, const HttpRequest& request, Respond respond) {
-  auto parsed = json_body(request);
-  if (auto* refused = std::get_if<HttpResponse>(&parsed)) return respond(std::move(*refused));
+// What reading a submission takes, per byte of its body, at most: the body, the scene's
+// stored text and one object at a time in nodes (docs/performance.md, "Memory per
+// submitted scene"). What a submission holds of the SubmitBudget.
+constexpr std::size_t kSubmitBytesPerBodyByte = 4;
+// After a body this large, the memory its reading freed goes back to the system.
+constexpr std::size_t kTrimAfterBytes = 1 << 20;
+
+// Given back to the system: the nodes of a scene are many small blocks, which glibc keeps
+// in its arenas once freed, so that an idle coordinator would go on holding the memory of
+// the largest scene it has read.
+void return_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
+// What a submission holds while it is read and stored: its share of the budget, and the
+// memory to give back once it is done.
+struct SubmissionMemory {
+  explicit SubmissionMemory(bool large) : large(large) {}
+  SubmissionMemory(const SubmissionMemory&) = delete;
+  SubmissionMemory& operator=(const SubmissionMemory&) = delete;
+  ~SubmissionMemory() {
+    hold.reset();
+    if (large) return_free_memory();
+  }
+  const bool large;
+  std::optional<SubmitBudget::Hold> hold;
+};
+
+std::string mebibytes(std::size_t bytes) {
+  return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB";
+}
+
+HttpResponse busy(const SubmitBudget& budget, std::size_t needed) {
+  HttpResponse response =
+      error_response(503, "busy",
+                     "the coordinator is reading other scenes, which hold " +
+                         mebibytes(budget.held()) + " of its " + mebibytes(budget.limit()) +
+                         " for them (--submit-memory-budget); this one needs " + mebibytes(needed) +
+                         ": try again shortly");
+  response.headers.emplace_back("Retry-After", "1");
+  return response;
+}
+
+HttpResponse scene_refused(const SceneError& e) {
+  const std::string path = "/scene" + e.pointer();
+  if (e.limit().empty())
+    return error_response(400, "invalid_scene", path + ": " + e.detail(), path);
+  // Valid, but more than this server takes: say which limit, so the user can ask for it.
+  return json_response(
+      422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(), path,
+                                             e.limit(), e.limit_value()}));
+}
+
+// The submission envelope around the scene (`JobSubmission`). Memory is bounded by the
+// body, not amplified by it: a first pass builds nothing and refuses a scene over a count
+// limit where it crosses it; only then are nodes made, and the scene's objects, by far its
+// largest part, are read and checked one at a time (common/scene_stream.hpp).
+void submit(ApiContext& context, HttpRequest& request, Respond respond) {
+  // Declared before the body, so that it gives memory back after the body is freed.
+  auto memory = std::make_shared<SubmissionMemory>(request.body.size() >= kTrimAfterBytes);
+  std::string body = std::move(request.body);
+  // The budget's share goes back before the answer, so that a client that sends its next
+  // submission as soon as it has this one's answer finds the share free.
+  const auto answer = [&memory, &respond](HttpResponse response) {
+    memory->hold.reset();
+    respond(std::move(response));
+  };
+  if (context.submit_budget) {
+    const std::size_t needed = body.size() * kSubmitBytesPerBodyByte;
+    auto hold = context.submit_budget->try_hold(needed);
+    if (!hold) return answer(busy(*context.submit_budget, needed));
+    memory->hold.emplace(std::move(*hold));
+  }
+  ObjectTexts objects;
+  json envelope;
+  try {
+    scan_scene_limits(body, context.limits, "scene");
+    objects.reserve(body.size());  // room only: untouched, it costs nothing
+    // JobSubmission's keys: any other is refused by its name, and its value not built.
+    static constexpr std::string_view envelope_keys[] = {"name", "priority", "scene"};
+    envelope = parse_json_objects_apart(body, "scene", objects, envelope_keys);
+  } catch (const SceneError& e) {
+    // Only a syntax error is not the scene's: the scan puts it at the document ("").
+    if (e.limit().empty()) return answer(error_response(400, "malformed_json", e.detail()));
+    return answer(scene_refused(e));
+  }
+  std::string().swap(body);  // all of it is in `envelope` and `objects` now
   protocol::JobSubmission submission;
   try {
-    submission = protocol::JobSubmission::take(std::get<json>(parsed));
+    submission = protocol::JobSubmission::take(envelope);
   } catch (const protocol::ProtocolError& e) {
-    return respond(invalid_request(e));
+    return answer(invalid_request(e));
   }
   Scene scene;
   try {
-    scene = parse_scene(submission.scene, context.limits);
+    scene = check_scene(submission.scene, context.limits, objects);
   } catch (const SceneError& e) {
-    const std::string path = "/scene" + e.pointer();
-    if (e.limit().empty())
-      return respond(error_response(400, "invalid_scene", path + ": " + e.detail(), path));
-    // Valid, but more than this server takes: say which limit, so the user can ask for it.
-    return respond(
-        json_response(422, protocol::to_json(protocol::Error{"over_limit", path + ": " + e.detail(),
-                                                             path, e.limit(), e.limit_value()})));
+    return answer(scene_refused(e));
   }
+  // The stored text is the scene's dump(), byte for byte: its digest is what workers ask
+  // for, and the same scene sent twice is stored once.
+  std::string scene_json = dump_scene(submission.scene, std::move(objects));
+  submission.scene = json();
   context.scheduler.submit(
-      submission.name, submission.priority, scene, submission.scene.dump(),
-      [&context, respond = std::move(respond)](std::optional<JobStatus> job,
-                                               const std::string& error) {
+      submission.name, submission.priority, scene, std::move(scene_json),
+      [&context, memory, respond = std::move(respond)](std::optional<JobStatus> job,
+                                                       const std::string& error) {
+        memory->hold.reset();  // before the answer, as above
         // The store refused (a full disk, say): nothing was created.
         if (!job) return respond(storage_failed("the job", error));
         HttpResponse response = body_response(201, status_of(*job, context.clock.now_ms()));

@@ -45,6 +45,7 @@ struct ServerOptions {
   std::string port_file;
   tessera::Limits limits;
   std::size_t max_job_bytes = 64 << 20;
+  std::size_t submit_memory_budget = std::size_t{1} << 30;
   std::string api_token, api_token_file;
   std::string worker_token, worker_token_file;
   bool insecure = false;
@@ -184,6 +185,7 @@ int run(const ServerOptions& options) {
 
   Readiness readiness;
   Router router;
+  SubmitBudget submit_budget(options.submit_memory_budget);
   ApiContext context{scheduler,
                      clock,
                      claims,
@@ -197,6 +199,7 @@ int run(const ServerOptions& options) {
   context.run_blocking = [&encoders](std::function<void()> work) {
     boost::asio::post(encoders, std::move(work));
   };
+  context.submit_budget = &submit_budget;
   add_routes(router, context, readiness);
 
   HttpServerOptions http;
@@ -359,6 +362,11 @@ void add_limit_options(CLI::App& app, ServerOptions& options) {
       ->capture_default_str();
   app.add_option("--max-job-bytes", options.max_job_bytes,
                  "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--submit-memory-budget", options.submit_memory_budget,
+                 "Memory in bytes the job submissions being read may take together, reckoned "
+                 "as 4x each body; one over it gets 503 with Retry-After")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
 }

@@ -43,6 +43,13 @@ Statement& Statement::bind(int index, std::string_view text) {
   return *this;
 }
 
+Statement& Statement::bind_view(int index, std::string_view text) {
+  const char* data = text.data() ? text.data() : "";
+  if (sqlite3_bind_text64(stmt_, index, data, text.size(), SQLITE_STATIC, SQLITE_UTF8) != SQLITE_OK)
+    fail("bind");
+  return *this;
+}
+
 Statement& Statement::bind_blob(int index, std::span<const std::byte> bytes) {
   // SQLITE_STATIC: tiles can be large, and the caller's buffer outlives the statement's
   // use (bindings are cleared by reset()).

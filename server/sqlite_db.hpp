@@ -31,6 +31,9 @@ class Statement {
   Statement& bind(int index, std::int64_t value);
   Statement& bind(int index, int value) { return bind(index, static_cast<std::int64_t>(value)); }
   Statement& bind(int index, std::string_view text);
+  // As bind(), without SQLite's copy of the text, which must outlive the statement's use:
+  // for a scene's text of tens of megabytes.
+  Statement& bind_view(int index, std::string_view text);
   Statement& bind_blob(int index, std::span<const std::byte> bytes);
 
   // True while there is a row to read; false once done.

@@ -158,7 +158,7 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
   Transaction tx(db_);
   db_.statement("INSERT OR IGNORE INTO scenes (digest, json) VALUES (?, ?)")
       ->bind(1, job.scene_digest)
-      .bind(2, scene_json)
+      .bind_view(2, scene_json)
       .run();
   db_.statement(
          "INSERT INTO jobs (id, name, priority, state, width, height, tile_size, scene_digest, "

@@ -112,6 +112,9 @@ void StoreThread::run() {
     }
     StoreTicket newest = 0;
     for (const Item& item : items) newest = std::max(newest, item.ticket);
+    // What the work held (a submitted scene's text can be tens of megabytes) is freed
+    // before the callbacks, which may then give that memory back to the system.
+    items.clear();
 
     lock.lock();
     for (const auto& [ticket, error] : refused) refused_[ticket] = error;

@@ -1,0 +1,304 @@
+#include "common/scene_limits_scan.hpp"
+
+#include <cstddef>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/scene_parser_parts.hpp"
+
+namespace tessera {
+namespace {
+
+using nlohmann::json;
+
+// What a container is to the scene; only these are counted.
+enum class Role : std::uint8_t {
+  other,
+  envelope,   // the root, when the scene is one of its members
+  scene,      // the scene's own object
+  materials,  // its "materials" object
+  lights,     // its "lights" array
+  objects,    // its "objects" array
+  object,     // an element of "objects"
+  triangles,  // an object's "triangles" array
+};
+
+struct Frame {
+  Role role = Role::other;
+  bool array = false;
+  std::size_t elements = 0;  // of an array, so far
+  std::string key;           // the last key read, where the role makes keys matter
+};
+
+enum class ShapeKind : std::uint8_t { uncounted, box, triangle, mesh };
+
+// The element of "objects" being read: as in the document, the last of repeated keys wins.
+struct ObjectState {
+  std::size_t index = 0;
+  ShapeKind kind = ShapeKind::uncounted;
+  bool inline_material = false;
+  std::size_t triangles = 0;  // elements of its (last) "triangles" array
+};
+
+// nlohmann's SAX interface, statically dispatched. Refusals are thrown from the callbacks,
+// which nlohmann's parser lets through: nothing after the first one is read.
+class LimitCounter {
+ public:
+  LimitCounter(const Limits& limits, std::optional<std::string_view> scene_member)
+      : limits_(limits), scene_member_(scene_member) {}
+
+  bool nested_too_deep = false;
+  std::size_t error_position = 0;
+  std::string error_what;
+
+  bool null() { return scalar(); }
+  bool boolean(bool) { return scalar(); }
+  bool number_integer(json::number_integer_t) { return scalar(); }
+  bool number_unsigned(json::number_unsigned_t) { return scalar(); }
+  bool number_float(json::number_float_t, const json::string_t&) { return scalar(); }
+  bool binary(json::binary_t&) { return scalar(); }
+
+  bool string(json::string_t& text) { return scalar(&text); }
+
+  bool start_object(std::size_t) { return open(false); }
+  bool start_array(std::size_t) { return open(true); }
+
+  bool key(json::string_t& key) {
+    Frame& frame = stack_.back();
+    switch (frame.role) {
+      case Role::envelope:
+      case Role::scene:
+      case Role::object:
+        frame.key = key;
+        break;
+      case Role::materials:
+        add_named_material(key);
+        break;
+      default:
+        break;
+    }
+    return true;
+  }
+
+  bool end_object() {
+    if (stack_.back().role == Role::object) end_scene_object();
+    stack_.pop_back();
+    return true;
+  }
+
+  bool end_array() {
+    if (stack_.back().role == Role::triangles) object_.triangles = stack_.back().elements;
+    stack_.pop_back();
+    return true;
+  }
+
+  bool parse_error(std::size_t position, const std::string&, const json::exception& error) {
+    error_position = position;
+    error_what = error.what();
+    return false;
+  }
+
+ private:
+  bool in(Role role) const { return !stack_.empty() && stack_.back().role == role; }
+
+  // A value that is neither an object nor an array, as it begins; `text` if a string.
+  bool scalar(const json::string_t* text = nullptr) {
+    if (in(Role::object)) {
+      const std::string& key = stack_.back().key;
+      if (key == "type")
+        object_.kind = text ? kind_named(*text) : ShapeKind::uncounted;
+      else if (key == "material")
+        object_.inline_material = false;
+      else if (key == "triangles")
+        object_.triangles = 0;
+    }
+    count_element();
+    return true;
+  }
+
+  static ShapeKind kind_named(const std::string& type) {
+    if (type == "box") return ShapeKind::box;
+    if (type == "triangle") return ShapeKind::triangle;
+    if (type == "mesh") return ShapeKind::mesh;
+    return ShapeKind::uncounted;
+  }
+
+  bool open(bool array) {
+    if (stack_.size() >= static_cast<std::size_t>(max_json_nesting)) {
+      nested_too_deep = true;
+      return false;
+    }
+    count_element();
+    const Role role = role_of_child(array);
+    switch (role) {
+      case Role::scene:
+        named_.clear();
+        start_objects();
+        break;
+      case Role::materials:
+        named_.clear();
+        break;
+      case Role::objects:
+        start_objects();
+        break;
+      case Role::object:
+        object_ = ObjectState{stack_.back().elements - 1};
+        break;
+      default:
+        break;
+    }
+    if (in(Role::object)) {
+      const std::string& key = stack_.back().key;
+      if (key == "type") object_.kind = ShapeKind::uncounted;
+      if (key == "material") object_.inline_material = !array;  // an array: parse_scene says
+      if (key == "triangles" && !array) object_.triangles = 0;
+    }
+    stack_.push_back(Frame{role, array, 0, {}});
+    return true;
+  }
+
+  Role role_of_child(bool array) const {
+    if (stack_.empty()) {
+      if (array) return Role::other;
+      return scene_member_ ? Role::envelope : Role::scene;
+    }
+    const Frame& parent = stack_.back();
+    switch (parent.role) {
+      case Role::envelope:
+        return !array && parent.key == *scene_member_ ? Role::scene : Role::other;
+      case Role::scene:
+        if (!array && parent.key == "materials") return Role::materials;
+        if (array && parent.key == "lights") return Role::lights;
+        if (array && parent.key == "objects") return Role::objects;
+        return Role::other;
+      case Role::objects:
+        return array ? Role::other : Role::object;
+      case Role::object:
+        return array && parent.key == "triangles" ? Role::triangles : Role::other;
+      default:
+        return Role::other;
+    }
+  }
+
+  void start_objects() {
+    triangles_ = 0;
+    inline_materials_.clear();
+  }
+
+  // Every value, as it begins, is one more element of the array it is in, if any.
+  void count_element() {
+    if (stack_.empty() || !stack_.back().array) return;
+    Frame& frame = stack_.back();
+    const std::size_t index = frame.elements++;
+    switch (frame.role) {
+      case Role::objects:
+        if (index >= limits_.max_objects)
+          too_many("/objects", "elements", limits_.max_objects, "max_objects", index);
+        break;
+      case Role::lights:
+        if (index >= limits_.max_lights)
+          too_many("/lights", "elements", limits_.max_lights, "max_lights", index);
+        break;
+      case Role::triangles:
+        // A huge mesh is refused within its own array, once its type is known to be "mesh".
+        if (object_.kind == ShapeKind::mesh && triangles_ + index >= limits_.max_triangles)
+          throw SceneError("/objects",
+                           "must have <= " + std::to_string(limits_.max_triangles) +
+                               " triangles in total (limit max_triangles), got more, counting up "
+                               "to /objects/" +
+                               std::to_string(object_.index),
+                           "max_triangles", limits_.max_triangles);
+        break;
+      default:
+        break;
+    }
+  }
+
+  [[noreturn]] void too_many(const std::string& pointer, const char* what, std::size_t limit,
+                             const char* name, std::size_t index) const {
+    throw SceneError(pointer,
+                     "must have <= " + std::to_string(limit) + " " + what + " (limit " + name +
+                         "), got more (stopped counting at " + pointer + "/" +
+                         std::to_string(index) + ")",
+                     name, limit);
+  }
+
+  void add_named_material(const std::string& name) {
+    // Repeated names are one material, as in the document.
+    if (!named_.insert(name).second) return;
+    if (named_.size() > limits_.max_materials)
+      throw SceneError("/materials",
+                       "must have <= " + std::to_string(limits_.max_materials) +
+                           " entries (limit max_materials), got more (stopped counting at " +
+                           quote(name) + ")",
+                       "max_materials", limits_.max_materials);
+    check_all_materials();
+  }
+
+  // Named materials come first in the table, then each object's inline one in order: the
+  // one that goes over is the inline one at (limit - named).
+  void check_all_materials() const {
+    const std::size_t limit = limits_.max_materials;
+    if (named_.size() + inline_materials_.size() <= limit) return;
+    const std::size_t object = inline_materials_[limit - named_.size()];
+    throw SceneError("/objects/" + std::to_string(object) + "/material",
+                     "is one material too many: named and inline materials together must be <= " +
+                         std::to_string(limit) + " (limit max_materials)",
+                     "max_materials", limit);
+  }
+
+  // In parse_scene's order for one object: its material, then its triangles.
+  void end_scene_object() {
+    if (object_.inline_material) {
+      inline_materials_.push_back(object_.index);
+      check_all_materials();
+    }
+    switch (object_.kind) {
+      case ShapeKind::box:
+        triangles_ += 12;
+        break;
+      case ShapeKind::triangle:
+        triangles_ += 1;
+        break;
+      case ShapeKind::mesh:
+        triangles_ += object_.triangles;
+        break;
+      case ShapeKind::uncounted:
+        break;
+    }
+    if (triangles_ > limits_.max_triangles)
+      throw SceneError("/objects",
+                       "must have <= " + std::to_string(limits_.max_triangles) +
+                           " triangles in total (limit max_triangles), got " +
+                           std::to_string(triangles_) + " counting up to /objects/" +
+                           std::to_string(object_.index),
+                       "max_triangles", limits_.max_triangles);
+  }
+
+  const Limits& limits_;
+  const std::optional<std::string_view> scene_member_;
+  std::vector<Frame> stack_;
+  ObjectState object_;
+  std::unordered_set<std::string> named_;
+  std::vector<std::size_t> inline_materials_;  // the objects that define one, in order
+  std::size_t triangles_ = 0;
+};
+
+}  // namespace
+
+void scan_scene_limits(std::string_view text, const Limits& limits,
+                       std::optional<std::string_view> scene_member) {
+  LimitCounter counter(limits, scene_member);
+  if (json::sax_parse(text.begin(), text.end(), &counter)) return;
+  if (counter.nested_too_deep) {
+    check_nesting(text);  // words it as parse_json_text() does
+    throw SceneError("",
+                     "JSON nesting is deeper than " + std::to_string(max_json_nesting) + " levels");
+  }
+  throw json_syntax_error(text, counter.error_position, counter.error_what);
+}
+
+}  // namespace tessera
