@@ -1,5 +1,9 @@
 #include "common/net/coordinator_client.hpp"
 
+#include <algorithm>
+#include <charconv>
+#include <thread>
+
 #include "common/protocol/paths.hpp"
 
 namespace tessera {
@@ -59,8 +63,24 @@ HttpClient::Headers CoordinatorClient::identity() const {
 }
 
 protocol::JobStatus CoordinatorClient::submit(const protocol::JobSubmission& submission) {
-  return read_body<protocol::JobStatus>(
-      call("POST", std::string(route::jobs), protocol::to_json(submission).dump()).body);
+  const std::string body = protocol::to_json(submission).dump();
+  // A coordinator busy reading other large submissions (503 busy) kept nothing of this one:
+  // it goes again after the Retry-After the answer gives, for about a minute at most.
+  for (int attempt = 1;; ++attempt) {
+    HttpResult result =
+        http_.request("POST", std::string(route::jobs), body, "application/json", identity());
+    const auto error = result.status == 503 ? protocol::error_of(result.body) : std::nullopt;
+    if (!error || error->code != "busy" || attempt == kSubmitAttempts)
+      return read_body<protocol::JobStatus>(checked(std::move(result)).body);
+    std::chrono::seconds wait{1};
+    if (const auto after = result.headers.find("retry-after"); after != result.headers.end()) {
+      int seconds = 0;
+      const auto [end, ec] = std::from_chars(after->second.data(),
+                                             after->second.data() + after->second.size(), seconds);
+      if (ec == std::errc() && seconds >= 0) wait = std::chrono::seconds(std::min(seconds, 10));
+    }
+    std::this_thread::sleep_for(wait);
+  }
 }
 
 protocol::JobStatus CoordinatorClient::job(std::string_view id, double wait_s) {

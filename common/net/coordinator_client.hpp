@@ -55,7 +55,9 @@ class CoordinatorClient {
   // Each throws ApiError for an error answer (but those named), HttpError for none, and
   // protocol::ProtocolError for an answer not of the protocol's shape.
 
-  // The client's routes.
+  // The client's routes. A submission answered 503 busy goes again after its Retry-After,
+  // up to kSubmitAttempts times in all.
+  static constexpr int kSubmitAttempts = 30;
   protocol::JobStatus submit(const protocol::JobSubmission& submission);
   // With `wait_s` > 0 the server answers once the job has finished, or after wait_s.
   protocol::JobStatus job(std::string_view id, double wait_s = 0);

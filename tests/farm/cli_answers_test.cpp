@@ -23,6 +23,7 @@
 #include <gtest/gtest.h>
 #include <boost/asio/io_context.hpp>
 
+#include "common/protocol/jobs.hpp"
 #include "server/http_server.hpp"
 #include "server/router.hpp"
 #include "tests/farm/process.hpp"
@@ -194,7 +195,7 @@ TEST(CliAnswers, NoAnswerAtAllIsUnreachable) {
 TEST(CliAnswers, AnyServerUrlIsOneLine) {
   const fs::path dir = fresh_dir("cli-urls");
   const std::vector<std::pair<std::string, int>> urls = {
-      {"https://127.0.0.1:1", 3},  // TLS: not spoken by this build
+      {"https://127.0.0.1:1", 3},  // nothing listens there (TLS itself: farm_tls_test.cpp)
       {"ftp://127.0.0.1", 2},     {"http://", 2},
       {"http://[::1", 2},         {"http://127.0.0.1:99999", 2},
       {"http://u@127.0.0.1", 2},  {"http://127.0.0.1/v1", 2},
@@ -206,6 +207,46 @@ TEST(CliAnswers, AnyServerUrlIsOneLine) {
     EXPECT_EQ(run.exit_code, code) << run.output;
     expect_one_error_line(run);
   }
+}
+
+// A coordinator busy reading other large submissions answers 503 busy with Retry-After and
+// keeps nothing: `tessera submit` sends the job again after that wait, and it is created.
+TEST(CliAnswers, ASubmissionAnsweredBusyGoesAgainAfterRetryAfter) {
+  const fs::path dir = fresh_dir("cli-busy");
+  boost::asio::io_context io;
+  Router router;
+  std::atomic<int> posts{0};
+  router.add(
+      "POST", "/v1/jobs",
+      [&posts](HttpRequest&&, Respond respond) {
+        if (++posts <= 2) {
+          HttpResponse busy{503,
+                            "application/json",
+                            R"({"error": {"code": "busy", "message": "busy reading others"}})",
+                            {{"Retry-After", "1"}}};
+          return respond(std::move(busy));
+        }
+        protocol::JobStatus job;
+        job.id = "j-busy-then-taken";
+        job.name = "tiny";
+        job.width = job.height = 8;
+        job.created_at = "2026-12-05T00:00:00.000Z";
+        respond(HttpResponse{201, "application/json", protocol::to_json(job).dump(), {}});
+      },
+      std::nullopt, "", "");
+  HttpServerOptions options;
+  options.address = "127.0.0.1";
+  options.port = 0;
+  HttpServer server(io, router, options);
+  std::thread thread([&io] { io.run(); });
+  const CliRun run =
+      run_cli(dir, {"--server", "http://127.0.0.1:" + std::to_string(server.port()), "--json",
+                    "submit", std::string(TESSERA_SOURCE_DIR) + "/tests/data/tiny.json"});
+  server.stop();
+  thread.join();
+  EXPECT_EQ(posts.load(), 3) << run.output;
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("j-busy-then-taken"), std::string::npos) << run.output;
 }
 
 }  // namespace
