@@ -1,6 +1,7 @@
 #include "common/scene_limits_scan.hpp"
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/scene_parser_parts.hpp"
+#include "common/value_reader.hpp"
 
 namespace tessera {
 namespace {
@@ -31,7 +33,14 @@ struct Frame {
   bool array = false;
   std::size_t elements = 0;  // of an array, so far
   std::string key;           // the last key read, where the role makes keys matter
+  bool lifted = false;       // in a mesh's positions, normals or triangles
 };
+
+// The most JSON values one piece of a scene may hold outside a mesh's big arrays. A piece
+// (a member of the scene or of "materials", an element of "objects" or "lights") is built
+// as nodes whole when it is checked, at tens of bytes a value: this keeps that cost to a
+// few MiB however the text is made. Valid pieces hold a few dozen values.
+constexpr std::size_t kMaxPieceValues = 65536;
 
 enum class ShapeKind : std::uint8_t { uncounted, box, triangle, mesh };
 
@@ -75,6 +84,7 @@ class LimitCounter {
         frame.key = key;
         break;
       case Role::materials:
+        frame.key = key;
         add_named_material(key);
         break;
       default:
@@ -85,13 +95,13 @@ class LimitCounter {
 
   bool end_object() {
     if (stack_.back().role == Role::object) end_scene_object();
-    stack_.pop_back();
+    close();
     return true;
   }
 
   bool end_array() {
     if (stack_.back().role == Role::triangles) object_.triangles = stack_.back().elements;
-    stack_.pop_back();
+    close();
     return true;
   }
 
@@ -116,6 +126,7 @@ class LimitCounter {
         object_.triangles = 0;
     }
     count_element();
+    count_piece_value(!stack_.empty() && stack_.back().lifted);
     return true;
   }
 
@@ -133,6 +144,14 @@ class LimitCounter {
     }
     count_element();
     const Role role = role_of_child(array);
+    const bool lifted = lifted_child(array);
+    if (piece_depth_ == 0 && (role == Role::other || role == Role::object))
+      if (auto pointer = piece_of_child()) {
+        piece_depth_ = stack_.size() + 1;
+        piece_values_ = 0;
+        piece_pointer_ = std::move(*pointer);
+      }
+    count_piece_value(lifted);
     switch (role) {
       case Role::scene:
         named_.clear();
@@ -156,8 +175,49 @@ class LimitCounter {
       if (key == "material") object_.inline_material = !array;  // an array: parse_scene says
       if (key == "triangles" && !array) object_.triangles = 0;
     }
-    stack_.push_back(Frame{role, array, 0, {}});
+    stack_.push_back(Frame{role, array, 0, {}, lifted});
     return true;
+  }
+
+  void close() {
+    if (piece_depth_ == stack_.size()) piece_depth_ = 0;
+    stack_.pop_back();
+  }
+
+  // A mesh's big arrays are read apart from the nodes (LiftedTriples), so not counted.
+  bool lifted_child(bool array) const {
+    if (stack_.empty()) return false;
+    const Frame& parent = stack_.back();
+    if (parent.lifted) return true;
+    return array && parent.role == Role::object &&
+           (parent.key == "positions" || parent.key == "normals" || parent.key == "triangles");
+  }
+
+  // The JSON Pointer of the piece a container opening here begins, if it begins one (the
+  // counted containers, "objects", "lights" and "materials", are not pieces: their
+  // elements are).
+  std::optional<std::string> piece_of_child() const {
+    if (stack_.empty()) return std::nullopt;
+    const Frame& parent = stack_.back();
+    switch (parent.role) {
+      case Role::scene:
+        return "/" + pointer_token(parent.key);
+      case Role::materials:
+        return "/materials/" + pointer_token(parent.key);
+      case Role::objects:
+        return "/objects/" + std::to_string(parent.elements - 1);
+      case Role::lights:
+        return "/lights/" + std::to_string(parent.elements - 1);
+      default:
+        return std::nullopt;
+    }
+  }
+
+  void count_piece_value(bool lifted) {
+    if (piece_depth_ == 0 || lifted || ++piece_values_ <= kMaxPieceValues) return;
+    throw SceneError(piece_pointer_, "holds more than " + std::to_string(kMaxPieceValues) +
+                                         " JSON values outside a mesh's positions, normals and "
+                                         "triangles; a valid one holds a few dozen");
   }
 
   Role role_of_child(bool array) const {
@@ -281,6 +341,9 @@ class LimitCounter {
   const Limits& limits_;
   const std::optional<std::string_view> scene_member_;
   std::vector<Frame> stack_;
+  std::size_t piece_depth_ = 0;  // the size of stack_ with the piece's frame on top; 0: none
+  std::size_t piece_values_ = 0;
+  std::string piece_pointer_;
   ObjectState object_;
   std::unordered_set<std::string> named_;
   std::vector<std::size_t> inline_materials_;  // the objects that define one, in order

@@ -18,7 +18,11 @@ namespace tessera {
 //    as the first element too many begins (the rest of the text is not read);
 //  - over max_materials: at "/materials" for the named ones, at the inline material that
 //    goes over ("/objects/7/material") for the others;
-//  - over max_triangles: at "/objects", counting up to the object that goes over.
+//  - over max_triangles: at "/objects", counting up to the object that goes over;
+//  - a piece (a member of the scene or of "materials", an element of "objects" or
+//    "lights") of more than 65,536 JSON values outside a mesh's positions, normals and
+//    triangles, at its pointer: no valid piece comes close, and each is built as nodes
+//    whole when it is checked. parse_scene itself has no such rule.
 // Otherwise returns: the text is valid JSON within those limits, and parse_scene still
 // checks everything else. `scene_member`: the root member that holds the scene (a job
 // submission's "scene"), or nothing when the root is the scene; pointers are the scene's.

@@ -110,8 +110,8 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
     static constexpr std::string_view envelope_keys[] = {"name", "priority", "scene"};
     envelope = parse_json_objects_apart(body, "scene", objects, envelope_keys);
   } catch (const SceneError& e) {
-    // Only a syntax error is not the scene's: the scan puts it at the document ("").
-    if (e.limit().empty()) return answer(error_response(400, "malformed_json", e.detail()));
+    // A syntax error is not the scene's: the scan puts it at the document ("").
+    if (e.pointer().empty()) return answer(error_response(400, "malformed_json", e.detail()));
     return answer(scene_refused(e));
   }
   std::string().swap(body);  // all of it is in `envelope` and `objects` now

@@ -115,6 +115,33 @@ TEST(FarmMemory, RefusedJunkCostsNoMoreThanItsBody) {
   EXPECT_LT(growth.peak_per_body_byte, 4.0) << body.size() << " bytes";
 }
 
+// A huge value where three numbers belong, in an object or in the camera, is refused
+// before its piece is built.
+TEST(FarmMemory, RefusedHugeValuesCostNoMoreThanTheirBody) {
+  Farm farm("mem-huge-value", 0);
+  if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
+  std::string huge = "[";
+  for (int i = 0; i < 700'000; ++i) huge += (i ? ",[" : "[") + std::to_string(i) + ",1.5,-2]";
+  huge += "]";
+  for (const auto& [member, path] : std::vector<std::pair<std::string, std::string>>{
+           {R"("center":[0.25,0.5,-20])", "/scene/objects/0"}, {R"("eye":)", "/scene/camera"}}) {
+    SCOPED_TRACE(path);
+    std::string body = submission_with_spheres(10);
+    const std::size_t at = body.find(member);
+    ASSERT_NE(at, std::string::npos) << member;
+    if (member.starts_with(R"("center")"))
+      body.replace(at, member.size(), R"("center":)" + huge);
+    else
+      body.insert(at + member.size(), huge + ",\"unused\":");
+    ASSERT_TRUE(reset_peak(farm.server().pid()));
+    const Growth growth = post_measuring(farm, body);
+    ASSERT_EQ(growth.status, 400) << growth.body.substr(0, 300);
+    EXPECT_EQ(json::parse(growth.body)["error"]["path"], path);
+    RecordProperty("peak_growth_per_body_byte", std::to_string(growth.peak_per_body_byte));
+    EXPECT_LT(growth.peak_per_body_byte, 4.0) << body.size() << " bytes";
+  }
+}
+
 TEST(FarmMemory, AcceptedSceneCostsAFewTimesItsBody) {
   Farm farm("mem-accepted", 0);
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
