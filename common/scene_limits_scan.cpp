@@ -16,7 +16,8 @@ namespace {
 
 using nlohmann::json;
 
-// What a container is to the scene; only these are counted.
+// What a container is to the scene; only these are counted. The first three are
+// role_in_envelope()'s.
 enum class Role : std::uint8_t {
   other,
   envelope,   // the root, when the scene is one of its members
@@ -221,14 +222,9 @@ class LimitCounter {
   }
 
   Role role_of_child(bool array) const {
-    if (stack_.empty()) {
-      if (array) return Role::other;
-      return scene_member_ ? Role::envelope : Role::scene;
-    }
+    if (auto role = role_in_envelope<Role>(stack_, array, scene_member_)) return *role;
     const Frame& parent = stack_.back();
     switch (parent.role) {
-      case Role::envelope:
-        return !array && parent.key == *scene_member_ ? Role::scene : Role::other;
       case Role::scene:
         if (!array && parent.key == "materials") return Role::materials;
         if (array && parent.key == "lights") return Role::lights;

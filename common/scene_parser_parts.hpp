@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -34,6 +35,19 @@ SceneError json_syntax_error(std::string_view text, std::size_t position, std::s
 inline constexpr std::array<std::string_view, 9> scene_keys = {
     "version",       "image",     "camera", "render", "background",
     "ambient_light", "materials", "lights", "objects"};
+
+// The role of a container that opens at the root, or in a job submission's envelope, in
+// the two readers of submitted text (scene_limits_scan.cpp and scene_stream.cpp), whose
+// Role enums begin with other, envelope and scene, in that order, and whose frames have a
+// `role` and a `key` (the last key read); nothing anywhere else. `scene_member`: the
+// envelope's member that holds the scene; nothing when the root is the scene.
+template <typename Role, typename Frame>
+std::optional<Role> role_in_envelope(const std::vector<Frame>& stack, bool array,
+                                     std::optional<std::string_view> scene_member) {
+  if (stack.empty()) return array ? Role::other : scene_member ? Role::envelope : Role::scene;
+  if (stack.back().role != Role::envelope) return std::nullopt;
+  return !array && stack.back().key == *scene_member ? Role::scene : Role::other;
+}
 
 // --- material_parser.cpp ---
 

@@ -12,6 +12,7 @@ namespace {
 
 using nlohmann::json;
 
+// The first three are role_in_envelope()'s.
 enum class Role : std::uint8_t { other, envelope, scene, objects };
 
 struct Frame {
@@ -179,14 +180,9 @@ class ApartBuilder {
   }
 
   Role role_of_child(bool array) const {
-    if (stack_.empty()) {
-      if (array) return Role::other;
-      return scene_member_ ? Role::envelope : Role::scene;
-    }
+    if (auto role = role_in_envelope<Role>(stack_, array, scene_member_)) return *role;
     const Frame& parent = stack_.back();
     switch (parent.role) {
-      case Role::envelope:
-        return !array && parent.key == *scene_member_ ? Role::scene : Role::other;
       case Role::scene:
         return array && parent.key == "objects" ? Role::objects : Role::other;
       default:
