@@ -84,12 +84,18 @@ std::optional<SceneError> parse_error(const json& scene, const Limits& limits) {
   return ::testing::AssertionSuccess();
 }
 
-TEST(SceneScan, RefusesEachCountLimitAsParseSceneDoes) {
+// Count limits small enough to cross with a handful of elements.
+Limits small_limits() {
   Limits limits;
   limits.max_objects = 3;
   limits.max_lights = 2;
   limits.max_materials = 2;
   limits.max_triangles = 30;
+  return limits;
+}
+
+TEST(SceneScan, RefusesEachCountLimitAsParseSceneDoes) {
+  const Limits limits = small_limits();
   EXPECT_TRUE(refused_like_parse_scene(scene_with("objects", many(sphere(), 4)), limits));
   EXPECT_TRUE(refused_like_parse_scene(scene_with("lights", many(light(), 3)), limits));
   const json three_named = {{"a", json::object()}, {"b", json::object()}, {"c", json::object()}};
@@ -111,11 +117,7 @@ TEST(SceneScan, RefusesEachCountLimitAsParseSceneDoes) {
 }
 
 TEST(SceneScan, PassesWhatIsWithinTheLimits) {
-  Limits limits;
-  limits.max_objects = 3;
-  limits.max_lights = 2;
-  limits.max_materials = 2;
-  limits.max_triangles = 30;
+  const Limits limits = small_limits();
   json scene = scene_with("objects", {box(), box(), mesh(6)});
   scene["lights"] = many(light(), 2);
   scene["materials"] = {{"a", json::object()}, {"b", json::object()}};
