@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/image_io.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/printable.hpp"
 #include "common/scene_parser.hpp"
 #include "worker/local_render.hpp"
@@ -103,9 +104,11 @@ int run_render(const RenderOptions& options) {
     // The text and the document are freed before tracing starts, not kept beside the Scene
     // through it.
     const Scene scene = [&] {
-      return parse_scene_text(std::exchange(text, {}), Limits{}, [&](nlohmann::json& document) {
-        apply_overrides(document, options);
-      });
+      // Mesh files are named relative to the scene file.
+      const FolderSceneFiles files(std::filesystem::path(options.scene_path).parent_path());
+      return parse_scene_text(
+          std::exchange(text, {}), Limits{},
+          [&](nlohmann::json& document) { apply_overrides(document, options); }, &files);
     }();
     return render_and_report(options, scene, output);
   } catch (const SceneError& e) {

@@ -137,18 +137,18 @@ nlohmann::json parse_json_text(std::string_view text) {
 }
 
 Scene parse_scene_text(std::string_view text, const Limits& limits,
-                       const std::function<void(nlohmann::json&)>& edit) {
+                       const std::function<void(nlohmann::json&)>& edit, const SceneFiles* files) {
   if (auto fast = parse_json_fast_lifted(text, max_json_nesting, lifted_array_min_size)) {
     if (edit) edit(fast->document);
     try {
-      return parse_scene(fast->document, limits, &fast->lifted);
+      return parse_scene(fast->document, limits, &fast->lifted, files);
     } catch (const LiftedArrayRefused&) {
       // Parsed again below, the ordinary way, for the error's words.
     }
   }
   nlohmann::json document = parse_json_text(text);
   if (edit) edit(document);
-  return parse_scene(document, limits);
+  return parse_scene(document, limits, nullptr, files);
 }
 
 std::string read_text_file(const std::filesystem::path& path) {

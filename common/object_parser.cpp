@@ -76,8 +76,15 @@ const ShapeType& find_shape_type(const ObjectReader& reader) {
                        [&](const ShapeType& type) { return type.name == name; });
 }
 
-Object parse_object(const ValueReader& value, MaterialTable& materials) {
+// Appends what one element of "objects" is to `out`: one Object, or one per part of a mesh
+// file. `triangles` is the sum over the objects before it.
+void parse_object(const ValueReader& value, MaterialTable& materials, const ObjectContext& context,
+                  std::size_t triangles, std::vector<Object>& out) {
   const ObjectReader reader(value, "an object (scene object)");
+  if (is_mesh_file(reader)) {
+    parse_mesh_file(reader, materials, context, triangles, out);
+    return;
+  }
   const ShapeType& type = find_shape_type(reader);
   std::vector<std::string_view> keys = {"type", "material", "transform"};
   keys.insert(keys.end(), type.keys.begin(), type.keys.end());
@@ -88,7 +95,7 @@ Object parse_object(const ValueReader& value, MaterialTable& materials) {
   if (const auto material = reader.find("material")) object.material = materials.resolve(*material);
   if (const auto transform = reader.find("transform"))
     object.transform = parse_transform(*transform);
-  return object;
+  out.push_back(std::move(object));
 }
 
 void check_object_count(const ValueReader& objects, std::size_t count, const Limits& limits) {
@@ -99,10 +106,21 @@ void check_object_count(const ValueReader& objects, std::size_t count, const Lim
   }
 }
 
-// Adds `object`'s triangles to `triangles`, the sum over the objects so far.
-void add_triangles(const ValueReader& objects, const ValueReader& element, const Object& object,
-                   std::size_t& triangles, const Limits& limits) {
-  triangles += triangle_count(object.shape);
+// Adds the triangles of `added`, the objects one element made, to `triangles`, the sum over
+// the objects so far; `count` is how many objects there are so far, mesh files' parts
+// counted one by one.
+void add_triangles(const ValueReader& objects, const ValueReader& element,
+                   std::span<const Object> added, std::size_t& triangles, std::size_t& count,
+                   const Limits& limits) {
+  for (const Object& object : added) triangles += triangle_count(object.shape);
+  count += added.size();
+  if (count > limits.max_objects) {
+    objects.fail_limit("must make <= " + std::to_string(limits.max_objects) +
+                           " objects (limit max_objects), counting each part of a mesh file, "
+                           "got " +
+                           std::to_string(count) + " counting up to " + element.pointer(),
+                       "max_objects", limits.max_objects);
+  }
   if (triangles > limits.max_triangles) {
     objects.fail_limit("must have <= " + std::to_string(limits.max_triangles) +
                            " triangles in total (limit max_triangles), got " +
@@ -132,41 +150,51 @@ Mat4 parse_transform(const ValueReader& steps) {
 }
 
 std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
-                                  const Limits& limits) {
+                                  const ObjectContext& context) {
   const std::size_t count = objects.array_size("an array of objects");
-  check_object_count(objects, count, limits);
+  check_object_count(objects, count, context.limits);
   std::vector<Object> result;
   result.reserve(count);
   std::size_t triangles = 0;
+  std::size_t made = 0;
   for (std::size_t i = 0; i < count; ++i) {
     const ValueReader element = objects.element(i);
-    result.push_back(parse_object(element, materials));
-    add_triangles(objects, element, result.back(), triangles, limits);
+    const std::size_t before = result.size();
+    parse_object(element, materials, context, triangles, result);
+    add_triangles(objects, element, std::span(result).subspan(before), triangles, made,
+                  context.limits);
   }
   return result;
 }
 
 void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
-                   const Limits& limits) {
+                   const ObjectContext& context) {
+  const Limits& limits = context.limits;
   check_object_count(objects, texts.size(), limits);
   std::size_t triangles = 0;
+  std::size_t made = 0;
   LiftedArrays lifted;
+  std::vector<Object> parsed;
   for (std::size_t i = 0; i < texts.size(); ++i) {
     const std::string pointer = objects.pointer() + "/" + std::to_string(i);
+    parsed.clear();
     // A mesh's arrays lifted, as parse_scene_text() does: a shape parsed before the
     // material, so that a refusal there has added nothing to the table.
     if (const auto value = texts.element_lifted(i, pointer, lifted)) {
       try {
         const ValueReader element(*value, pointer, &lifted);
-        add_triangles(objects, element, parse_object(element, materials), triangles, limits);
+        parse_object(element, materials, context, triangles, parsed);
+        add_triangles(objects, element, parsed, triangles, made, limits);
         continue;
       } catch (const LiftedArrayRefused&) {
         // Read again below, the ordinary way, for the error's words.
+        parsed.clear();
       }
     }
     const nlohmann::json value = texts.element(i);
     const ValueReader element(value, pointer);
-    add_triangles(objects, element, parse_object(element, materials), triangles, limits);
+    parse_object(element, materials, context, triangles, parsed);
+    add_triangles(objects, element, parsed, triangles, made, limits);
   }
 }
 

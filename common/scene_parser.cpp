@@ -71,7 +71,7 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
 }
 
 Scene read_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
-                 const ObjectTexts* apart) {
+                 const ObjectTexts* apart, const SceneFiles* files) {
   const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
   // Before the key check: a future version may well have keys this one does not know.
   if (const auto version = root.find("version")) {
@@ -91,10 +91,11 @@ Scene read_scene(const nlohmann::json& document, const Limits& limits, const Lif
   if (const auto named = root.find("materials")) materials.add_named(*named);
   if (const auto lights = root.find("lights")) scene.lights = parse_lights(*lights, limits);
   if (const auto objects = root.find("objects")) {
+    const ObjectContext context{limits, files};
     if (apart && objects->json().is_array())
-      check_objects(*objects, *apart, materials, limits);
+      check_objects(*objects, *apart, materials, context);
     else
-      scene.objects = parse_objects(*objects, materials, limits);
+      scene.objects = parse_objects(*objects, materials, context);
   }
   scene.materials = std::move(materials).take();
   return scene;
@@ -113,14 +114,14 @@ Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
   return parse_scene(document, limits, nullptr);
 }
 
-Scene parse_scene(const nlohmann::json& document, const Limits& limits,
-                  const LiftedArrays* lifted) {
-  return read_scene(document, limits, lifted, nullptr);
+Scene parse_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
+                  const SceneFiles* files) {
+  return read_scene(document, limits, lifted, nullptr, files);
 }
 
-Scene check_scene(const nlohmann::json& document, const Limits& limits,
-                  const ObjectTexts& objects) {
-  return read_scene(document, limits, nullptr, &objects);
+Scene check_scene(const nlohmann::json& document, const Limits& limits, const ObjectTexts& objects,
+                  const SceneFiles* files) {
+  return read_scene(document, limits, nullptr, &objects, files);
 }
 
 }  // namespace tessera

@@ -13,13 +13,16 @@
 
 #include "common/scene.hpp"
 #include "common/scene_error.hpp"
+#include "common/scene_files.hpp"
 
 namespace tessera {
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits = {});
 // The same for a document whose big mesh arrays were lifted out (parse_json_fast_lifted());
-// throws LiftedArrayRefused where one of them breaks a rule.
-Scene parse_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted);
+// throws LiftedArrayRefused where one of them breaks a rule. Mesh files are read through
+// `files`; with none, a mesh object that names a file is a SceneError.
+Scene parse_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
+                  const SceneFiles* files = nullptr);
 
 // Parses JSON text; a syntax error or nesting deeper than 64 levels is a SceneError at ""
 // naming line and column.
@@ -31,7 +34,8 @@ nlohmann::json parse_json_text(std::string_view text);
 // errors are those of parse_scene(parse_json_text(text), limits), but a mesh's big arrays
 // go from simdjson straight into the Scene, without a node per number.
 Scene parse_scene_text(std::string_view text, const Limits& limits = {},
-                       const std::function<void(nlohmann::json&)>& edit = {});
+                       const std::function<void(nlohmann::json&)>& edit = {},
+                       const SceneFiles* files = nullptr);
 
 // A whole file's text; an unreadable file is a std::runtime_error.
 std::string read_text_file(const std::filesystem::path& path);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/scene.hpp"
+#include "common/scene_files.hpp"
 #include "common/value_reader.hpp"
 
 namespace tessera {
@@ -62,11 +63,11 @@ class MaterialTable {
   void add_named(const ValueReader& materials);  // the top-level "materials" object
   // An object's "material": a name from "materials" or an inline material object.
   std::uint32_t resolve(const ValueReader& reference);
+  // A material a mesh file gives; `where` is the object that names the file.
+  std::uint32_t add(Material material, const ValueReader& where);
   std::vector<Material> take() && { return std::move(materials_); }
 
  private:
-  std::uint32_t add(Material material, const ValueReader& where);
-
   std::size_t max_materials_;
   std::vector<Material> materials_;
   std::map<std::string, std::uint32_t, std::less<>> by_name_;
@@ -78,14 +79,31 @@ std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits)
 
 // --- object_parser.cpp ---
 
+// What reading objects needs besides the JSON: the limits, and where mesh files come from
+// (none: a mesh file is refused).
+struct ObjectContext {
+  const Limits& limits;
+  const SceneFiles* files = nullptr;
+};
+
 std::vector<Object> parse_objects(const ValueReader& objects, MaterialTable& materials,
-                                  const Limits& limits);
+                                  const ObjectContext& context);
+
+// A mesh object that names a file rather than holding its arrays.
+bool is_mesh_file(const ObjectReader& object);
+// Appends one Object per part of the file's model to `out`, each with the object's
+// "material" if it has one, else the file's own material for the part (added to
+// `materials`). `triangles`: those of the objects before it.
+void parse_mesh_file(const ObjectReader& object, MaterialTable& materials,
+                     const ObjectContext& context, std::size_t triangles, std::vector<Object>& out);
 class ObjectTexts;
 // parse_objects() for the objects kept apart from `objects` (scene_stream.hpp), an empty
 // array standing for them: each is checked as it would be there, then dropped.
 void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
-                   const Limits& limits);
+                   const ObjectContext& context);
 Mat4 parse_transform(const ValueReader& steps);
+
+// --- mesh_file_object.cpp ---
 
 // --- shape_parser.cpp ---
 

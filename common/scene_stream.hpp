@@ -14,6 +14,7 @@
 
 #include "common/json_fast_parse.hpp"
 #include "common/scene.hpp"
+#include "common/scene_files.hpp"
 
 namespace tessera {
 
@@ -61,7 +62,8 @@ nlohmann::json parse_json_objects_apart(std::string_view text,
 // parse_scene(), with the same errors, for a scene whose "objects" are `objects` (an empty
 // "objects" array in `document` stands for them). The Scene has no objects: each is
 // checked and dropped, for a caller that only needs to know the scene is valid.
-Scene check_scene(const nlohmann::json& document, const Limits& limits, const ObjectTexts& objects);
+Scene check_scene(const nlohmann::json& document, const Limits& limits, const ObjectTexts& objects,
+                  const SceneFiles* files = nullptr);
 
 // The bytes of document.dump() were its "objects" array filled with `objects`, made by
 // moving their text rather than copying it.

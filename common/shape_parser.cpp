@@ -10,17 +10,6 @@
 namespace tessera {
 namespace {
 
-// Zero area up to rounding, relative to the triangle's own size so that the test means
-// the same for a scene modelled in millimetres and one modelled in kilometres.
-bool is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 e1 = b - a;
-  const Vec3 e2 = c - a;
-  const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z), std::abs(e2.x),
-                                 std::abs(e2.y), std::abs(e2.z)});
-  if (!(scale > 0.0) || !std::isfinite(scale)) return true;
-  return glm::length(glm::cross(e1 / scale, e2 / scale)) <= 1e-12;
-}
-
 Shape parse_sphere(const ObjectReader& object) {
   Sphere sphere;
   sphere.center = object.require("center").vec3();
@@ -225,6 +214,17 @@ struct TriangleCount {
 };
 
 }  // namespace
+
+// Zero area up to rounding, relative to the triangle's own size so that the test means
+// the same for a scene modelled in millimetres and one modelled in kilometres.
+bool is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 e1 = b - a;
+  const Vec3 e2 = c - a;
+  const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z), std::abs(e2.x),
+                                 std::abs(e2.y), std::abs(e2.z)});
+  if (!(scale > 0.0) || !std::isfinite(scale)) return true;
+  return glm::length(glm::cross(e1 / scale, e2 / scale)) <= 1e-12;
+}
 
 std::span<const ShapeType> shape_types() { return types; }
 

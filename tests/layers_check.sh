@@ -22,6 +22,11 @@ refuse() {
 refuse common 'boost/|embree|sqlite3|worker/|server/|client/' \
   "the core of common/ stays free of Beast, Embree and SQLite, and of the folders above it" \
   'common/net/'
+refuse common 'tiny_obj_loader|tiny_gltf|common/mesh_files/' \
+  "only common/mesh_files/ reads mesh formats; the parser sees them through SceneFiles" \
+  'common/mesh_files/'
+refuse common/mesh_files 'boost/|embree|sqlite3|common/net/|common/protocol/' \
+  "mesh files are read with tinyobjloader, tinygltf and common/ alone"
 refuse common/protocol 'boost/|common/net/' "the protocol is JSON types only"
 refuse common/net 'embree|sqlite3|worker/|server/|client/' "the transport knows only the protocol"
 refuse worker 'client/|server/' "the worker links common/net and common/protocol, nothing of client/ or server/"

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "common/image_io.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
 
 namespace tessera {
@@ -49,7 +50,8 @@ TEST_P(Golden, MatchesReferenceImage) {
   const int height = document["image"]["height"];
   document["image"]["width"] = kGoldenWidth;
   document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
-  const Image image = test::render_image(document, 2);
+  const FolderSceneFiles files(GetParam().path.parent_path());
+  const Image image = test::render_image(document, 2, 0, &files);
   // What a worker uploads must be what the coordinator accepts: finite values of 0 or more.
   const auto pixels = image.pixels();
   const auto impossible = std::find_if(pixels.begin(), pixels.end(),
@@ -92,7 +94,8 @@ TEST(Examples, CoverEveryFeature) {
   std::set<std::string> lights, shapes;
   bool checker = false, transmissive = false, deep = false, big_mesh = false;
   for (const Example& example : examples()) {
-    const Scene scene = parse_scene(read_json_file(example.path));
+    const FolderSceneFiles files(example.path.parent_path());
+    const Scene scene = parse_scene(read_json_file(example.path), Limits{}, nullptr, &files);
     for (const Light& light : scene.lights) lights.insert(std::to_string(light.index()));
     for (const Object& object : scene.objects) {
       shapes.insert(std::to_string(object.shape.index()));

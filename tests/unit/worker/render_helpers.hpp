@@ -33,8 +33,10 @@ inline Color render_pixel(const json& scene, int x = 0, int y = 0) {
   return Color(rgb[0], rgb[1], rgb[2]);
 }
 
-inline Image render_image(const json& scene, int threads = 0, int tile_size = 0) {
-  const Renderer renderer(parse_scene(scene));
+// `files`: where the scene's mesh files are, if it names any.
+inline Image render_image(const json& scene, int threads = 0, int tile_size = 0,
+                          const SceneFiles* files = nullptr) {
+  const Renderer renderer(parse_scene(scene, Limits{}, nullptr, files));
   return render_local(renderer, threads, tile_size).image;
 }
 

@@ -1,0 +1,101 @@
+// A scene object that names a mesh file: {"type": "mesh", "file": "models/bunny.obj"}.
+#include <algorithm>
+#include <cctype>
+
+#include "common/scene_parser_parts.hpp"
+
+namespace tessera {
+namespace {
+
+constexpr std::string_view mesh_file_keys[] = {"type",   "material", "transform", "file",
+                                               "format", "normals",  "thin"};
+
+MeshFormat read_format(const ObjectReader& reader, const ValueReader& file) {
+  if (const auto format = reader.find("format")) {
+    const std::string_view name = format->choice(mesh_format_names);
+    const auto* found = std::find(std::begin(mesh_format_names), std::end(mesh_format_names), name);
+    return static_cast<MeshFormat>(found - std::begin(mesh_format_names));
+  }
+  const auto format = mesh_format_of(file.string());
+  if (!format) {
+    file.fail(
+        "has no extension that names a mesh format (.obj, .gltf, .glb, .ply, .off); "
+        "say which with \"format\"");
+  }
+  return *format;
+}
+
+NormalsMode read_normals(const ObjectReader& reader) {
+  const auto normals = reader.find("normals");
+  if (!normals) return NormalsMode::file;
+  const std::string_view name = normals->choice(normals_mode_names);
+  const auto* found = std::find(std::begin(normals_mode_names), std::end(normals_mode_names), name);
+  return static_cast<NormalsMode>(found - std::begin(normals_mode_names));
+}
+
+}  // namespace
+
+std::optional<MeshFormat> mesh_format_of(std::string_view file) {
+  const auto dot = file.rfind('.');
+  if (dot == std::string_view::npos || file.find('/', dot) != std::string_view::npos)
+    return std::nullopt;
+  std::string extension(file.substr(dot + 1));
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (std::size_t i = 0; i < std::size(mesh_format_names); ++i)
+    if (extension == mesh_format_names[i]) return static_cast<MeshFormat>(i);
+  return std::nullopt;
+}
+
+bool is_mesh_file(const ObjectReader& object) {
+  const auto type = object.find("type");
+  return type && type->json().is_string() && type->json().get_ref<const std::string&>() == "mesh" &&
+         object.members().contains("file");
+}
+
+void parse_mesh_file(const ObjectReader& object, MaterialTable& materials,
+                     const ObjectContext& context, std::size_t triangles,
+                     std::vector<Object>& out) {
+  const std::size_t limit = context.limits.max_triangles;
+  object.allow_only(mesh_file_keys);
+  const ValueReader file = object.require("file");
+  if (!file.json().is_string()) file.fail_type("a file name (string)");
+  if (file.string().empty()) file.fail("must name a file, got \"\"");
+  MeshFileRequest request;
+  request.file = file.string();
+  request.format = read_format(object, file);
+  request.normals = read_normals(object);
+  request.max_triangles = limit - std::min(triangles, limit);
+  request.limit_max_triangles = limit;
+  const bool thin = object.boolean_or("thin", false);
+  Mat4 transform{1.0};
+  if (const auto steps = object.find("transform")) transform = parse_transform(*steps);
+  std::optional<std::uint32_t> material;
+  if (const auto reference = object.find("material")) material = materials.resolve(*reference);
+  if (context.files == nullptr) {
+    file.fail(
+        "names a mesh file, which only a scene read from a file can do (tessera render "
+        "FILE reads it beside the scene)");
+  }
+
+  Model model;
+  try {
+    model = context.files->load_model(request);
+  } catch (const SceneFileError& error) {
+    if (!error.limit().empty()) file.fail_limit(error.what(), error.limit(), error.limit_value());
+    file.fail(error.what());
+  }
+  for (ModelPart& part : model.parts) {
+    Object made;
+    part.mesh.thin = thin;
+    made.shape = std::move(part.mesh);
+    made.transform = transform;
+    if (material)
+      made.material = *material;
+    else if (part.material)
+      made.material = materials.add(*part.material, file);
+    out.push_back(std::move(made));
+  }
+}
+
+}  // namespace tessera

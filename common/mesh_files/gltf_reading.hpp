@@ -1,0 +1,15 @@
+// A glTF document tinygltf has read, made into a Model: its node hierarchy walked, its
+// accessors checked against their buffers, its materials mapped. Errors name a JSON
+// Pointer into the glTF.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include "common/mesh_files/model_source.hpp"
+
+namespace tessera {
+
+Model gltf_model(const tinygltf::Model& gltf, const ModelSource& source);
+Material gltf_material(const tinygltf::Material& material);
+
+}  // namespace tessera
