@@ -74,8 +74,8 @@ void parse_mesh_file(const ObjectReader& object, MaterialTable& materials,
   if (const auto reference = object.find("material")) material = materials.resolve(*reference);
   if (context.files == nullptr) {
     file.fail(
-        "names a mesh file, which only a scene read from a file can do (tessera render "
-        "FILE reads it beside the scene)");
+        "names a mesh file, which only `tessera render` reads (beside the scene file); the "
+        "farm takes no mesh files yet");
   }
 
   Model model;

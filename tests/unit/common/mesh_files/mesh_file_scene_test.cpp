@@ -125,7 +125,7 @@ TEST_F(MeshFileScene, WithoutFilesAMeshFileIsRefused) {
     FAIL() << "read a mesh file with no SceneFiles";
   } catch (const SceneError& e) {
     EXPECT_EQ(e.pointer(), "/objects/0/file");
-    EXPECT_THAT(e.detail(), HasSubstr("only a scene read from a file"));
+    EXPECT_THAT(e.detail(), HasSubstr("only `tessera render` reads"));
   }
 }
 
