@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "client/import_command.hpp"
 #include "client/job_commands.hpp"
 #include "client/render_command.hpp"
 #include "common/huge_page_malloc.hpp"
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
   app.fallthrough();
   tessera::add_render_command(app);
   tessera::add_job_commands(app);
+  tessera::add_import_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {
