@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 
+#include "client/scene_input.hpp"
 #include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
 #include "common/printable.hpp"
@@ -193,7 +194,7 @@ void save_image(CoordinatorClient& api, const std::string& id, const std::string
 int submit(const Options& options, CoordinatorClient& api) {
   nlohmann::json scene;
   try {
-    scene = read_json_file(options.scene_path);
+    scene = parse_json_text(read_scene_text(options.scene_path));
     parse_scene(scene);  // report mistakes with their JSON Pointer before sending anything
   } catch (const SceneError& e) {
     fail(kExitUsage, options.scene_path + ": " + e.what());
@@ -290,7 +291,8 @@ CLI::App* on(CLI::App& app, const SharedOptions& options, const char* name, cons
 
 void add_submit_command(CLI::App& app, const SharedOptions& options) {
   CLI::App* submit_cmd = on(app, options, "submit", "Submit a scene as a render job", submit);
-  submit_cmd->add_option("scene", options->scene_path, "Scene file (JSON)")->required();
+  submit_cmd->add_option("scene", options->scene_path, "Scene file (JSON, or a COS 426 .scn)")
+      ->required();
   submit_cmd->add_option("--name", options->name, "Job name (default: the file's name)");
   submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
       ->check(CLI::Range(0, 100));

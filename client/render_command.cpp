@@ -9,10 +9,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "client/scene_input.hpp"
 #include "common/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/printable.hpp"
 #include "common/scene_parser.hpp"
+#include "common/scn_import.hpp"
 #include "worker/local_render.hpp"
 
 namespace tessera {
@@ -94,7 +96,10 @@ int run_render(const RenderOptions& options) {
   }
   std::string text;
   try {
-    text = read_text_file(options.scene_path);
+    text = read_scene_text(options.scene_path, options.width, options.height);
+  } catch (const ScnError& e) {
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
+    return 2;
   } catch (const std::exception& e) {
     // A scene file that is missing or unreadable: a usage error, as for submit.
     std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
@@ -126,7 +131,8 @@ int run_render(const RenderOptions& options) {
 void add_render_command(CLI::App& app) {
   auto options = std::make_shared<RenderOptions>();
   CLI::App* render = app.add_subcommand("render", "Render a scene on this machine (no server)");
-  render->add_option("scene", options->scene_path, "Scene file (JSON)")->required();
+  render->add_option("scene", options->scene_path, "Scene file (JSON, or a COS 426 .scn)")
+      ->required();
   render->add_option("-o,--output", options->output_path,
                      "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png)");
   render->add_option("--width", options->width, "Override image.width")->check(CLI::PositiveNumber);

@@ -1,0 +1,163 @@
+// Mesh-file reading throughput: one grid of triangles written as OBJ, binary PLY and glb,
+// each read back through read_model_file() as `tessera render` reads a scene's files.
+// Prints one line per format: format, bytes, triangles, median seconds, MB/s, Mtriangles/s.
+// Usage: tessera_mesh_files_bench [TRIANGLES (default 2000000)] [RUNS (default 3)]
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "bench/median.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A side × side grid of squares, two triangles each, rippled so that no triangle is flat
+// with its neighbour.
+struct Grid {
+  int side;
+  float x(int i) const { return static_cast<float>(i) / side; }
+  float y(int i, int j) const { return 0.05f * static_cast<float>(((i * 7 + j * 13) % 11)) / 11.f; }
+  std::uint32_t index(int i, int j) const { return static_cast<std::uint32_t>(j * (side + 1) + i); }
+};
+
+template <typename T>
+void put(std::string& out, T value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+void write_file(const fs::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string obj(const Grid& g) {
+  std::string out;
+  char line[96];
+  for (int j = 0; j <= g.side; ++j)
+    for (int i = 0; i <= g.side; ++i) {
+      std::snprintf(line, sizeof line, "v %.6f %.6f %.6f\n", g.x(i), g.y(i, j), g.x(j));
+      out += line;
+    }
+  for (int j = 0; j < g.side; ++j)
+    for (int i = 0; i < g.side; ++i) {
+      std::snprintf(line, sizeof line, "f %u %u %u\nf %u %u %u\n", g.index(i, j) + 1,
+                    g.index(i, j + 1) + 1, g.index(i + 1, j) + 1, g.index(i + 1, j) + 1,
+                    g.index(i, j + 1) + 1, g.index(i + 1, j + 1) + 1);
+      out += line;
+    }
+  return out;
+}
+
+void vertices_and_indices(const Grid& g, std::string& vertices, std::string& indices,
+                          bool ply_faces) {
+  for (int j = 0; j <= g.side; ++j)
+    for (int i = 0; i <= g.side; ++i) {
+      put(vertices, g.x(i));
+      put(vertices, g.y(i, j));
+      put(vertices, g.x(j));
+    }
+  for (int j = 0; j < g.side; ++j)
+    for (int i = 0; i < g.side; ++i)
+      for (const auto& t :
+           {std::array{g.index(i, j), g.index(i, j + 1), g.index(i + 1, j)},
+            std::array{g.index(i + 1, j), g.index(i, j + 1), g.index(i + 1, j + 1)}}) {
+        if (ply_faces) put(indices, std::uint8_t{3});
+        for (const std::uint32_t v : t) put(indices, v);
+      }
+}
+
+std::string ply(const Grid& g) {
+  const std::size_t vertices = static_cast<std::size_t>(g.side + 1) * (g.side + 1);
+  const std::size_t faces = 2ull * g.side * g.side;
+  std::string out =
+      "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertices) +
+      "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+      std::to_string(faces) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  std::string indices;
+  vertices_and_indices(g, out, indices, true);
+  return out + indices;
+}
+
+std::string glb(const Grid& g) {
+  std::string bin, indices;
+  vertices_and_indices(g, bin, indices, false);
+  const std::size_t vertex_bytes = bin.size();
+  bin += indices;
+  const std::size_t vertices = vertex_bytes / 12;
+  std::string json =
+      "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+      "\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{\"attributes\":"
+      "{\"POSITION\":0},\"indices\":1}]}],\"accessors\":[{\"bufferView\":0,"
+      "\"componentType\":5126,\"count\":" +
+      std::to_string(vertices) +
+      ",\"type\":\"VEC3\"},{\"bufferView\":1,\"componentType\":5125,\"count\":" +
+      std::to_string(indices.size() / 4) +
+      ",\"type\":\"SCALAR\"}],\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,"
+      "\"byteLength\":" +
+      std::to_string(vertex_bytes) +
+      "},{\"buffer\":0,\"byteOffset\":" + std::to_string(vertex_bytes) +
+      ",\"byteLength\":" + std::to_string(indices.size()) +
+      "}],\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + "}]}";
+  while (json.size() % 4) json += ' ';
+  while (bin.size() % 4) bin += '\0';
+  std::string out;
+  put(out, std::uint32_t{0x46546C67});
+  put(out, std::uint32_t{2});
+  put(out, static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
+  put(out, static_cast<std::uint32_t>(json.size()));
+  put(out, std::uint32_t{0x4E4F534A});
+  out += json;
+  put(out, static_cast<std::uint32_t>(bin.size()));
+  put(out, std::uint32_t{0x004E4942});
+  return out + bin;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const long triangles = argc > 1 ? std::atol(argv[1]) : 2000000;
+  const int runs = argc > 2 ? std::atoi(argv[2]) : 3;
+  if (triangles < 2 || runs < 1) {
+    std::fprintf(stderr, "usage: tessera_mesh_files_bench [TRIANGLES] [RUNS]\n");
+    return 2;
+  }
+  Grid grid{1};
+  while (2L * (grid.side + 1) * (grid.side + 1) <= triangles) ++grid.side;
+  const fs::path dir =
+      fs::temp_directory_path() / ("tessera-mesh-bench-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::pair<const char*, std::string> files[] = {
+      {"grid.obj", obj(grid)}, {"grid.ply", ply(grid)}, {"grid.glb", glb(grid)}};
+  std::printf("format bytes triangles seconds MB/s Mtriangles/s\n");
+  for (const auto& [name, bytes] : files) {
+    write_file(dir / name, bytes);
+    tessera::MeshFileRequest request;
+    request.file = name;
+    request.format = *tessera::mesh_format_of(name);
+    request.max_triangles = request.limit_max_triangles = 1u << 30;
+    std::vector<double> seconds;
+    std::size_t read = 0;
+    for (int r = 0; r < runs; ++r) {
+      const auto start = std::chrono::steady_clock::now();
+      const tessera::Model model = tessera::read_model_file(dir / name, request);
+      seconds.push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      read = model.triangles();
+    }
+    const double s = tessera::bench::median(seconds);
+    std::printf("%s %zu %zu %.3f %.1f %.2f\n", fs::path(name).extension().c_str() + 1, bytes.size(),
+                read, s, bytes.size() / s / 1e6, read / s / 1e6);
+  }
+  fs::remove_all(dir);
+  return 0;
+}

@@ -1,0 +1,23 @@
+#include "client/scene_input.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+#include "common/scene_parser.hpp"
+#include "common/scn_import.hpp"
+
+namespace tessera {
+
+std::string read_scene_text(const std::filesystem::path& path, std::optional<int> width,
+                            std::optional<int> height) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".scn") return read_text_file(path);
+  ScnImportOptions options;
+  if (width) options.width = *width;
+  if (height) options.height = *height;
+  return import_scn(path, options).dump();
+}
+
+}  // namespace tessera
