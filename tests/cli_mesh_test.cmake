@@ -1,0 +1,62 @@
+# `tessera render` of scenes that name mesh files, end to end: a real process, the files on
+# disk beside the scene, exit codes and messages.
+# Arguments: -DTESSERA=path -DSOURCE_DIR=repo -DWORK_DIR=scratch
+file(REMOVE_RECURSE "${WORK_DIR}")
+file(MAKE_DIRECTORY "${WORK_DIR}/models")
+
+function(expect)
+  cmake_parse_arguments(PARSE_ARGV 0 arg "" "MESSAGE" "")
+  if(NOT (${arg_UNPARSED_ARGUMENTS}))
+    message(FATAL_ERROR "${arg_MESSAGE}")
+  endif()
+endfunction()
+
+# The example's OBJ and MTL are found beside the scene, from any working directory.
+execute_process(
+  COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/still_life.json" -o "${WORK_DIR}/still.png"
+          --width 48 --height 36 --spp 1 --threads 2
+  WORKING_DIRECTORY "${WORK_DIR}"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 0 MESSAGE "rendering the OBJ example failed (${code}): ${out} ${err}")
+expect(EXISTS ${WORK_DIR}/still.png MESSAGE "no image written for the OBJ example")
+
+# A scene whose OFF file has a bad index: exit 2, the object's pointer, the file and line.
+file(WRITE "${WORK_DIR}/models/bad.off" "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n")
+file(WRITE "${WORK_DIR}/bad.json" [=[{"image": {"width": 8, "height": 8},
+  "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+  "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1},
+              {"type": "mesh", "file": "models/bad.off"}]}]=])
+execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/bad.json" -o "${WORK_DIR}/bad.png"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 2 MESSAGE "a bad mesh file exited ${code}: ${err}")
+string(FIND "${err}" "/objects/1/file: models/bad.off:line 6: vertex index \"5\"" found)
+expect(NOT found EQUAL -1 MESSAGE "error does not name the object, file and line: ${err}")
+expect(NOT EXISTS ${WORK_DIR}/bad.png MESSAGE "an image was written for a bad mesh file")
+
+# A model whose MTL lies outside its folder is refused, not read.
+file(WRITE "${WORK_DIR}/secret.mtl" "newmtl stolen\nKd 1 0 0\n")
+file(WRITE "${WORK_DIR}/models/escape.obj" "mtllib ../secret.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+file(WRITE "${WORK_DIR}/escape.json" [=[{"image": {"width": 8, "height": 8},
+  "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+  "objects": [{"type": "mesh", "file": "models/escape.obj"}]}]=])
+execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/escape.json" -o "${WORK_DIR}/escape.png"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 2 MESSAGE "an escaping MTL exited ${code}: ${err}")
+string(FIND "${err}" "outside the model's own folder" found)
+expect(NOT found EQUAL -1 MESSAGE "error does not say the MTL is outside: ${err}")
+
+# A .scn renders directly, with its included file and its OFF mesh.
+execute_process(
+  COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/course/temple.scn" -o "${WORK_DIR}/temple.png"
+          --width 48 --height 36 --spp 1
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 0 MESSAGE "rendering the .scn example failed (${code}): ${out} ${err}")
+expect(EXISTS ${WORK_DIR}/temple.png MESSAGE "no image written for the .scn example")
+
+# A broken .scn is exit 2 with its file and line.
+file(WRITE "${WORK_DIR}/bad.scn" "camera 0 0 5 0 0 -1 0 1 0 0.5 0.1 10\nsphere -1 0 0 0\n")
+execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/bad.scn" -o "${WORK_DIR}/badscn.png"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 2 MESSAGE "a broken .scn exited ${code}: ${err}")
+string(FIND "${err}" "bad.scn:2: sphere needs 5 numbers" found)
+expect(NOT found EQUAL -1 MESSAGE "error does not name the .scn line: ${err}")
