@@ -45,13 +45,17 @@ expect(code EQUAL 2 MESSAGE "an escaping MTL exited ${code}: ${err}")
 string(FIND "${err}" "outside the model's own folder" found)
 expect(NOT found EQUAL -1 MESSAGE "error does not say the MTL is outside: ${err}")
 
-# A .scn renders directly, with its included file and its OFF mesh.
+# A .scn renders directly, with its included file and its OFF mesh named relative to it.
+file(WRITE "${WORK_DIR}/scn/tetra.off" "OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+file(WRITE "${WORK_DIR}/scn/parts.scn" "material 0.1 0.1 0.1 0.6 0.3 0.2 0.3 0.3 0.3 0 0 0 0 0 0 20 1 0\nmesh 0 tetra.off\n")
+file(WRITE "${WORK_DIR}/scn/scene.scn" "camera 0.3 0.4 4 0 0 -1 0 1 0 0.5 0.1 100\npoint_light 1 1 1 2 3 4 1 0 0\n"
+  "begin -1 1 0 0 -0.5 0 1 0 0 0 0 1 0 0 0 0 1\ninclude parts.scn\nend\nsphere -1 1 0 0 0.4\n")
 execute_process(
-  COMMAND "${TESSERA}" render "${SOURCE_DIR}/examples/course/temple.scn" -o "${WORK_DIR}/temple.png"
+  COMMAND "${TESSERA}" render "${WORK_DIR}/scn/scene.scn" -o "${WORK_DIR}/scn.png"
           --width 48 --height 36 --spp 1
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-expect(code EQUAL 0 MESSAGE "rendering the .scn example failed (${code}): ${out} ${err}")
-expect(EXISTS ${WORK_DIR}/temple.png MESSAGE "no image written for the .scn example")
+expect(code EQUAL 0 MESSAGE "rendering a .scn failed (${code}): ${out} ${err}")
+expect(EXISTS ${WORK_DIR}/scn.png MESSAGE "no image written for the .scn")
 
 # A broken .scn is exit 2 with its file and line.
 file(WRITE "${WORK_DIR}/bad.scn" "camera 0 0 5 0 0 -1 0 1 0 0.5 0.1 10\nsphere -1 0 0 0\n")

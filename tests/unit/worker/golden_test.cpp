@@ -36,6 +36,8 @@ std::vector<Example> examples() {
     if (entry.path().extension() == ".json")
       list.push_back({entry.path().stem().string(), entry.path()});
   list.push_back({"mesh", fs::path(TESSERA_BINARY_DIR) / "examples" / "mesh.json"});
+  list.push_back(
+      {"gltf_carousel", fs::path(TESSERA_BINARY_DIR) / "examples" / "gltf_carousel.json"});
   std::sort(list.begin(), list.end(), [](auto& a, auto& b) { return a.name < b.name; });
   return list;
 }
