@@ -9,6 +9,34 @@ namespace {
 
 constexpr std::string_view mesh_file_keys[] = {"type",   "material", "transform", "file",
                                                "format", "normals",  "thin"};
+constexpr std::string_view mesh_asset_keys[] = {"type", "material", "transform", "asset", "files",
+                                                "name", "format",   "normals",   "thin"};
+
+// "sha256:" and 64 lower-case hex digits: the 64 digits, or a SceneError at `value`.
+std::string read_digest(const ValueReader& value) {
+  if (!value.json().is_string()) value.fail_type("an asset digest \"sha256:<64 hex digits>\"");
+  const std::string& text = value.string();
+  constexpr std::string_view prefix = "sha256:";
+  const bool hex = text.size() == prefix.size() + 64 && text.starts_with(prefix) &&
+                   std::all_of(text.begin() + prefix.size(), text.end(), [](char c) {
+                     return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+                   });
+  if (!hex) value.fail("must be \"sha256:\" and 64 lower-case hex digits, got " + quote(text));
+  return text.substr(prefix.size());
+}
+
+// The farm's form: {"asset": "sha256:...", "format": "obj", "files": {"x.mtl": "sha256:..."}}.
+void read_asset(const ObjectReader& object, MeshFileRequest& request) {
+  request.asset = read_digest(object.require("asset"));
+  if (const auto files = object.find("files")) {
+    const ObjectReader names(*files, "an object mapping the model's file names to digests");
+    for (const auto& [name, unused] : names.members())
+      request.files.emplace(name, read_digest(files->member(name)));
+  }
+  const auto name = object.find("name");
+  if (name && !name->json().is_string()) name->fail_type("a file name (string)");
+  request.file = name ? name->string() : "sha256:" + request.asset->substr(0, 12);
+}
 
 MeshFormat read_format(const ObjectReader& reader, const ValueReader& file) {
   if (const auto format = reader.find("format")) {
@@ -50,20 +78,27 @@ std::optional<MeshFormat> mesh_format_of(std::string_view file) {
 bool is_mesh_file(const ObjectReader& object) {
   const auto type = object.find("type");
   return type && type->json().is_string() && type->json().get_ref<const std::string&>() == "mesh" &&
-         object.members().contains("file");
+         (object.members().contains("file") || object.members().contains("asset"));
 }
 
 void parse_mesh_file(const ObjectReader& object, MaterialTable& materials,
                      const ObjectContext& context, std::size_t triangles,
                      std::vector<Object>& out) {
   const std::size_t limit = context.limits.max_triangles;
-  object.allow_only(mesh_file_keys);
-  const ValueReader file = object.require("file");
-  if (!file.json().is_string()) file.fail_type("a file name (string)");
-  if (file.string().empty()) file.fail("must name a file, got \"\"");
   MeshFileRequest request;
-  request.file = file.string();
-  request.format = read_format(object, file);
+  const bool asset = object.members().contains("asset");
+  const ValueReader file = object.require(asset ? "asset" : "file");
+  if (asset) {
+    object.allow_only(mesh_asset_keys);
+    read_asset(object, request);
+    request.format = read_format(object, object.require("format"));
+  } else {
+    object.allow_only(mesh_file_keys);
+    if (!file.json().is_string()) file.fail_type("a file name (string)");
+    if (file.string().empty()) file.fail("must name a file, got \"\"");
+    request.file = file.string();
+    request.format = read_format(object, file);
+  }
   request.normals = read_normals(object);
   request.max_triangles = limit - std::min(triangles, limit);
   request.limit_max_triangles = limit;
@@ -74,13 +109,18 @@ void parse_mesh_file(const ObjectReader& object, MaterialTable& materials,
   if (const auto reference = object.find("material")) material = materials.resolve(*reference);
   if (context.files == nullptr) {
     file.fail(
-        "names a mesh file, which only `tessera render` reads (beside the scene file); the "
-        "farm takes no mesh files yet");
+        "names a mesh file, which this reader of the scene cannot open (tessera render reads "
+        "files beside the scene; tessera submit uploads them as assets)");
   }
 
   Model model;
   try {
     model = context.files->load_model(request);
+  } catch (const AssetNotHeld& missing) {
+    throw MissingAssetError(missing.name.empty()
+                                ? file.pointer()
+                                : object.pointer() + "/files/" + pointer_token(missing.name),
+                            missing.digest);
   } catch (const SceneFileError& error) {
     if (!error.limit().empty()) file.fail_limit(error.what(), error.limit(), error.limit_value());
     file.fail(error.what());

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "common/scene.hpp"
+#include "common/scene_error.hpp"
 
 namespace tessera {
 
@@ -40,7 +42,11 @@ struct Model {
 
 // What the scene asks of one mesh file.
 struct MeshFileRequest {
-  std::string file;  // as the scene writes it
+  std::string file;  // as the scene writes it; for an asset, its "name" or its digest
+  // The farm's form: the model is the asset of this SHA-256 (64 hex digits), and the files
+  // it names are the assets `files` maps their names to (docs/scene-format.md).
+  std::optional<std::string> asset;
+  std::map<std::string, std::string> files;
   MeshFormat format = MeshFormat::obj;
   NormalsMode normals = NormalsMode::file;
   // The triangles the scene may still have (Limits::max_triangles less those before it): a
@@ -74,6 +80,28 @@ class SceneFileError : public std::runtime_error {
   std::string where_;
   std::string limit_;
   std::uint64_t limit_value_ = 0;
+};
+
+// An asset the scene names that the coordinator (or the worker's cache) does not hold.
+// `pointer` is where the scene names it ("/objects/2/asset", "/objects/2/files/x.mtl").
+class MissingAssetError : public SceneError {
+ public:
+  MissingAssetError(std::string pointer, std::string digest)
+      : SceneError(std::move(pointer), "names asset sha256:" + digest +
+                                           ", which the coordinator does not have; upload it "
+                                           "first (tessera submit does)"),
+        digest_(std::move(digest)) {}
+  const std::string& digest() const { return digest_; }
+
+ private:
+  std::string digest_;
+};
+
+// Thrown by a SceneFiles for an asset it lacks: `name` is the model's, or the name the
+// model's files map gives it ("" for the model itself).
+struct AssetNotHeld {
+  std::string name;
+  std::string digest;
 };
 
 // Where a scene's files come from: a folder on disk for `tessera render`

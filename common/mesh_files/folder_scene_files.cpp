@@ -4,8 +4,10 @@
 
 namespace tessera {
 
-Model read_model_file(const std::filesystem::path& path, const MeshFileRequest& request) {
-  const ModelSource source{path, request.file, path.parent_path(), &request};
+namespace {
+
+Model read_model(const ModelSource& source) {
+  const MeshFileRequest& request = *source.request;
   Model model;
   switch (request.format) {
     case MeshFormat::obj:
@@ -27,8 +29,42 @@ Model read_model_file(const std::filesystem::path& path, const MeshFileRequest& 
   return model;
 }
 
+}  // namespace
+
+Model read_model_file(const std::filesystem::path& path, const MeshFileRequest& request) {
+  return read_model({path, request.file, path.parent_path(), &request, {}});
+}
+
 Model FolderSceneFiles::load_model(const MeshFileRequest& request) const {
+  if (request.asset) {
+    throw SceneFileError(request.file, "",
+                         "is an asset (sha256:...), which only the farm holds; name the file "
+                         "itself with \"file\" to render here");
+  }
   return read_model_file(folder_ / request.file, request);
+}
+
+Model AssetSceneFiles::load_model(const MeshFileRequest& request) const {
+  if (!request.asset) {
+    throw SceneFileError(request.file, "",
+                         "is a file on the machine that sent the scene; the farm reads meshes "
+                         "as assets (tessera submit uploads them)");
+  }
+  const auto model = locate_(*request.asset);
+  if (!model) throw AssetNotHeld{"", *request.asset};
+  ModelSource source{*model, request.file, {}, &request, {}};
+  source.lookup = [this, &request](const std::string& name, const std::string& where) {
+    const auto digest = request.files.find(name);
+    if (digest == request.files.end()) {
+      throw SceneFileError(
+          request.file, where,
+          "names \"" + name + "\", which the scene's \"files\" do not map to an asset");
+    }
+    const auto path = locate_(digest->second);
+    if (!path) throw AssetNotHeld{name, digest->second};
+    return *path;
+  };
+  return read_model(source);
 }
 
 }  // namespace tessera

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 
 #include "common/scene_files.hpp"
 
@@ -15,6 +17,20 @@ class FolderSceneFiles : public SceneFiles {
 
  private:
   std::filesystem::path folder_;
+};
+
+// Mesh files as the farm has them: assets, files named by their SHA-256, which `locate`
+// finds (the coordinator's asset store, a worker's cache). A model's own files are the
+// assets its "files" map names to.
+class AssetSceneFiles : public SceneFiles {
+ public:
+  using Locate = std::function<std::optional<std::filesystem::path>(const std::string& sha256)>;
+  explicit AssetSceneFiles(Locate locate) : locate_(std::move(locate)) {}
+  // Throws AssetNotHeld for an asset `locate` does not find.
+  Model load_model(const MeshFileRequest& request) const override;
+
+ private:
+  Locate locate_;
 };
 
 // Reads the model file at `path`, whose own files resolve in its folder; `request.file` is

@@ -42,6 +42,7 @@ std::filesystem::path ModelSource::dependency(std::string_view reference,
   if (reference.empty() || relative.is_absolute() || relative.has_root_name()) refuse();
   const std::filesystem::path normal = relative.lexically_normal();
   if (normal.empty() || *normal.begin() == "..") refuse();
+  if (lookup) return lookup(normal.generic_string(), where);
   const std::filesystem::path full = bundle / normal;
   // A link inside the folder that leads out of it counts as leaving.
   std::error_code error;

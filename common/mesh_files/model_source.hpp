@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -18,6 +19,9 @@ struct ModelSource {
   std::string name;              // as the scene names it
   std::filesystem::path bundle;  // the folder the model's own references resolve in
   const MeshFileRequest* request = nullptr;
+  // Where the model's own files are when they are not in a folder (an asset's bundle): from
+  // a name, lexically normal and inside the bundle, to its file. Unset: `bundle` / name.
+  std::function<std::filesystem::path(const std::string& name, const std::string& where)> lookup;
 
   [[noreturn]] void fail(const std::string& where, const std::string& detail) const {
     throw SceneFileError(name, where, detail);

@@ -1,4 +1,6 @@
 // Scenes that name mesh files: what the parser makes of them, and its errors.
+#include <set>
+
 #include <gmock/gmock.h>
 #include <nlohmann/json.hpp>
 
@@ -125,7 +127,66 @@ TEST_F(MeshFileScene, WithoutFilesAMeshFileIsRefused) {
     FAIL() << "read a mesh file with no SceneFiles";
   } catch (const SceneError& e) {
     EXPECT_EQ(e.pointer(), "/objects/0/file");
-    EXPECT_THAT(e.detail(), HasSubstr("only `tessera render` reads"));
+    EXPECT_THAT(e.detail(), HasSubstr("which this reader of the scene cannot open"));
+  }
+}
+
+// The farm's form: the model and its MTL are assets, found by digest.
+TEST_F(MeshFileScene, AssetsAreFoundByDigestAndTheirFilesThroughTheirMap) {
+  const std::string obj_digest(64, 'a'), mtl_digest(64, 'b');
+  write("store/" + obj_digest, two_materials_obj);
+  write("store/" + mtl_digest, two_materials_mtl);
+  std::set<std::string> held = {obj_digest, mtl_digest};
+  const AssetSceneFiles files(
+      [&](const std::string& digest) -> std::optional<std::filesystem::path> {
+        if (!held.contains(digest)) return std::nullopt;
+        return dir_ / "store" / digest;
+      });
+  nlohmann::json object = {{"type", "mesh"},
+                           {"asset", "sha256:" + obj_digest},
+                           {"format", "obj"},
+                           {"name", "two.obj"},
+                           {"files", {{"m.mtl", "sha256:" + mtl_digest}}}};
+  const auto parse_with = [&](const nlohmann::json& o) {
+    nlohmann::json scene = {{"image", {{"width", 8}, {"height", 8}}},
+                            {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
+                            {"objects", {o}}};
+    return parse_scene_text(scene.dump(), {}, {}, &files);
+  };
+  const Scene scene = parse_with(object);
+  ASSERT_EQ(scene.objects.size(), 2u);
+  EXPECT_EQ(scene.materials[scene.objects[1].material].diffuse, Color(0, 1, 0));
+
+  held.erase(mtl_digest);
+  try {
+    parse_with(object);
+    FAIL() << "a missing MTL asset was not noticed";
+  } catch (const MissingAssetError& e) {
+    EXPECT_EQ(e.pointer(), "/objects/0/files/m.mtl");
+    EXPECT_EQ(e.digest(), mtl_digest);
+  }
+  held.erase(obj_digest);
+  try {
+    parse_with(object);
+    FAIL() << "a missing model asset was not noticed";
+  } catch (const MissingAssetError& e) {
+    EXPECT_EQ(e.pointer(), "/objects/0/asset");
+  }
+  held = {obj_digest, mtl_digest};
+  object["files"] = nlohmann::json::object();
+  try {
+    parse_with(object);
+    FAIL() << "an MTL the map does not name was read";
+  } catch (const SceneError& e) {
+    EXPECT_THAT(e.detail(),
+                HasSubstr("two.obj:line 1: names \"m.mtl\", which the scene's \"files\""));
+  }
+  object["asset"] = "sha256:ABC";
+  try {
+    parse_with(object);
+    FAIL() << "a malformed digest was taken";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.pointer(), "/objects/0/asset");
   }
 }
 
