@@ -11,8 +11,10 @@
 #include <memory>
 #include <optional>
 
+#include "client/scene_assets.hpp"
 #include "client/scene_input.hpp"
 #include "common/image_format.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
 #include "common/printable.hpp"
 #include "common/scene_parser.hpp"
@@ -193,13 +195,26 @@ void save_image(CoordinatorClient& api, const std::string& id, const std::string
 
 int submit(const Options& options, CoordinatorClient& api) {
   nlohmann::json scene;
+  const std::filesystem::path folder = std::filesystem::path(options.scene_path).parent_path();
   try {
     scene = parse_json_text(read_scene_text(options.scene_path));
-    parse_scene(scene);  // report mistakes with their JSON Pointer before sending anything
+    // Mistakes are reported with their JSON Pointer (and a mesh file's, with its line)
+    // before anything is sent.
+    const FolderSceneFiles files(folder);
+    parse_scene(scene, Limits{}, nullptr, &files);
   } catch (const SceneError& e) {
     fail(kExitUsage, options.scene_path + ": " + e.what());
   } catch (const std::exception& e) {
     fail(kExitUsage, e.what());
+  }
+  // The scene's mesh files go first, as assets the scene then names by digest.
+  try {
+    const AssetUploads sent = send_scene_assets(scene, folder, api, stderr);
+    if (sent.uploaded + sent.held > 0)
+      std::fprintf(stderr, "assets: %zu uploaded (%llu bytes), %zu already on the coordinator\n",
+                   sent.uploaded, static_cast<unsigned long long>(sent.bytes), sent.held);
+  } catch (const SceneFileError& e) {
+    fail(kExitUsage, options.scene_path + ": " + e.what());
   }
   const std::string name = options.name.empty()
                                ? std::filesystem::path(options.scene_path).stem().string()

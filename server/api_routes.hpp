@@ -16,6 +16,8 @@
 
 namespace tessera {
 
+class AssetStore;
+
 struct ApiContext {
   Scheduler& scheduler;
   const Clock& clock;
@@ -30,8 +32,16 @@ struct ApiContext {
   std::function<void(std::function<void()>)> run_blocking = [](const std::function<void()>& work) {
     work();
   };
+  // Runs work that reads or writes assets (an upload's pieces, a submission's mesh files)
+  // off the network's threads, apart from image encoding; at once where nothing is given.
+  std::function<void(std::function<void()>)> run_disk = [](const std::function<void()>& work) {
+    work();
+  };
   // The memory job submissions being read may take together; none: no cap.
   SubmitBudget* submit_budget = nullptr;
+  // Mesh files and the files they name, by digest; none: no asset routes, and a scene
+  // that names an asset is refused.
+  AssetStore* assets = nullptr;
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.
@@ -39,6 +49,7 @@ void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
 void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers...
 void add_scene_routes(Router& router, ApiContext& context);   // /v1/scenes/{digest}
 void add_lease_routes(Router& router, ApiContext& context);   // /v1/leases/{id}/...
+void add_asset_routes(Router& router, ApiContext& context);   // /v1/assets, /v1/scene-assets
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
 // that knows start-up is over (server_main) can say so.
 void add_health_routes(Router& router, const Readiness* readiness = nullptr);

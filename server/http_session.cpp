@@ -281,6 +281,7 @@ class BasicHttpSession : public HttpSession {
       return send(too_large(limit), true);
     parser_->body_limit(limit);  // also caps a chunked body, whose size is not announced
 
+    if (route_.sink) return start_streaming(body_follows);
     if (!body_follows) return dispatch();
     const auto length = parser_->content_length();
     if (!length || *length <= shared_->options.budgeted_body_bytes) return read_body_now();
@@ -297,6 +298,46 @@ class BasicHttpSession : public HttpSession {
   void read_body_now() {
     if (beast::iequals(parser_->get()[http::field::expect], "100-continue")) return do_continue();
     do_read_body();
+  }
+
+  // A streamed body (BodySink): no budget, since at most one piece of it is held at a time.
+  void start_streaming(bool body_follows) {
+    HttpRequest head = plain_request(parser_->get());
+    head.path = path_;
+    head.params = route_.params;
+    head.remote_address = remote_address_;
+    try {
+      sink_ = (*route_.sink)(head);
+    } catch (const std::exception& e) {
+      spdlog::error("http {}: no sink for the body: {}", route_.pattern, e.what());
+      return send(error_response(500, "internal_error", "the body cannot be taken"), true);
+    }
+    if (!sink_) {  // the route refused it from its head: answered unread, then closed
+      keep_alive_ = false;
+      return dispatch();
+    }
+    if (!body_follows) return dispatch();
+    read_body_now();
+  }
+
+  // Pieces of about a mebibyte go to the sink, each once the last was taken; the client's
+  // deadline stands still while the sink works.
+  void hand_piece() {
+    std::string piece = std::move(parser_->get().body());
+    parser_->get().body().clear();
+    lowest().expires_never();
+    const auto handed = std::chrono::steady_clock::now();
+    sink_->write(std::move(piece), [self = self(), handed](bool taken) {
+      net::dispatch(self->stream_.get_executor(), [self, handed, taken] {
+        if (!taken)
+          return self->send(error_response(507, "insufficient_storage",
+                                           "the coordinator could not store the body"),
+                            true);
+        self->body_deadline_ += std::chrono::steady_clock::now() - handed;
+        if (self->parser_->is_done()) return self->dispatch();
+        self->read_body_more();
+      });
+    });
   }
 
   void release_body_budget() {
@@ -329,7 +370,11 @@ class BasicHttpSession : public HttpSession {
     lowest().expires_at(body_deadline_);
     http::async_read_some(
         stream_, buffer_, *parser_, [self = self()](error_code ec, std::size_t bytes) {
-          if (ec || self->parser_->is_done()) return self->on_read_body(ec);
+          if (ec) return self->on_read_body(ec);
+          if (self->sink_ &&
+              (self->parser_->is_done() || self->parser_->get().body().size() >= kStreamPiece))
+            return self->hand_piece();
+          if (self->parser_->is_done()) return self->on_read_body(ec);
           self->body_deadline_ +=
               std::chrono::microseconds(bytes * 1'000'000 / self->shared_->options.min_body_rate);
           self->read_body_more();
@@ -435,7 +480,9 @@ class BasicHttpSession : public HttpSession {
   std::optional<WireMessage> answer_;              // alive while being written
   std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
   std::unique_ptr<std::string> refusal_;           // to a client of the other protocol
-  std::size_t budget_held_ = 0;  // of shared_->body_budget, for the body being read or served
+  static constexpr std::size_t kStreamPiece = 1 << 20;
+  std::shared_ptr<BodySink> sink_;  // the streamed body's, for a route that has one
+  std::size_t budget_held_ = 0;     // of shared_->body_budget, for the body being read or served
   std::string remote_address_;
   Phase phase_ = Phase::idle;
   bool first_request_ = true;
@@ -457,6 +504,7 @@ void BasicHttpSession<Stream>::dispatch() {
   request.query = std::move(query_);
   request.params = std::move(route_.params);
   request.remote_address = remote_address_;
+  request.body_sink = std::move(sink_);
   parser_.reset();
   // A body is read through buffer_, which then keeps its largest size (64 KiB): with a
   // thousand workers parked on a claim, that memory would idle with them. Empty, it is

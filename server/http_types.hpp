@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -15,6 +16,15 @@
 
 namespace tessera {
 
+// A body that a route takes piece by piece as it arrives rather than whole (an asset
+// upload, which may be gigabytes): the session reads the next piece only once `done` has
+// been called, from any thread, with whether the piece was taken.
+class BodySink {
+ public:
+  virtual ~BodySink() = default;
+  virtual void write(std::string piece, std::function<void(bool taken)> done) = 0;
+};
+
 struct HttpRequest {
   std::string method;                          // as sent, e.g. "GET"
   std::string path;                            // percent-encoded, as sent, without the query
@@ -23,6 +33,8 @@ struct HttpRequest {
   std::map<std::string, std::string> headers;  // lower-case names; repeats joined with ", "
   std::string body;
   std::string remote_address;  // "ip:port" of the peer
+  // For a route that streams its body: where the body went; `body` is then empty.
+  std::shared_ptr<BodySink> body_sink;
 };
 
 struct HttpResponse {
@@ -72,6 +84,9 @@ inline std::string_view trim_ows(std::string_view text) {
 // call is ignored, and dropping every copy without calling it answers 500.
 using Respond = std::function<void(HttpResponse)>;
 using Handler = std::function<void(HttpRequest&&, Respond)>;
+// Makes the sink for a request's body from its head (no body yet), once the route, its
+// role and its limits have passed; throws to refuse with 500.
+using SinkFactory = std::function<std::shared_ptr<BodySink>(const HttpRequest& head)>;
 
 inline HttpResponse json_response(int status, const nlohmann::json& body) {
   // Replace rather than throw on invalid UTF-8: a response must always be producible,

@@ -8,6 +8,7 @@
 
 #include "common/image_format.hpp"
 #include "common/image_io.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/protocol/paths.hpp"
 #include "common/scene_limits_scan.hpp"
 #include "common/scene_parser.hpp"
@@ -15,6 +16,7 @@
 #include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
+#include "server/asset_store.hpp"
 #include "server/submit_budget.hpp"
 
 namespace tessera {
@@ -81,6 +83,14 @@ HttpResponse scene_refused(const SceneError& e) {
                                              e.limit(), e.limit_value()}));
 }
 
+// What the network's thread hands the blocking pool of a submission it has read.
+struct Taken {
+  protocol::JobSubmission submission;
+  ObjectTexts objects;
+};
+void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<SubmissionMemory> memory,
+                      Respond respond);
+
 // The submission envelope around the scene (`JobSubmission`). Memory is bounded by the
 // body, not amplified by it: a first pass builds nothing and refuses a scene over a count
 // limit where it crosses it; only then are nodes made, and the scene's objects, by far its
@@ -121,9 +131,32 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   } catch (const protocol::ProtocolError& e) {
     return answer(invalid_request(e));
   }
+  // Off the network's threads: mesh files are read from the asset store to be checked.
+  auto taken = std::make_shared<Taken>(Taken{std::move(submission), std::move(objects)});
+  context.run_disk([&context, taken, memory, respond = std::move(respond)]() mutable {
+    check_and_submit(context, std::move(*taken), memory, std::move(respond));
+  });
+}
+
+void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<SubmissionMemory> memory,
+                      Respond respond) {
+  protocol::JobSubmission& submission = taken.submission;
+  ObjectTexts& objects = taken.objects;
+  const auto answer = [&memory, &respond](HttpResponse response) {
+    memory->hold.reset();
+    respond(std::move(response));
+  };
+  std::optional<AssetSceneFiles> files;
+  if (context.assets) {
+    files.emplace(
+        [store = context.assets](const std::string& digest) { return store->find(digest); });
+  }
   Scene scene;
   try {
-    scene = check_scene(submission.scene, context.limits, objects);
+    scene = check_scene(submission.scene, context.limits, objects, files ? &*files : nullptr);
+  } catch (const MissingAssetError& e) {
+    const std::string path = "/scene" + e.pointer();
+    return answer(error_response(422, "missing_asset", path + ": " + e.detail(), path));
   } catch (const SceneError& e) {
     return answer(scene_refused(e));
   }

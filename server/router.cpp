@@ -72,8 +72,8 @@ std::optional<std::map<std::string, std::string>> parse_query(std::string_view q
 }
 
 void Router::add(std::string method, std::string pattern, Handler handler,
-                 std::optional<std::size_t> body_limit, std::string role,
-                 std::string content_type) {
+                 std::optional<std::size_t> body_limit, std::string role, std::string content_type,
+                 SinkFactory sink) {
   if (method.empty()) throw std::invalid_argument("route " + pattern + ": empty method");
   if (pattern.empty() || pattern.front() != '/')
     throw std::invalid_argument("route pattern \"" + pattern + "\" must start with '/'");
@@ -114,7 +114,7 @@ void Router::add(std::string method, std::string pattern, Handler handler,
                              "\" with other parameter names");
   }
   routes_.push_back({std::move(method), std::move(pattern), std::move(segments), std::move(handler),
-                     body_limit, std::move(role), std::move(content_type)});
+                     body_limit, std::move(role), std::move(content_type), std::move(sink)});
 }
 
 RouteMatch Router::match(std::string_view method, std::string_view path) const {
@@ -170,6 +170,7 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
       result.pattern = route.pattern;
       result.body_limit = route.body_limit;
       result.role = route.role;
+      result.sink = route.sink ? &route.sink : nullptr;
       result.content_type = route.content_type;
       for (std::size_t i = 0; i < parts.size(); ++i)
         if (route.segments[i].is_param) result.params.emplace(route.segments[i].text, parts[i]);

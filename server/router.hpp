@@ -22,6 +22,7 @@ struct RouteMatch {
   std::optional<std::size_t> body_limit;      // nullopt: the server's default
   std::string role;                           // who may call it; "" for anyone
   std::string content_type;                   // of the body a POST or PUT must send
+  const SinkFactory* sink = nullptr;          // set: the body streams to a sink, not memory
   // When handler is null: 404 not_found, 405 method_not_allowed (with an Allow header)
   // or 400 bad_request (a path that is not valid percent-encoding).
   HttpResponse error;
@@ -38,7 +39,7 @@ class Router {
   // "" takes any).
   void add(std::string method, std::string pattern, Handler handler,
            std::optional<std::size_t> body_limit = std::nullopt, std::string role = "",
-           std::string content_type = "application/json");
+           std::string content_type = "application/json", SinkFactory sink = {});
 
   // `path` is the request target without its query, still percent-encoded. Where several
   // patterns fit, the one with a literal segment earliest wins ("/v1/jobs/stats" over
@@ -63,6 +64,7 @@ class Router {
     std::optional<std::size_t> body_limit;
     std::string role;
     std::string content_type;
+    SinkFactory sink;
   };
 
   std::vector<Route> routes_;

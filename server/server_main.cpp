@@ -25,6 +25,7 @@
 #include "common/secret.hpp"
 #include "server/access.hpp"
 #include "server/api_routes.hpp"
+#include "server/asset_store.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
 
@@ -33,6 +34,7 @@ namespace {
 struct ServerOptions {
   std::string listen = "127.0.0.1:8640";
   std::string data_dir = "./tessera-data";
+  std::uint64_t max_asset_bytes = std::uint64_t{2} << 30;
   int local_workers = static_cast<int>(std::thread::hardware_concurrency());
   int worker_threads = 1;
   double lease_timeout_s = 30;
@@ -154,6 +156,7 @@ void add_routes(tessera::Router& router, tessera::ApiContext& context,
   add_worker_routes(router, context);
   add_scene_routes(router, context);
   add_lease_routes(router, context);
+  add_asset_routes(router, context);
 }
 
 // Runs `io` on one thread per core (at least two) until it has nothing left to do.
@@ -200,6 +203,13 @@ int run(const ServerOptions& options) {
     boost::asio::post(encoders, std::move(work));
   };
   context.submit_budget = &submit_budget;
+  // Asset uploads and the checks of submitted scenes' mesh files, beside the encoder.
+  AssetStore assets(std::filesystem::path(options.data_dir) / "assets", options.max_asset_bytes);
+  context.assets = &assets;
+  boost::asio::thread_pool disk(2);
+  context.run_disk = [&disk](std::function<void()> work) {
+    boost::asio::post(disk, std::move(work));
+  };
   add_routes(router, context, readiness);
 
   HttpServerOptions http;
@@ -309,6 +319,9 @@ void add_farm_options(CLI::App& app, ServerOptions& options) {
                  "Seconds between a worker's heartbeats")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-asset-bytes", options.max_asset_bytes,
+                 "Largest asset (a mesh file, its MTL or .bin) PUT /v1/assets takes")
+      ->capture_default_str();
   app.add_option("--max-tile-attempts", options.max_tile_attempts,
                  "Failures of one tile (lease expired, or an error reported) that fail its job")
       ->capture_default_str()

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -13,6 +14,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/protocol/limits.hpp"
 #include "common/scene_parser.hpp"
 
@@ -214,6 +216,17 @@ std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& 
   }
 }
 
+AssetCache& WorkerDaemon::asset_cache() {
+  if (!assets_) {
+    std::filesystem::path dir = options_.asset_cache;
+    if (dir.empty())
+      dir =
+          std::filesystem::temp_directory_path() / ("tessera-assets-" + std::to_string(::getuid()));
+    assets_ = std::make_unique<AssetCache>(dir, options_.asset_cache_bytes);
+  }
+  return *assets_;
+}
+
 const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   if (auto it = renderers_.find(digest); it != renderers_.end()) return *it->second;
   std::optional<std::string> scene;
@@ -224,9 +237,27 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
   }
   if (!scene) throw std::runtime_error("cannot fetch scene " + digest);
   if (renderers_.size() >= kMaxCachedScenes) renderers_.erase(renderers_.begin());
+  // The scene's assets come from the cache, or from the coordinator into it, as the
+  // parser meets them.
+  std::set<std::string> used;
+  const AssetSceneFiles files(
+      [&](const std::string& sha256) -> std::optional<std::filesystem::path> {
+        used.insert(sha256);
+        try {
+          return asset_cache().get(sha256, [&]() -> std::string {
+            auto bytes = with_retry("asset", [&] { return control_.scene_asset(sha256); });
+            if (!bytes) throw std::runtime_error("stopped while fetching asset " + sha256);
+            return std::move(*bytes);
+          });
+        } catch (const ApiError& e) {
+          if (e.status() == 404) return std::nullopt;
+          throw;
+        }
+      });
   // The coordinator validated the scene against its own limits, which may be above the
   // defaults: here it is only rebuilt.
-  auto renderer = std::make_unique<Renderer>(parse_scene_text(*scene, Limits::none()));
+  auto renderer = std::make_unique<Renderer>(parse_scene_text(*scene, Limits::none(), {}, &files));
+  if (!used.empty()) asset_cache().trim(used);
   return *renderers_.emplace(digest, std::move(renderer)).first->second;
 }
 

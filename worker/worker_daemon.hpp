@@ -15,6 +15,7 @@
 
 #include "common/net/coordinator_client.hpp"
 #include "common/protocol/limits.hpp"
+#include "worker/asset_cache.hpp"
 #include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
 #include "worker/renderer.hpp"
@@ -33,6 +34,10 @@ struct WorkerOptions {
   // a failure, whenever tile N of any job is about to be rendered ("error:N,M" for
   // several tiles). Empty: none.
   std::string fault;
+  // Where assets (mesh files) are kept by digest, and how many bytes of them at most.
+  // "": a folder of this user's under the system's temporary directory.
+  std::string asset_cache;
+  std::uint64_t asset_cache_bytes = std::uint64_t{10} << 30;
 };
 
 class WorkerDaemon {
@@ -63,6 +68,7 @@ class WorkerDaemon {
   bool register_self();
   std::optional<Claimed> claim();
   const Renderer& renderer_for(const std::string& digest);
+  AssetCache& asset_cache();  // made on first use
   // What the threads rendering one lease share (render_lease.cpp).
   struct LeaseProgress {
     std::atomic<int> rendered{0};
@@ -128,6 +134,7 @@ class WorkerDaemon {
   std::atomic<std::uint64_t> tiles_rendered_{0};  // for the log line at exit
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
   std::map<std::string, std::unique_ptr<Renderer>> renderers_;
+  std::unique_ptr<AssetCache> assets_;
   std::unique_ptr<tbb::task_arena> arena_;  // made once: a new arena per tile costs a lot
 };
 

@@ -66,6 +66,12 @@ int main(int argc, char** argv) {
   app.add_option("--ca-file", options.ca_file,
                  "Trust the CAs of this PEM file for an https:// coordinator, instead of the "
                  "system's (default: $TESSERA_CA_FILE)");
+  app.add_option("--asset-cache", options.asset_cache,
+                 "Folder for the mesh files of scenes, by digest (default: tessera-assets-UID in "
+                 "the temporary directory)");
+  app.add_option("--asset-cache-bytes", options.asset_cache_bytes,
+                 "Most bytes of assets kept; the least recently used go first")
+      ->capture_default_str();
   app.set_version_flag("--version", "tessera-worker " TESSERA_VERSION);
   CLI11_PARSE(app, argc, argv);
   try {

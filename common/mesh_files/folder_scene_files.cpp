@@ -52,6 +52,9 @@ Model AssetSceneFiles::load_model(const MeshFileRequest& request) const {
   }
   const auto model = locate_(*request.asset);
   if (!model) throw AssetNotHeld{"", *request.asset};
+  // Every asset the scene names must be there, whether or not the model reads it.
+  for (const auto& [name, digest] : request.files)
+    if (!locate_(digest)) throw AssetNotHeld{name, digest};
   ModelSource source{*model, request.file, {}, &request, {}};
   source.lookup = [this, &request](const std::string& name, const std::string& where) {
     const auto digest = request.files.find(name);

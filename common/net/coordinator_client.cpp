@@ -4,6 +4,7 @@
 #include <charconv>
 #include <thread>
 
+#include "common/protocol/assets.hpp"
 #include "common/protocol/paths.hpp"
 
 namespace tessera {
@@ -142,6 +143,21 @@ std::optional<protocol::Lease> CoordinatorClient::extend(std::string_view lease,
   const HttpResult result = call("POST", protocol::extend_target(lease, max_tiles), {}, {410});
   if (result.status == 410) return std::nullopt;
   return read_body<protocol::Lease>(result.body);
+}
+
+bool CoordinatorClient::has_asset(std::string_view sha256) {
+  return call("HEAD", fill(route::asset, "sha256:" + std::string(sha256)), {}, {404}).status == 200;
+}
+
+bool CoordinatorClient::put_asset(std::string_view sha256, std::string bytes) {
+  const HttpResult result =
+      checked(http_.request("PUT", fill(route::asset, "sha256:" + std::string(sha256)),
+                            std::move(bytes), "application/octet-stream"));
+  return result.status == 201;
+}
+
+std::string CoordinatorClient::scene_asset(std::string_view sha256) {
+  return call("GET", fill(route::scene_asset, "sha256:" + std::string(sha256))).body;
 }
 
 std::string CoordinatorClient::scene(std::string_view digest) {

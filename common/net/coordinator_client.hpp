@@ -67,6 +67,10 @@ class CoordinatorClient {
   std::string image(std::string_view id, const ImageFormat& format, bool partial);
   protocol::WorkerList workers();
   protocol::Health health();  // GET /healthz
+  // Assets by their SHA-256 (64 hex digits): whether the coordinator holds one (HEAD), and
+  // an upload, true when it was new (201), false when already held (200).
+  bool has_asset(std::string_view sha256);
+  bool put_asset(std::string_view sha256, std::string bytes);
 
   // The worker's routes. A registration of another protocol version throws ApiError 409
   // (protocol_mismatch); an answer of another version throws protocol::ProtocolMismatch.
@@ -81,7 +85,8 @@ class CoordinatorClient {
   // Nothing when the lease is lost (410).
   std::optional<protocol::Lease> heartbeat(std::string_view lease);
   std::optional<protocol::Lease> extend(std::string_view lease, int max_tiles);
-  std::string scene(std::string_view digest);  // the scene's JSON text
+  std::string scene(std::string_view digest);        // the scene's JSON text
+  std::string scene_asset(std::string_view sha256);  // an asset a scene names, for workers
   // Tiles' pixels (float32 RGB, one tile after another) named by `tiles`, with the rays
   // each took.
   protocol::ResultAnswer upload(std::string_view lease, std::span<const std::uint64_t> tiles,

@@ -28,11 +28,15 @@ inline constexpr std::string_view lease_extend = "/v1/leases/{id}/extend";
 inline constexpr std::string_view lease_result = "/v1/leases/{id}/result";
 inline constexpr std::string_view lease_fail = "/v1/leases/{id}/fail";
 inline constexpr std::string_view lease_release = "/v1/leases/{id}/release";
+// Assets (mesh files, their MTL and .bin) by digest, "sha256:<64 hex digits>": uploaded and
+// looked up by clients, fetched by workers from the second.
+inline constexpr std::string_view asset = "/v1/assets/{digest}";
+inline constexpr std::string_view scene_asset = "/v1/scene-assets/{digest}";
 // Every one of them, for the contract test.
 inline constexpr std::string_view all[] = {
-    healthz,         readyz,       jobs,         job,          job_image,
-    job_cancel,      workers,      worker,       worker_claim, scene,
-    lease_heartbeat, lease_extend, lease_result, lease_fail,   lease_release};
+    healthz,      readyz,     jobs,          job,   job_image,       job_cancel,
+    workers,      worker,     worker_claim,  scene, lease_heartbeat, lease_extend,
+    lease_result, lease_fail, lease_release, asset, scene_asset};
 }  // namespace route
 
 // The names of the routes' query parameters.

@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "common/image_format.hpp"
+#include "common/protocol/assets.hpp"
 #include "common/protocol/error.hpp"
 #include "common/protocol/health.hpp"
 #include "common/protocol/jobs.hpp"
@@ -207,6 +208,7 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   check(api, api.response("/v1/leases/{id}/result", "put", "200"), ResultAnswer{});
   check(api, api.response("/healthz", "get", "200"), Health{});
   check(api, api.response("/readyz", "get", "200"), Ready{});
+  check(api, api.schema("AssetStored"), AssetStored{"sha256:" + std::string(64, 'a'), true});
 }
 
 TEST(ProtocolContract, EnumsAreTheSchemasEnums) {

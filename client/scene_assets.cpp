@@ -1,0 +1,99 @@
+#include "client/scene_assets.hpp"
+
+#include <map>
+#include <set>
+
+#include "common/mesh_files/model_references.hpp"
+#include "common/net/file_digest.hpp"
+#include "common/printable.hpp"
+#include "common/scene_parser.hpp"
+
+namespace tessera {
+namespace {
+
+std::string size_text(std::uint64_t bytes) {
+  char text[32];
+  if (bytes < 1024) return std::to_string(bytes) + " B";
+  if (bytes < (1u << 20))
+    std::snprintf(text, sizeof text, "%.1f KiB", static_cast<double>(bytes) / 1024);
+  else
+    std::snprintf(text, sizeof text, "%.1f MiB", static_cast<double>(bytes) / (1 << 20));
+  return text;
+}
+
+std::string digest_of(const std::filesystem::path& path, const std::string& name) {
+  const std::string digest = file_sha256(path);
+  if (digest.empty()) throw SceneFileError(name, "", "cannot be read");
+  return digest;
+}
+
+// Sends each file once, when the coordinator lacks it.
+class Sender {
+ public:
+  Sender(CoordinatorClient& api, std::FILE* progress) : api_(api), progress_(progress) {}
+
+  void send(const std::filesystem::path& path, const std::string& name, const std::string& digest) {
+    if (!seen_.insert(digest).second) return;
+    if (api_.has_asset(digest)) {
+      ++report_.held;
+      return;
+    }
+    const std::string bytes = read_text_file(path);
+    if (progress_)
+      std::fprintf(progress_, "uploading %s (%s) ...\n", printable(name).c_str(),
+                   size_text(bytes.size()).c_str());
+    report_.bytes += bytes.size();
+    if (api_.put_asset(digest, bytes))
+      ++report_.uploaded;
+    else
+      ++report_.held;  // arrived meanwhile, from another submission
+  }
+  const AssetUploads& report() const { return report_; }
+
+ private:
+  CoordinatorClient& api_;
+  std::FILE* progress_;
+  std::set<std::string> seen_;
+  AssetUploads report_;
+};
+
+}  // namespace
+
+AssetUploads send_scene_assets(nlohmann::json& scene, const std::filesystem::path& folder,
+                               CoordinatorClient& api, std::FILE* progress) {
+  Sender sender(api, progress);
+  const auto objects = scene.find("objects");
+  if (objects == scene.end() || !objects->is_array()) return sender.report();
+  for (nlohmann::json& object : *objects) {
+    if (!object.is_object() || object.value("type", "") != "mesh" || !object.contains("file") ||
+        !object["file"].is_string())
+      continue;
+    const std::string name = object["file"].get<std::string>();
+    const std::filesystem::path path = folder / name;
+    MeshFormat format = MeshFormat::obj;
+    if (object.contains("format") && object["format"].is_string()) {
+      const std::string wanted = object["format"].get<std::string>();
+      for (std::size_t i = 0; i < std::size(mesh_format_names); ++i)
+        if (mesh_format_names[i] == wanted) format = static_cast<MeshFormat>(i);
+    } else if (const auto known = mesh_format_of(name)) {
+      format = *known;
+    }
+    nlohmann::json files = nlohmann::json::object();
+    for (const std::string& reference : model_references(path, format, name)) {
+      const std::filesystem::path file = path.parent_path() / reference;
+      const std::string digest = digest_of(file, reference);
+      sender.send(file, reference, digest);
+      files[reference] = "sha256:" + digest;
+    }
+    const std::string digest = digest_of(path, name);
+    sender.send(path, name, digest);
+    object.erase("file");
+    object["asset"] = "sha256:" + digest;
+    object["format"] = std::string(mesh_format_names[static_cast<int>(format)]);
+    object["name"] = name;
+    if (!files.empty()) object["files"] = std::move(files);
+  }
+  return sender.report();
+}
+
+}  // namespace tessera

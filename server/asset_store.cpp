@@ -1,0 +1,102 @@
+#include "server/asset_store.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+#include <openssl/evp.h>
+
+#include "server/ids.hpp"
+
+namespace tessera {
+
+struct AssetStore::Upload::Digest {
+  EVP_MD_CTX* context = EVP_MD_CTX_new();
+  ~Digest() { EVP_MD_CTX_free(context); }
+};
+
+bool is_sha256_hex(std::string_view text) {
+  if (text.size() != 64) return false;
+  for (const char c : text)
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
+  return true;
+}
+
+AssetStore::AssetStore(std::filesystem::path dir, std::uint64_t max_bytes)
+    : dir_(std::move(dir)), incoming_(dir_ / "incoming"), max_bytes_(max_bytes) {
+  std::filesystem::create_directories(incoming_);
+  for (const auto& entry : std::filesystem::directory_iterator(incoming_)) {
+    std::error_code ignored;
+    std::filesystem::remove(entry.path(), ignored);
+  }
+}
+
+std::optional<std::filesystem::path> AssetStore::find(std::string_view sha256) const {
+  if (!is_sha256_hex(sha256)) return std::nullopt;
+  std::filesystem::path path = dir_ / std::string(sha256);
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return std::nullopt;
+  return path;
+}
+
+std::unique_ptr<AssetStore::Upload> AssetStore::begin_upload() {
+  std::unique_ptr<Upload> upload(new Upload());
+  upload->path_ = incoming_ / random_hex(32);
+  upload->fd_ = ::open(upload->path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0640);
+  if (upload->fd_ < 0)
+    throw std::runtime_error("cannot create " + upload->path_.string() + ": " +
+                             std::strerror(errno));
+  upload->digest_ = std::make_unique<Upload::Digest>();
+  if (!upload->digest_->context ||
+      EVP_DigestInit_ex(upload->digest_->context, EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("OpenSSL could not start a SHA-256");
+  return upload;
+}
+
+AssetStore::Upload::~Upload() {
+  if (fd_ >= 0) ::close(fd_);
+  std::error_code ignored;
+  if (!path_.empty()) std::filesystem::remove(path_, ignored);
+}
+
+bool AssetStore::Upload::write(std::string_view bytes) {
+  if (EVP_DigestUpdate(digest_->context, bytes.data(), bytes.size()) != 1) return false;
+  while (!bytes.empty()) {
+    const ssize_t written = ::write(fd_, bytes.data(), bytes.size());
+    if (written < 0 && errno == EINTR) continue;
+    if (written <= 0) return false;
+    bytes.remove_prefix(static_cast<std::size_t>(written));
+    size_ += static_cast<std::uint64_t>(written);
+  }
+  return true;
+}
+
+AssetStore::Committed AssetStore::commit(Upload& upload, std::string_view sha256,
+                                         std::string* actual) {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+  unsigned length = 0;
+  if (EVP_DigestFinal_ex(upload.digest_->context, digest.data(), &length) != 1)
+    return Committed::failed;
+  static constexpr char hex[] = "0123456789abcdef";
+  std::string text;
+  for (unsigned i = 0; i < length; ++i) {
+    text += hex[digest[i] >> 4];
+    text += hex[digest[i] & 15];
+  }
+  if (actual) *actual = text;
+  if (text != sha256) return Committed::wrong_digest;
+  // On the disk before it is named, so that a crash never leaves a named asset whose
+  // bytes are not all there.
+  if (::fsync(upload.fd_) != 0) return Committed::failed;
+  const std::filesystem::path target = dir_ / std::string(sha256);
+  if (::link(upload.path_.c_str(), target.c_str()) != 0)
+    return errno == EEXIST ? Committed::already_held : Committed::failed;
+  return Committed::added;
+}
+
+}  // namespace tessera

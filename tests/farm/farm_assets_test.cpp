@@ -1,0 +1,196 @@
+// Scenes with mesh files on a real farm: the files travel once, as assets by digest, and
+// the farm's image is the local render's, bit for bit; the asset routes check digests and
+// refuse what they must.
+#include <sys/resource.h>
+
+#include <atomic>
+#include <cstring>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "common/net/file_digest.hpp"
+#include "tests/farm/farm_fixture.hpp"
+
+namespace tessera::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+template <typename T>
+void put(std::string& out, T value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+// A tetrahedron in a .gltf whose buffer is a .bin beside it.
+void write_tetrahedron_gltf(const fs::path& dir) {
+  std::string bin;
+  for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f}) put(bin, v);
+  for (const std::uint16_t i : {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}) put(bin, i);
+  write_text(dir / "tetra.bin", bin);
+  write_text(dir / "tetra.gltf", nlohmann::json::parse(R"({
+    "asset": {"version": "2.0"},
+    "nodes": [{"mesh": 0, "translation": [-1.6, 0.3, 0.5], "scale": [0.8, 0.8, 0.8]}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+    "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.5, 0.9, 1],
+                                            "metallicFactor": 0, "roughnessFactor": 0.3}}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+                  {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                    {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+    "buffers": [{"uri": "tetra.bin", "byteLength": 72}]
+  })")
+                                     .dump());
+}
+
+// examples/still_life.json's OBJ and MTL, and a glTF with its .bin, in one scene.
+fs::path write_scene(const fs::path& dir) {
+  fs::create_directories(dir / "models");
+  const fs::path examples = fs::path(TESSERA_SOURCE_DIR) / "examples";
+  fs::copy_file(examples / "models" / "still_life.obj", dir / "models" / "still_life.obj");
+  fs::copy_file(examples / "models" / "still_life.mtl", dir / "models" / "still_life.mtl");
+  write_tetrahedron_gltf(dir / "models");
+  nlohmann::json scene = read_json_file(examples / "still_life.json");
+  scene["image"] = {{"width", 96}, {"height", 72}};
+  scene["render"] = {{"samples_per_pixel", 1}, {"max_depth", 6}, {"tile_size", 16}};
+  scene["objects"].push_back({{"type", "mesh"}, {"file", "models/tetra.gltf"}});
+  write_text(dir / "scene.json", scene.dump(2));
+  return dir / "scene.json";
+}
+
+TEST(FarmAssets, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
+  Farm farm("farm-assets", 2);
+  const fs::path scene = write_scene(farm.dir() / "project");
+  const CliRun first = run_cli(
+      farm.dir(),
+      {"--server", farm.url(), "submit", scene.string(), "-o", (farm.dir() / "farm.exr").string()},
+      std::chrono::seconds(120));
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  // The OBJ, its MTL, the glTF and its .bin.
+  EXPECT_TRUE(contains(first.output, "assets: 4 uploaded")) << first.output;
+  const CliRun local = run_cli(farm.dir(), {"render", scene.string(), "-o",
+                                            (farm.dir() / "local.exr").string(), "--threads", "2"});
+  ASSERT_EQ(local.exit_code, 0) << local.output;
+  EXPECT_TRUE(
+      same_pixels(read_image(farm.dir() / "farm.exr"), read_image(farm.dir() / "local.exr")));
+
+  // Again: nothing is sent twice, and the job still renders.
+  const CliRun second = run_cli(
+      farm.dir(),
+      {"--server", farm.url(), "submit", scene.string(), "-o", (farm.dir() / "again.exr").string()},
+      std::chrono::seconds(120));
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_TRUE(contains(second.output, "assets: 0 uploaded (0 bytes), 4 already on the coordinator"))
+      << second.output;
+  EXPECT_FALSE(contains(second.output, "uploading")) << second.output;
+  EXPECT_TRUE(
+      same_pixels(read_image(farm.dir() / "again.exr"), read_image(farm.dir() / "local.exr")));
+}
+
+std::string asset_target(const std::string& digest) { return "/v1/assets/sha256:" + digest; }
+
+TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
+  Farm farm("farm-asset-routes", 0, {"--max-asset-bytes", "4096"});
+  HttpClient http = farm.http(std::chrono::seconds(10));
+  const std::string bytes = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const std::string digest = bytes_sha256(bytes);
+  const std::string other = bytes_sha256("something else");
+
+  EXPECT_EQ(http.request("HEAD", asset_target(digest)).status, 404);
+  const HttpResult wrong =
+      http.request("PUT", asset_target(other), bytes, "application/octet-stream");
+  EXPECT_EQ(wrong.status, 400);
+  EXPECT_TRUE(contains(wrong.body, "digest_mismatch")) << wrong.body;
+  EXPECT_EQ(http.request("HEAD", asset_target(other)).status, 404);
+
+  EXPECT_EQ(http.request("PUT", asset_target(digest), bytes, "application/octet-stream").status,
+            201);
+  EXPECT_EQ(http.request("PUT", asset_target(digest), bytes, "application/octet-stream").status,
+            200);
+  EXPECT_EQ(http.request("HEAD", asset_target(digest)).status, 200);
+  EXPECT_EQ(http.request("GET", asset_target(digest)).body, bytes);
+
+  const std::string big(5000, 'x');
+  const HttpResult over =
+      http.request("PUT", asset_target(bytes_sha256(big)), big, "application/octet-stream");
+  EXPECT_EQ(over.status, 413);
+  EXPECT_EQ(http.request("PUT", "/v1/assets/sha256:ABC", bytes, "application/octet-stream").status,
+            400);
+  EXPECT_EQ(http.request("PUT", "/v1/assets/" + digest, bytes, "application/octet-stream").status,
+            400);
+  // Nothing of the refused uploads is left behind.
+  EXPECT_TRUE(eventually([&] { return fs::is_empty(farm.dir() / "data" / "assets" / "incoming"); },
+                         std::chrono::seconds(5)));
+  EXPECT_FALSE(fs::exists(farm.dir() / "data" / "assets" / other));
+
+  // A scene naming an asset the coordinator lacks: 422 at its pointer, naming the digest.
+  const nlohmann::json missing = {{"scene",
+                                   {{"image", {{"width", 8}, {"height", 8}}},
+                                    {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
+                                    {"objects",
+                                     {{{"type", "mesh"},
+                                       {"asset", "sha256:" + digest},
+                                       {"format", "obj"},
+                                       {"files", {{"x.mtl", "sha256:" + other}}}}}}}}};
+  const HttpResult refused = http.request("POST", "/v1/jobs", missing.dump());
+  EXPECT_EQ(refused.status, 422);
+  EXPECT_TRUE(contains(refused.body, "\"path\":\"/scene/objects/0/files/x.mtl\"")) << refused.body;
+  EXPECT_TRUE(contains(refused.body, other)) << refused.body;
+}
+
+TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {
+  Farm farm("farm-asset-race", 0);
+  const std::string bytes(300000, 'q');
+  const std::string digest = bytes_sha256(bytes);
+  std::atomic<int> added{0}, held{0}, other{0};
+  std::vector<std::thread> threads;
+  for (int i = 0; i < 6; ++i)
+    threads.emplace_back([&] {
+      HttpClient http = farm.http(std::chrono::seconds(20));
+      const int status =
+          http.request("PUT", asset_target(digest), bytes, "application/octet-stream").status;
+      (status == 201 ? added : status == 200 ? held : other)++;
+    });
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(added.load(), 1);
+  EXPECT_EQ(held.load(), 5);
+  EXPECT_EQ(other.load(), 0);
+  EXPECT_EQ(read_text(farm.dir() / "data" / "assets" / digest), bytes);
+}
+
+TEST(FarmAssets, AWorkerFetchesACorruptCacheEntryAgain) {
+  Farm farm("farm-asset-cache", 0);
+  const fs::path scene = write_scene(farm.dir() / "project");
+  const fs::path cache = farm.dir() / "cache";
+  Process worker(TESSERA_WORKER_BIN,
+                 {"--server", farm.url(), "--threads", "2", "--name", "cached", "--asset-cache",
+                  cache.string()},
+                 farm.dir() / "cached.log");
+  const CliRun first = run_cli(
+      farm.dir(),
+      {"--server", farm.url(), "submit", scene.string(), "-o", (farm.dir() / "first.exr").string()},
+      std::chrono::seconds(120));
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const std::string obj_digest = file_sha256(farm.dir() / "project" / "models" / "still_life.obj");
+  ASSERT_TRUE(fs::exists(cache / obj_digest));
+  write_text(cache / obj_digest, "v 0 0 0\n");  // corrupt: another digest
+
+  // Another scene (another job) naming the same assets: the entry is fetched again.
+  nlohmann::json changed = read_json_file(scene);
+  changed["background"] = {0.1, 0.1, 0.1};
+  write_text(scene, changed.dump());
+  const CliRun second = run_cli(farm.dir(),
+                                {"--server", farm.url(), "submit", scene.string(), "-o",
+                                 (farm.dir() / "second.exr").string()},
+                                std::chrono::seconds(120));
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_EQ(file_sha256(cache / obj_digest), obj_digest);
+  const CliRun local =
+      run_cli(farm.dir(), {"render", scene.string(), "-o", (farm.dir() / "local.exr").string()});
+  ASSERT_EQ(local.exit_code, 0) << local.output;
+  EXPECT_TRUE(
+      same_pixels(read_image(farm.dir() / "second.exr"), read_image(farm.dir() / "local.exr")));
+}
+
+}  // namespace
+}  // namespace tessera::test
