@@ -53,5 +53,8 @@ void add_asset_routes(Router& router, ApiContext& context);   // /v1/assets, /v1
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
 // that knows start-up is over (server_main) can say so.
 void add_health_routes(Router& router, const Readiness* readiness = nullptr);
+// Every route of docs/openapi.yaml, as the coordinator serves them (the asset routes only
+// with an AssetStore in `context`).
+void add_api_routes(Router& router, ApiContext& context, const Readiness* readiness = nullptr);
 
 }  // namespace tessera

@@ -147,18 +147,6 @@ std::unique_ptr<tessera::LocalWorkers> start_local_workers(const ServerOptions& 
       options.local_workers, options.worker_threads, options.log_level);
 }
 
-// Every route of docs/openapi.yaml.
-void add_routes(tessera::Router& router, tessera::ApiContext& context,
-                const tessera::Readiness& readiness) {
-  using namespace tessera;
-  add_health_routes(router, &readiness);
-  add_job_routes(router, context);
-  add_worker_routes(router, context);
-  add_scene_routes(router, context);
-  add_lease_routes(router, context);
-  add_asset_routes(router, context);
-}
-
 // Runs `io` on one thread per core (at least two) until it has nothing left to do.
 void run_io(boost::asio::io_context& io) {
   const unsigned io_threads = std::max(2u, std::thread::hardware_concurrency());
@@ -210,7 +198,7 @@ int run(const ServerOptions& options) {
   context.run_disk = [&disk](std::function<void()> work) {
     boost::asio::post(disk, std::move(work));
   };
-  add_routes(router, context, readiness);
+  add_api_routes(router, context, &readiness);
 
   HttpServerOptions http;
   http.address = host;

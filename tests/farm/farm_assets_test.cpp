@@ -1,7 +1,8 @@
 // Scenes with mesh files on a real farm: the files travel once, as assets by digest, and
 // the farm's image is the local render's, bit for bit; the asset routes check digests and
 // refuse what they must.
-#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cstring>
@@ -190,6 +191,58 @@ TEST(FarmAssets, AWorkerFetchesACorruptCacheEntryAgain) {
   ASSERT_EQ(local.exit_code, 0) << local.output;
   EXPECT_TRUE(
       same_pixels(read_image(farm.dir() / "second.exr"), read_image(farm.dir() / "local.exr")));
+}
+
+// Runs a command to completion; true when it exited 0.
+bool run_command(const std::string& binary, const std::vector<std::string>& args,
+                 const fs::path& log) {
+  Process process(binary, args, log);
+  const auto status = process.wait_for(std::chrono::seconds(20));
+  return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
+}
+
+TEST(FarmAssets, ADiskThatFillsMidUploadLeavesNoPartialAssetAndTheServerKeepsServing) {
+  const fs::path dir = fresh_dir("farm-asset-disk-full");
+  const fs::path data = dir / "data";
+  fs::create_directories(data);
+  // A 4 MiB file system for the data dir: as root, a tmpfs of that size.
+  if (::geteuid() != 0 ||
+      !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=4m", "tmpfs", data.string()},
+                   dir / "mount.log"))
+    GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
+                 << (dir / "mount.log");
+  struct Unmount {
+    fs::path path;
+    ~Unmount() {
+      run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log");
+    }
+  } unmount{data};
+  Process server(TESSERA_SERVER_BIN,
+                 {"--listen", "127.0.0.1:0", "--data-dir", data.string(), "--local-workers", "0",
+                  "--port-file", (dir / "port").string(), "--log-level", "warn"},
+                 dir / "server.log");
+  ASSERT_TRUE(eventually([&] { return fs::exists(dir / "port"); }, std::chrono::seconds(20)))
+      << read_text(dir / "server.log");
+  int port = 0;
+  std::ifstream(dir / "port") >> port;
+  HttpClient http("http://127.0.0.1:" + std::to_string(port), std::chrono::seconds(20));
+
+  const std::string big(6 << 20, 'b');  // more than the disk holds
+  const HttpResult full =
+      http.request("PUT", asset_target(bytes_sha256(big)), big, "application/octet-stream");
+  EXPECT_EQ(full.status, 507) << full.body;
+  EXPECT_TRUE(eventually([&] { return fs::is_empty(data / "assets" / "incoming"); },
+                         std::chrono::seconds(10)));
+  EXPECT_FALSE(fs::exists(data / "assets" / bytes_sha256(big)));
+  // The space came back: a small asset still goes in, and the server answers as before.
+  HttpClient again("http://127.0.0.1:" + std::to_string(port), std::chrono::seconds(20));
+  const std::string small = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(
+      again.request("PUT", asset_target(bytes_sha256(small)), small, "application/octet-stream")
+          .status,
+      201);
+  EXPECT_EQ(again.request("GET", "/healthz").status, 200);
+  EXPECT_FALSE(server.wait_for(std::chrono::milliseconds(0)).has_value()) << "the server died";
 }
 
 }  // namespace

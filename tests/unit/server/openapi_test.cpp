@@ -13,6 +13,7 @@
 #include <boost/asio/io_context.hpp>
 
 #include "server/api_routes.hpp"
+#include "server/asset_store.hpp"
 #include "tests/unit/server/openapi_routes.hpp"
 
 namespace tessera {
@@ -35,11 +36,9 @@ TEST(OpenApi, ServerRoutesAndTheContractAgree) {
     LongPolls job_waits(io);
     Router router;
     ApiContext context{scheduler, clock, claims, job_waits, Limits{}, 1 << 20, dir / "tmp"};
-    add_health_routes(router);
-    add_job_routes(router, context);
-    add_worker_routes(router, context);
-    add_scene_routes(router, context);
-    add_lease_routes(router, context);
+    AssetStore assets(dir / "assets", 1 << 20);
+    context.assets = &assets;
+    add_api_routes(router, context);
     const auto served_list = router.routes();
     const std::set<Route> served(served_list.begin(), served_list.end());
     const auto documented = openapi_routes(fs::path(TESSERA_SOURCE_DIR) / "docs" / "openapi.yaml");

@@ -1,0 +1,14 @@
+#include "server/api_routes.hpp"
+
+namespace tessera {
+
+void add_api_routes(Router& router, ApiContext& context, const Readiness* readiness) {
+  add_health_routes(router, readiness);
+  add_job_routes(router, context);
+  add_worker_routes(router, context);
+  add_scene_routes(router, context);
+  add_lease_routes(router, context);
+  add_asset_routes(router, context);
+}
+
+}  // namespace tessera
