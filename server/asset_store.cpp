@@ -44,6 +44,30 @@ std::optional<std::filesystem::path> AssetStore::find(std::string_view sha256) c
   return path;
 }
 
+std::optional<std::filesystem::path> AssetStore::reference(std::string_view sha256) {
+  std::lock_guard lock(mutex_);
+  auto path = find(sha256);
+  std::error_code ignored;
+  if (path)
+    std::filesystem::last_write_time(*path, std::filesystem::file_time_type::clock::now(), ignored);
+  return path;
+}
+
+std::size_t AssetStore::collect(std::chrono::seconds retention,
+                                const std::set<std::string>& in_use) {
+  std::lock_guard lock(mutex_);
+  const auto cutoff = std::filesystem::file_time_type::clock::now() - retention;
+  std::size_t removed = 0;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir_, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!is_sha256_hex(name) || in_use.contains(name) || !entry.is_regular_file(error)) continue;
+    if (entry.last_write_time(error) > cutoff || error) continue;
+    if (std::filesystem::remove(entry.path(), error)) ++removed;
+  }
+  return removed;
+}
+
 std::unique_ptr<AssetStore::Upload> AssetStore::begin_upload() {
   std::unique_ptr<Upload> upload(new Upload());
   upload->path_ = incoming_ / random_hex(32);

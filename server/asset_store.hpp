@@ -5,10 +5,13 @@
 // less (a wrong digest, a full disk, a dropped connection) leaves nothing behind.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -21,6 +24,13 @@ class AssetStore {
 
   // The file of the asset with this digest (64 lower-case hex digits), when held.
   std::optional<std::filesystem::path> find(std::string_view sha256) const;
+  // find() for a job being submitted that names the asset: its time of last reference
+  // becomes now, under the lock that collect() holds, so that an asset a submission found is
+  // never then removed for being old.
+  std::optional<std::filesystem::path> reference(std::string_view sha256);
+  // Removes each asset last referenced (or stored) longer than `retention` ago, except those
+  // in `in_use`; returns how many went.
+  std::size_t collect(std::chrono::seconds retention, const std::set<std::string>& in_use);
   std::uint64_t max_bytes() const { return max_bytes_; }
 
   // One upload in progress. Not thread-safe: one writer at a time, which the session's
@@ -55,6 +65,7 @@ class AssetStore {
   std::filesystem::path dir_;
   std::filesystem::path incoming_;
   std::uint64_t max_bytes_;
+  std::mutex mutex_;  // reference() against collect()
 };
 
 // Whether `text` is 64 lower-case hex digits.

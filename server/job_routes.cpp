@@ -149,7 +149,7 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
   std::optional<AssetSceneFiles> files;
   if (context.assets) {
     files.emplace(
-        [store = context.assets](const std::string& digest) { return store->find(digest); });
+        [store = context.assets](const std::string& digest) { return store->reference(digest); });
   }
   Scene scene;
   try {

@@ -25,6 +25,7 @@
 #include "common/secret.hpp"
 #include "server/access.hpp"
 #include "server/api_routes.hpp"
+#include "server/asset_collector.hpp"
 #include "server/asset_store.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
@@ -35,6 +36,7 @@ struct ServerOptions {
   std::string listen = "127.0.0.1:8640";
   std::string data_dir = "./tessera-data";
   std::uint64_t max_asset_bytes = std::uint64_t{2} << 30;
+  std::int64_t asset_retention_s = 7 * 24 * 3600;
   int local_workers = static_cast<int>(std::thread::hardware_concurrency());
   int worker_threads = 1;
   double lease_timeout_s = 30;
@@ -199,6 +201,9 @@ int run(const ServerOptions& options) {
     boost::asio::post(disk, std::move(work));
   };
   add_api_routes(router, context, &readiness);
+  // Before the store thread, which it reads scenes through, stops.
+  auto collector = std::make_unique<AssetCollector>(
+      assets, scheduler, std::chrono::seconds(options.asset_retention_s));
 
   HttpServerOptions http;
   http.address = host;
@@ -277,7 +282,9 @@ int run(const ServerOptions& options) {
 
   run_io(io);
   if (stopper.joinable()) stopper.join();
+  collector.reset();
   encoders.join();
+  disk.join();
   // The long polls go before the scheduler does: it may still finish a job meanwhile.
   scheduler.stop_notifying();
   spdlog::info("stopped");
@@ -309,6 +316,11 @@ void add_farm_options(CLI::App& app, ServerOptions& options) {
       ->check(CLI::PositiveNumber);
   app.add_option("--max-asset-bytes", options.max_asset_bytes,
                  "Largest asset (a mesh file, its MTL or .bin) PUT /v1/assets takes")
+      ->capture_default_str();
+  app.add_option("--asset-retention", options.asset_retention_s,
+                 "Seconds after which an asset no submission has named is removed (never one "
+                 "a queued or running job needs)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--max-tile-attempts", options.max_tile_attempts,
                  "Failures of one tile (lease expired, or an error reported) that fail its job")

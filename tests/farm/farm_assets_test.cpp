@@ -8,6 +8,8 @@
 #include <cstring>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include <gtest/gtest.h>
 
 #include "common/net/file_digest.hpp"
@@ -191,6 +193,43 @@ TEST(FarmAssets, AWorkerFetchesACorruptCacheEntryAgain) {
   ASSERT_EQ(local.exit_code, 0) << local.output;
   EXPECT_TRUE(
       same_pixels(read_image(farm.dir() / "second.exr"), read_image(farm.dir() / "local.exr")));
+}
+
+TEST(FarmAssets, CollectionRemovesOldAssetsButNeverOneAQueuedJobNeeds) {
+  // Assets not named for a second go; with no worker, the job stays queued meanwhile.
+  Farm farm("farm-asset-collection", 0, {"--asset-retention", "1"});
+  const fs::path scene = write_scene(farm.dir() / "project");
+  HttpClient http = farm.http(std::chrono::seconds(10));
+  const std::string unused = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  ASSERT_EQ(
+      http.request("PUT", asset_target(bytes_sha256(unused)), unused, "application/octet-stream")
+          .status,
+      201);
+  const CliRun submitted =
+      run_cli(farm.dir(), {"--server", farm.url(), "--json", "submit", scene.string()});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
+  const std::string obj = file_sha256(farm.dir() / "project" / "models" / "still_life.obj");
+  const std::string bin = file_sha256(farm.dir() / "project" / "models" / "tetra.bin");
+  const fs::path assets = farm.dir() / "data" / "assets";
+  ASSERT_TRUE(eventually([&] { return !fs::exists(assets / bytes_sha256(unused)); },
+                         std::chrono::seconds(20)))
+      << "an asset no job names was never removed";
+  // Three more passes (one a second) later, the queued job's assets are all still there:
+  // what must not happen has no condition to wait for, only a window to watch.
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  EXPECT_TRUE(fs::exists(assets / obj));
+  EXPECT_TRUE(fs::exists(assets / bin));
+
+  // A worker renders the job from them.
+  Process worker(TESSERA_WORKER_BIN,
+                 {"--server", farm.url(), "--threads", "2", "--name", "late", "--asset-cache",
+                  (farm.dir() / "cache").string()},
+                 farm.dir() / "late.log");
+  const nlohmann::json jobs = farm.api().jobs("queued", 10);
+  ASSERT_EQ(jobs["jobs"].size(), 1u);
+  EXPECT_EQ(farm.wait_finished(jobs["jobs"][0]["id"])["state"], "completed");
+  // Once no job needs them, they go too.
+  EXPECT_TRUE(eventually([&] { return !fs::exists(assets / obj); }, std::chrono::seconds(20)));
 }
 
 // Runs a command to completion; true when it exited 0.

@@ -1,0 +1,75 @@
+#include "server/asset_collector.hpp"
+
+#include <algorithm>
+#include <future>
+#include <limits>
+
+#include <spdlog/spdlog.h>
+
+#include "server/asset_store.hpp"
+#include "server/scheduler.hpp"
+
+namespace tessera {
+
+std::set<std::string> digests_named_in(std::string_view text) {
+  std::set<std::string> digests;
+  constexpr std::string_view prefix = "sha256:";
+  for (std::size_t at = text.find(prefix); at != std::string_view::npos;
+       at = text.find(prefix, at + prefix.size())) {
+    const std::string_view hex = text.substr(at + prefix.size(), 64);
+    if (is_sha256_hex(hex)) digests.emplace(hex);
+  }
+  return digests;
+}
+
+AssetCollector::AssetCollector(AssetStore& store, const Scheduler& scheduler,
+                               std::chrono::seconds retention)
+    : store_(store), scheduler_(scheduler), retention_(retention), thread_([this] { run(); }) {}
+
+AssetCollector::~AssetCollector() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+std::size_t AssetCollector::collect_once() {
+  // The digests of the scenes of queued and running jobs, then the assets those scenes name.
+  std::set<std::string> scenes;
+  for (const JobState state : {JobState::queued, JobState::running})
+    for (const JobStatus& job : scheduler_.jobs(state, std::numeric_limits<std::size_t>::max()))
+      scenes.insert(job.scene_digest);
+  std::set<std::string> in_use;
+  for (const std::string& scene : scenes) {
+    std::promise<std::optional<std::string>> text;
+    auto arrived = text.get_future();
+    scheduler_.scene_json(
+        scene, [&text](std::optional<std::string> json) { text.set_value(std::move(json)); });
+    // The store thread answers unless it has stopped, when removing nothing is right.
+    if (arrived.wait_for(std::chrono::minutes(1)) != std::future_status::ready) return 0;
+    const auto json = arrived.get();
+    if (!json) return 0;  // a scene of a live job not found: keep everything
+    in_use.merge(digests_named_in(*json));
+  }
+  return store_.collect(retention_, in_use);
+}
+
+void AssetCollector::run() {
+  const auto interval = std::clamp<std::chrono::seconds>(retention_ / 4, std::chrono::seconds(1),
+                                                         std::chrono::hours(1));
+  std::unique_lock lock(mutex_);
+  while (!wake_.wait_for(lock, interval, [this] { return stopping_; })) {
+    lock.unlock();
+    try {
+      if (const std::size_t removed = collect_once())
+        spdlog::info("removed {} asset(s) no job has named for {} s", removed, retention_.count());
+    } catch (const std::exception& e) {
+      spdlog::error("asset collection: {}", e.what());
+    }
+    lock.lock();
+  }
+}
+
+}  // namespace tessera
