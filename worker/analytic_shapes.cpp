@@ -1,6 +1,7 @@
 // Spheres (ellipsoids under a transform), boxes and infinite planes as Embree user
 // geometry, with exact analytic intersection in double precision. The planes' tests outside
-// Embree are in analytic_shapes_planes.cpp, and the callbacks around each shape's test in
+// Embree are in analytic_shapes_planes.cpp, cylinders and cones in
+// analytic_shapes_quadrics.cpp, and the callbacks all of them share in
 // analytic_shapes_callbacks.hpp.
 #include <algorithm>
 #include <cmath>

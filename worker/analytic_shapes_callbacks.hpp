@@ -1,6 +1,6 @@
-// What the analytic shapes' files share: the rays Embree hands a callback, the callbacks
-// themselves around each shape's test, and the bounds of a transformed box. Internal to
-// the tracer.
+// What the analytic shapes' files share (analytic_shapes.cpp, analytic_shapes_quadrics.cpp):
+// the rays Embree hands a callback, the callbacks themselves around each shape's test, and
+// the bounds of a transformed box. Internal to the tracer.
 #pragma once
 
 #include <algorithm>
