@@ -90,7 +90,24 @@ struct Mesh {
   bool thin = false;
 };
 
-using Shape = std::variant<Sphere, Plane, Box, Triangle, Mesh>;
+// A solid closed cylinder. Its axis is object-space y (the convention of Princeton's COS 426
+// ray tracer), through `center`: it spans center.y - height/2 to center.y + height/2 and is
+// closed there by two flat caps.
+struct Cylinder {
+  Vec3 center{0.0};
+  double radius = 1.0;  // > 0
+  double height = 1.0;  // > 0
+};
+
+// A solid closed cone on the same axis: its base, a capped disc of `radius`, at
+// center.y - height/2, its apex at center.y + height/2.
+struct Cone {
+  Vec3 center{0.0};
+  double radius = 1.0;  // > 0, of the base
+  double height = 1.0;  // > 0
+};
+
+using Shape = std::variant<Sphere, Plane, Box, Triangle, Mesh, Cylinder, Cone>;
 
 struct Object {
   Shape shape;
@@ -100,7 +117,8 @@ struct Object {
 
 // Solid objects refract by Snell's law; thin ones let transmitted rays pass unbent.
 inline bool is_solid(const Object& object) {
-  if (std::holds_alternative<Sphere>(object.shape) || std::holds_alternative<Box>(object.shape))
+  if (std::holds_alternative<Sphere>(object.shape) || std::holds_alternative<Box>(object.shape) ||
+      std::holds_alternative<Cylinder>(object.shape) || std::holds_alternative<Cone>(object.shape))
     return true;
   if (const auto* mesh = std::get_if<Mesh>(&object.shape)) return !mesh->thin;
   return false;

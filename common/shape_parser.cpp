@@ -55,6 +55,22 @@ Shape parse_triangle(const ObjectReader& object) {
   return triangle;
 }
 
+Shape parse_cylinder(const ObjectReader& object) {
+  Cylinder cylinder;
+  cylinder.center = object.require("center").vec3();
+  cylinder.radius = object.require("radius").number(Range::above(0.0));
+  cylinder.height = object.require("height").number(Range::above(0.0));
+  return cylinder;
+}
+
+Shape parse_cone(const ObjectReader& object) {
+  Cone cone;
+  cone.center = object.require("center").vec3();
+  cone.radius = object.require("radius").number(Range::above(0.0));
+  cone.height = object.require("height").number(Range::above(0.0));
+  return cone;
+}
+
 // The slow path, which names what is wrong: `in_range` bounds the indices.
 std::array<std::uint32_t, 3> parse_mesh_triangle(const ValueReader& value,
                                                  const std::vector<Vec3>& positions,
@@ -199,11 +215,14 @@ constexpr std::string_view plane_keys[] = {"point", "normal"};
 constexpr std::string_view box_keys[] = {"min", "max"};
 constexpr std::string_view triangle_keys[] = {"vertices", "normals"};
 constexpr std::string_view mesh_keys[] = {"positions", "triangles", "normals", "thin"};
+constexpr std::string_view cylinder_keys[] = {"center", "radius", "height"};
+constexpr std::string_view cone_keys[] = {"center", "radius", "height"};
 
 constexpr ShapeType types[] = {
     {"sphere", sphere_keys, parse_sphere}, {"plane", plane_keys, parse_plane},
     {"box", box_keys, parse_box},          {"triangle", triangle_keys, parse_triangle},
-    {"mesh", mesh_keys, parse_mesh},
+    {"mesh", mesh_keys, parse_mesh},       {"cylinder", cylinder_keys, parse_cylinder},
+    {"cone", cone_keys, parse_cone},
 };
 
 struct TriangleCount {

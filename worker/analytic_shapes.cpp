@@ -1,14 +1,21 @@
 // Spheres (ellipsoids under a transform), boxes and infinite planes as Embree user
 // geometry, with exact analytic intersection in double precision. The planes' tests outside
-// Embree are in analytic_shapes_planes.cpp.
+// Embree are in analytic_shapes_planes.cpp, cylinders and cones in
+// analytic_shapes_quadrics.cpp, and the callbacks all of them share in
+// analytic_shapes_callbacks.hpp.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 
 #include "worker/analytic_shapes.hpp"
+#include "worker/analytic_shapes_callbacks.hpp"
 #include "worker/scene_geometry.hpp"
 
 namespace tessera {
+
+using analytic_detail::Lanes;
+using analytic_detail::set_callbacks;
+using analytic_detail::transformed_bounds;
 
 namespace {
 
@@ -101,30 +108,6 @@ namespace {
 
 // Planes are infinite; Embree needs finite boxes, so they get one far beyond any scene.
 constexpr float kPlaneExtent = 1e18f;
-
-// Lanes base to end - 1 (at most 16) of the rays Embree handed over, each field's lanes as
-// a plain array: Embree's accessors index in unsigned arithmetic, which GCC cannot prove
-// free of wrap-around, and so does not vectorise.
-struct Lanes {
-  Lanes(const RTCRayN* ray, unsigned n, const int* valid, unsigned base, unsigned end)
-      : count(end - base), valid(valid + base) {
-    auto* rays = const_cast<RTCRayN*>(ray);  // the accessors take it non-const
-    org_x = &RTCRayN_org_x(rays, n, base);
-    org_y = &RTCRayN_org_y(rays, n, base);
-    org_z = &RTCRayN_org_z(rays, n, base);
-    dir_x = &RTCRayN_dir_x(rays, n, base);
-    dir_y = &RTCRayN_dir_y(rays, n, base);
-    dir_z = &RTCRayN_dir_z(rays, n, base);
-    tnear = &RTCRayN_tnear(rays, n, base);
-    tfar = &RTCRayN_tfar(rays, n, base);
-  }
-
-  std::size_t count;
-  const int* valid;
-  const float *org_x, *org_y, *org_z;
-  const float *dir_x, *dir_y, *dir_z;
-  const float *tnear, *tfar;
-};
 
 // The nearest hit on each valid lane with tnear < t < tfar, and which primitive of the
 // geometry it is on: found[i] says whether t[i] and primitive[i] hold one.
@@ -221,58 +204,15 @@ void distances(const PlaneSet& set, const Lanes& lanes, double (&t)[kPacketSize]
   }
 }
 
-// Embree hands over up to 16 rays at once. The tests of all of them run first, in a loop of
-// their own, so that their divisions and square roots overlap; the hits are recorded after.
-template <typename Shape>
-void intersect_callback(const RTCIntersectFunctionNArguments* args) {
-  const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
-  const unsigned n = args->N;
-  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, n);
-  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, n);
-  auto* context = reinterpret_cast<HitContext*>(args->context);
-  // Embree's packets hold at most 16 rays; chunks keep this right for any N all the same.
-  for (unsigned base = 0; base < n; base += kPacketSize) {
-    const unsigned end = std::min(n, base + kPacketSize);
-    double t[kPacketSize];
-    unsigned primitive[kPacketSize];
-    bool found[kPacketSize];
-    distances(shape, Lanes(ray, n, args->valid, base, end), t, primitive, found);
-    for (unsigned i = base; i < end; ++i) {
-      if (!found[i - base]) continue;
-      RTCRayN_tfar(ray, n, i) = static_cast<float>(t[i - base]);
-      context->t[RTCRayN_id(ray, n, i)] = t[i - base];
-      RTCHitN_u(hit, n, i) = 0.0f;
-      RTCHitN_v(hit, n, i) = 0.0f;
-      RTCHitN_primID(hit, n, i) = primitive[i - base];
-      RTCHitN_geomID(hit, n, i) = args->geomID;
-      RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
-    }
-  }
-}
-
-template <typename Shape>
-void occluded_callback(const RTCOccludedFunctionNArguments* args) {
-  const auto& shape = *static_cast<const Shape*>(args->geometryUserPtr);
-  const unsigned n = args->N;
-  for (unsigned base = 0; base < n; base += kPacketSize) {
-    const unsigned end = std::min(n, base + kPacketSize);
-    double t[kPacketSize];
-    unsigned primitive[kPacketSize];
-    bool found[kPacketSize];
-    distances(shape, Lanes(args->ray, n, args->valid, base, end), t, primitive, found);
-    for (unsigned i = base; i < end; ++i)
-      if (found[i - base]) RTCRayN_tfar(args->ray, n, i) = -kInfinity;
-  }
-}
-
 void plane_bounds(const RTCBoundsFunctionArguments* args) {
   *args->bounds_o = {-kPlaneExtent, -kPlaneExtent, -kPlaneExtent, 0.0f,
                      kPlaneExtent,  kPlaneExtent,  kPlaneExtent,  0.0f};
 }
 
-// Embree's box around the box from `lo` to `hi` seen through `transform`: the box around
-// its transformed corners.
-RTCBounds transformed_bounds(const Vec3& box_lo, const Vec3& box_hi, const Mat4& transform) {
+}  // namespace
+
+RTCBounds analytic_detail::transformed_bounds(const Vec3& box_lo, const Vec3& box_hi,
+                                              const Mat4& transform) {
   Vec3 lo(std::numeric_limits<double>::max());
   Vec3 hi(std::numeric_limits<double>::lowest());
   for (int corner = 0; corner < 8; ++corner) {
@@ -290,8 +230,6 @@ RTCBounds transformed_bounds(const Vec3& box_lo, const Vec3& box_hi, const Mat4&
           static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z), 0.0f};
 }
 
-}  // namespace
-
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const auto& sphere = *static_cast<const PreparedSphere*>(args->geometryUserPtr);
   // The transformed corners of the object-space cube bound the ellipsoid.
@@ -306,21 +244,15 @@ void box_bounds(const RTCBoundsFunctionArguments* args) {
 }
 
 void set_sphere_callbacks(RTCGeometry geometry) {
-  rtcSetGeometryBoundsFunction(geometry, &sphere_bounds, nullptr);
-  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PreparedSphere>);
-  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PreparedSphere>);
+  set_callbacks<PreparedSphere, distances>(geometry, &sphere_bounds);
 }
 
 void set_box_callbacks(RTCGeometry geometry) {
-  rtcSetGeometryBoundsFunction(geometry, &box_bounds, nullptr);
-  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PreparedBox>);
-  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PreparedBox>);
+  set_callbacks<PreparedBox, distances>(geometry, &box_bounds);
 }
 
 void set_plane_callbacks(RTCGeometry geometry) {
-  rtcSetGeometryBoundsFunction(geometry, &plane_bounds, nullptr);
-  rtcSetGeometryIntersectFunction(geometry, &intersect_callback<PlaneSet>);
-  rtcSetGeometryOccludedFunction(geometry, &occluded_callback<PlaneSet>);
+  set_callbacks<PlaneSet, distances>(geometry, &plane_bounds);
 }
 
 }  // namespace tessera

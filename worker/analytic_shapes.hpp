@@ -1,5 +1,5 @@
-// The analytic shapes (spheres, boxes and planes), which Embree traces through callbacks
-// as user geometry: their bounds, and their exact intersections.
+// The analytic shapes (spheres, boxes, planes, cylinders and cones), which Embree traces
+// through callbacks as user geometry: their bounds, and their exact intersections.
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -8,15 +8,20 @@
 namespace tessera {
 
 // Install bounds, intersect and occluded callbacks; the geometry's user pointer must be a
-// PreparedSphere, a PreparedBox or a PlaneSet respectively.
+// PreparedSphere, a PreparedBox, a PlaneSet, a PreparedCylinder or a PreparedCone
+// respectively.
 void set_sphere_callbacks(RTCGeometry geometry);
 void set_box_callbacks(RTCGeometry geometry);
 void set_plane_callbacks(RTCGeometry geometry);
+void set_cylinder_callbacks(RTCGeometry geometry);
+void set_cone_callbacks(RTCGeometry geometry);
 
-// The bounds Embree is given for a sphere or a box: its args' user pointer is a
-// PreparedSphere or a PreparedBox.
+// The bounds Embree is given for a sphere, a box, a cylinder or a cone: its args' user
+// pointer is a PreparedSphere, a PreparedBox, a PreparedCylinder or a PreparedCone.
 void sphere_bounds(const RTCBoundsFunctionArguments* args);
 void box_bounds(const RTCBoundsFunctionArguments* args);
+void cylinder_bounds(const RTCBoundsFunctionArguments* args);
+void cone_bounds(const RTCBoundsFunctionArguments* args);
 
 struct PlaneSet;
 // Which of the lanes with valid[i] == -1 one of the planes blocks between 0 and tfar (the

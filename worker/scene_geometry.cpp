@@ -77,6 +77,89 @@ void finish_box_hit(const Ray& ray, const PreparedBox& box, unsigned face, doubl
   hit.shading_normal = hit.normal;
 }
 
+// The frame where a cylinder's or a cone's axis is y, and the object-space point o + t·d
+// there relative to `anchor` (a cylinder's centre, a cone's apex).
+Vec3 object_point(const Ray& ray, const Mat4& world_to_object, const Vec3& anchor, double t) {
+  const Vec3 o = Vec3(world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
+  const Vec3 d = glm::dmat3(world_to_object) * Vec3(ray.direction);
+  return o + t * d - anchor;
+}
+
+// Where the point `p` (relative to the anchor, in object space) lies across the axis: its
+// distance from it, and the unit direction away from it (zero on the axis itself).
+void across_axis(const Vec3& p, double& distance, double& ux, double& uz) {
+  distance = std::sqrt(p.x * p.x + p.z * p.z);
+  const bool off_axis = distance > 0.0;
+  ux = off_axis ? p.x / distance : 0.0;
+  uz = off_axis ? p.z / distance : 0.0;
+}
+
+// A point on a cap at height y, of radius `radius`: o + t·d snapped onto its plane, and
+// into its disc should rounding have taken it past the rim.
+Vec3 cap_point(const Vec3& p, double y, double radius) {
+  double distance, ux, uz;
+  across_axis(p, distance, ux, uz);
+  if (distance <= radius) return Vec3(p.x, y, p.z);
+  return Vec3(radius * ux, y, radius * uz);
+}
+
+// A hit of a cylinder or a cone, from its object-space point and outward normal.
+void finish_axial_hit(const Vec3& point, const Vec3& normal, const Mat4& object_to_world,
+                      const glm::dmat3& normal_matrix, SurfaceHit& hit) {
+  hit.position = Vec3(object_to_world * glm::dvec4(point, 1.0));
+  hit.normal = glm::normalize(normal_matrix * normal);
+  hit.shading_normal = hit.normal;
+}
+
+void finish_cylinder_hit(const Ray& ray, const PreparedCylinder& cylinder, unsigned part,
+                         double exact_t, SurfaceHit& hit) {
+  hit.t = exact_t;
+  const Vec3 p = object_point(ray, cylinder.world_to_object, cylinder.center, exact_t);
+  const double half = cylinder.half_height;
+  // Snapping the point onto its part removes the error that o + t·d accumulates.
+  Vec3 snapped;
+  Vec3 normal(0.0);
+  if (part == kSide) {
+    double distance, ux, uz;
+    across_axis(p, distance, ux, uz);
+    snapped = Vec3(cylinder.radius * ux, std::clamp(p.y, -half, half), cylinder.radius * uz);
+    // On the axis only through rounding gone wild; a unit normal keeps the pixel finite.
+    normal = distance > 0.0 ? Vec3(ux, 0.0, uz) : Vec3(1.0, 0.0, 0.0);
+  } else {
+    const double side = part == kTopCap ? 1.0 : -1.0;
+    snapped = cap_point(p, side * half, cylinder.radius);
+    normal.y = side;
+  }
+  finish_axial_hit(cylinder.center + snapped, normal, cylinder.object_to_world,
+                   cylinder.normal_matrix, hit);
+}
+
+void finish_cone_hit(const Ray& ray, const PreparedCone& cone, unsigned part, double exact_t,
+                     SurfaceHit& hit) {
+  hit.t = exact_t;
+  const Vec3 p = object_point(ray, cone.world_to_object, cone.apex, exact_t);
+  Vec3 snapped;
+  Vec3 normal;
+  if (part == kSide) {
+    // Across the axis, the side is the segment from the apex (0, 0) to the rim (radius,
+    // -height): the point goes to the nearest point of it, which for a flat cone as for a
+    // steep one moves it no further than its error.
+    double distance, ux, uz;
+    across_axis(p, distance, ux, uz);
+    const double along =
+        std::clamp((distance * cone.radius - p.y * cone.height) / cone.slant, 0.0, cone.slant);
+    const double out = along * cone.radius / cone.slant;
+    snapped = Vec3(out * ux, -along * cone.height / cone.slant, out * uz);
+    // At the apex itself, where the side has no normal, it points up the axis.
+    normal = distance > 0.0 ? Vec3(cone.height * ux, cone.radius, cone.height * uz)
+                            : Vec3(0.0, 1.0, 0.0);
+  } else {
+    snapped = cap_point(p, -cone.height, cone.radius);
+    normal = Vec3(0.0, -1.0, 0.0);
+  }
+  finish_axial_hit(cone.apex + snapped, normal, cone.object_to_world, cone.normal_matrix, hit);
+}
+
 void finish_plane_hit(const Ray& ray, const PlaneSet& set, unsigned index, double exact_t,
                       SurfaceHit& hit) {
   const PreparedPlane& plane = set.planes[index];
@@ -190,6 +273,12 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       break;
     case Kind::triangles:
       finish_triangle_hit(ray, meshes_[record.index], primitive, t, u, v, hit);
+      break;
+    case Kind::cylinder:
+      finish_cylinder_hit(ray, *cylinders_[record.index], primitive, exact_t, hit);
+      break;
+    case Kind::cone:
+      finish_cone_hit(ray, *cones_[record.index], primitive, exact_t, hit);
       break;
   }
 }

@@ -66,6 +66,33 @@ struct PreparedBox {
   Vec3 face_normals[6];  // world space, unit, outward; by face
 };
 
+// A cylinder or a cone: its axis object-space y, seen through its object-to-world
+// transform. Hits name their part as the primitive.
+enum AxialPart : unsigned { kSide = 0, kBaseCap = 1, kTopCap = 2 };
+
+// A cylinder: its side x² + z² = r² and its caps y = ±half_height, relative to `center`.
+struct PreparedCylinder {
+  Vec3 center{0.0};  // object space
+  double radius = 1.0;
+  double half_height = 0.5;
+  Mat4 object_to_world{1.0};
+  Mat4 world_to_object{1.0};
+  glm::dmat3 normal_matrix{1.0};  // the inverse transpose, which keeps outward normals outward
+};
+
+// A cone: its side x² + z² = slope2 · y² for -height <= y <= 0 and its base cap y = -height,
+// relative to `apex`.
+struct PreparedCone {
+  Vec3 apex{0.0};       // object space
+  double radius = 1.0;  // of the base
+  double height = 1.0;
+  double slope2 = 1.0;  // (radius / height)²
+  double slant = 1.0;   // the side's length from the apex to the base's rim
+  Mat4 object_to_world{1.0};
+  Mat4 world_to_object{1.0};
+  glm::dmat3 normal_matrix{1.0};
+};
+
 struct PreparedPlane {
   Vec3 point{0.0};    // world space
   Vec3 normal{0.0};   // world space, unit
@@ -186,8 +213,8 @@ class SceneGeometry {
                              const std::uint32_t (&left)[kPacketSize],
                              bool (&may)[kPacketSize]) const;
   // The object that a ray leaving `hit` towards `direction` can never meet again, for
-  // may_meet_transmissive(): the one hit, where it is convex (a sphere or a box, under any
-  // transform) and the ray leaves its inside there; kNoObject otherwise.
+  // may_meet_transmissive(): the one hit, where it is convex (a sphere, a box, a cylinder or
+  // a cone, under any transform) and the ray leaves its inside there; kNoObject otherwise.
   std::uint32_t left_for_good(const SurfaceHit& hit, const Vec3& direction) const {
     return convex_[hit.object] && glm::dot(hit.normal, direction) > 0.0 ? hit.object : kNoObject;
   }
@@ -206,7 +233,7 @@ class SceneGeometry {
                                    unsigned mask, bool (&blocked)[kPacketSize]) const;
 
  private:
-  enum class Kind : std::uint8_t { sphere, box, plane, triangles };
+  enum class Kind : std::uint8_t { sphere, box, plane, triangles, cylinder, cone };
   struct GeometryRecord {
     Kind kind;
     std::uint32_t index;   // into the vector of its kind (for planes: which PlaneSet)
@@ -233,17 +260,20 @@ class SceneGeometry {
   void store_hits(const RayPacket& packet, const PacketQuery& query, const PacketLanes& lanes,
                   SurfaceHit (&hits)[kPacketSize], bool (&found)[kPacketSize]) const;
   void add_sphere(const Sphere& sphere, const Mat4& transform, std::uint32_t object, unsigned mask);
+  void add_cylinder(const Cylinder& cylinder, const Mat4& transform, std::uint32_t object,
+                    unsigned mask);
+  void add_cone(const Cone& cone, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_box(const Box& box, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
                  bool transmissive);
   void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
   void add_analytic_shape(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
-  // Lower and upper corners of the box around a sphere's, a box's or a mesh's record.
+  // Lower and upper corners of the box around any record's shape but a plane's.
   std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;
   // The nearest opaque plane with 0 < t < t_max on the ray, as for a lane of a packet: its
   // index in plane_sets_[0] and distance, or -1 if `mask` leaves them out or none is there.
   int nearest_opaque_plane(const Ray& ray, float t_max, unsigned mask, double& t) const;
-  // `exact_t` is the callback's distance, for spheres and planes.
+  // `exact_t` is the callback's distance, for every shape but triangles.
   void finish_hit(const Ray& ray, unsigned geometry, unsigned primitive, float t, float u, float v,
                   double exact_t, SurfaceHit& hit) const;
 
@@ -264,10 +294,12 @@ class SceneGeometry {
     return (box.object != left) | (left == kNoObject);
   }
   std::vector<TransmissiveBounds> transmissive_bounds_;
-  std::vector<std::uint8_t> convex_;  // by object: a sphere or a box
+  std::vector<std::uint8_t> convex_;  // by object: a sphere, a box, a cylinder or a cone
   // Kept at stable addresses: Embree's callbacks hold pointers to these elements.
   std::vector<std::unique_ptr<PreparedSphere>> spheres_;
   std::vector<std::unique_ptr<PreparedBox>> boxes_;
+  std::vector<std::unique_ptr<PreparedCylinder>> cylinders_;
+  std::vector<std::unique_ptr<PreparedCone>> cones_;
   PlaneSet plane_sets_[2];  // opaque, transmissive
   // The record of plane_sets_[0], after every Embree geometry's (and its Embree geometry
   // id with OpaquePlanes::also_in_embree).

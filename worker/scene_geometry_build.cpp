@@ -29,12 +29,18 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
             add_box(shape, object.transform, i, mask);
           else if constexpr (std::is_same_v<T, Plane>)
             add_plane(shape, object.transform, i, transmissive);
+          else if constexpr (std::is_same_v<T, Cylinder>)
+            add_cylinder(shape, object.transform, i, mask);
+          else if constexpr (std::is_same_v<T, Cone>)
+            add_cone(shape, object.transform, i, mask);
           else
             add_triangles(triangulate(shape, object.transform), i, mask);
         },
         object.shape);
     convex_.push_back(std::holds_alternative<Sphere>(object.shape) ||
-                      std::holds_alternative<Box>(object.shape));
+                      std::holds_alternative<Box>(object.shape) ||
+                      std::holds_alternative<Cylinder>(object.shape) ||
+                      std::holds_alternative<Cone>(object.shape));
     if (transmissive) {
       // A plane has no record yet (the plane sets are added last), and no bounds anyway.
       const bool plane = std::holds_alternative<Plane>(object.shape);
@@ -78,6 +84,12 @@ void SceneGeometry::add_analytic_shape(Kind kind, std::uint32_t index, std::uint
   } else if (kind == Kind::box) {
     rtcSetGeometryUserData(geometry, boxes_[index].get());
     set_box_callbacks(geometry);
+  } else if (kind == Kind::cylinder) {
+    rtcSetGeometryUserData(geometry, cylinders_[index].get());
+    set_cylinder_callbacks(geometry);
+  } else if (kind == Kind::cone) {
+    rtcSetGeometryUserData(geometry, cones_[index].get());
+    set_cone_callbacks(geometry);
   } else {
     rtcSetGeometryUserData(geometry, &plane_sets_[index]);
     set_plane_callbacks(geometry);
@@ -151,6 +163,37 @@ void SceneGeometry::add_box(const Box& box, const Mat4& transform, std::uint32_t
   add_analytic_shape(Kind::box, static_cast<std::uint32_t>(boxes_.size() - 1), object, mask);
 }
 
+void SceneGeometry::add_cylinder(const Cylinder& cylinder, const Mat4& transform,
+                                 std::uint32_t object, unsigned mask) {
+  auto prepared = std::make_unique<PreparedCylinder>();
+  prepared->center = cylinder.center;
+  prepared->radius = cylinder.radius;
+  prepared->half_height = cylinder.height / 2.0;
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  // The inverse transpose keeps an outward normal outward even under a mirroring transform.
+  prepared->normal_matrix = glm::transpose(glm::dmat3(prepared->world_to_object));
+  cylinders_.push_back(std::move(prepared));
+  add_analytic_shape(Kind::cylinder, static_cast<std::uint32_t>(cylinders_.size() - 1), object,
+                     mask);
+}
+
+void SceneGeometry::add_cone(const Cone& cone, const Mat4& transform, std::uint32_t object,
+                             unsigned mask) {
+  auto prepared = std::make_unique<PreparedCone>();
+  prepared->apex = cone.center + Vec3(0.0, cone.height / 2.0, 0.0);
+  prepared->radius = cone.radius;
+  prepared->height = cone.height;
+  const double slope = cone.radius / cone.height;
+  prepared->slope2 = slope * slope;
+  prepared->slant = std::sqrt(cone.radius * cone.radius + cone.height * cone.height);
+  prepared->object_to_world = transform;
+  prepared->world_to_object = glm::inverse(transform);
+  prepared->normal_matrix = glm::transpose(glm::dmat3(prepared->world_to_object));
+  cones_.push_back(std::move(prepared));
+  add_analytic_shape(Kind::cone, static_cast<std::uint32_t>(cones_.size() - 1), object, mask);
+}
+
 void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
                               bool transmissive) {
   const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
@@ -205,16 +248,22 @@ void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t obj
 }
 
 std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
-  if (record.kind == Kind::sphere || record.kind == Kind::box) {
+  if (record.kind != Kind::triangles) {
     RTCBounds bounds{};
     RTCBoundsFunctionArguments args{};
     args.bounds_o = &bounds;
     if (record.kind == Kind::sphere) {
       args.geometryUserPtr = spheres_[record.index].get();
       sphere_bounds(&args);
-    } else {
+    } else if (record.kind == Kind::box) {
       args.geometryUserPtr = boxes_[record.index].get();
       box_bounds(&args);
+    } else if (record.kind == Kind::cylinder) {
+      args.geometryUserPtr = cylinders_[record.index].get();
+      cylinder_bounds(&args);
+    } else {
+      args.geometryUserPtr = cones_[record.index].get();
+      cone_bounds(&args);
     }
     return {{bounds.lower_x, bounds.lower_y, bounds.lower_z},
             {bounds.upper_x, bounds.upper_y, bounds.upper_z}};

@@ -12,7 +12,7 @@ namespace {
 
 using test::json;
 
-// Every feature at once, with several samples per pixel.
+// Every feature and every shape at once, with several samples per pixel.
 json busy_scene() {
   return {
       {"image", {{"width", 67}, {"height", 45}}},
@@ -44,7 +44,32 @@ json busy_scene() {
         {{"type", "box"},
          {"min", {-0.4, 0, -2}},
          {"max", {0.4, 1.5, -1.2}},
-         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}}}}};
+         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}},
+        // Cylinders and cones, tilted and squashed: glass that bends and reflects rays
+        // inside it, a mirror, and a diffuse one whose shadow falls through the glass.
+        {{"type", "cylinder"},
+         {"center", {0, 0, 0}},
+         {"radius", 0.45},
+         {"height", 1.2},
+         {"material", "glass"},
+         {"transform",
+          {{{"rotate", {{"axis", {0, 0, 1}}, {"degrees", 25}}}},
+           {{"translate", {2.5, 0.7, -0.6}}}}}},
+        {{"type", "cone"},
+         {"center", {-2.6, 0.75, -0.5}},
+         {"radius", 0.6},
+         {"height", 1.5},
+         {"material", "mirror"},
+         {"transform", {{{"scale", {1, 1, 0.7}}}}}},
+        {{"type", "cylinder"}, {"center", {0.2, 0.25, 1.8}}, {"radius", 0.3}, {"height", 0.5}},
+        {{"type", "cone"},
+         {"center", {0, 0, 0}},
+         {"radius", 0.4},
+         {"height", 0.9},
+         {"material", "glass"},
+         {"transform",
+          {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 100}}}},
+           {{"translate", {-1, 0.4, 1.6}}}}}}}}};
 }
 
 TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {

@@ -111,7 +111,7 @@ TEST(Examples, CoverEveryFeature) {
     deep |= scene.render.max_depth >= 12;
   }
   EXPECT_EQ(lights.size(), 3u);
-  EXPECT_EQ(shapes.size(), 5u);
+  EXPECT_EQ(shapes.size(), 7u);
   EXPECT_TRUE(checker);
   EXPECT_TRUE(transmissive);
   EXPECT_TRUE(deep);
