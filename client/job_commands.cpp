@@ -207,19 +207,30 @@ int submit(const Options& options, CoordinatorClient& api) {
   } catch (const std::exception& e) {
     fail(kExitUsage, e.what());
   }
-  // The scene's mesh files go first, as assets the scene then names by digest.
-  try {
-    const AssetUploads sent = send_scene_assets(scene, folder, api, stderr);
-    if (sent.uploaded + sent.held > 0)
-      std::fprintf(stderr, "assets: %zu uploaded (%llu bytes), %zu already on the coordinator\n",
-                   sent.uploaded, static_cast<unsigned long long>(sent.bytes), sent.held);
-  } catch (const SceneFileError& e) {
-    fail(kExitUsage, options.scene_path + ": " + e.what());
-  }
   const std::string name = options.name.empty()
                                ? std::filesystem::path(options.scene_path).stem().string()
                                : options.name;
-  const protocol::JobStatus job = api.submit({name, options.priority, std::move(scene)});
+  // The scene's mesh files go first, as assets the scene then names by digest. An asset the
+  // coordinator removed between its answer and the submission (its collection of old
+  // assets) is sent again, once.
+  const auto send_and_submit = [&](nlohmann::json with_files) {
+    try {
+      const AssetUploads sent = send_scene_assets(with_files, folder, api, stderr);
+      if (sent.uploaded + sent.held > 0)
+        std::fprintf(stderr, "assets: %zu uploaded (%llu bytes), %zu already on the coordinator\n",
+                     sent.uploaded, static_cast<unsigned long long>(sent.bytes), sent.held);
+    } catch (const SceneFileError& e) {
+      fail(kExitUsage, options.scene_path + ": " + e.what());
+    }
+    return api.submit({name, options.priority, std::move(with_files)});
+  };
+  protocol::JobStatus job;
+  try {
+    job = send_and_submit(scene);
+  } catch (const ApiError& e) {
+    if (e.code() != "missing_asset") throw;
+    job = send_and_submit(std::move(scene));
+  }
   const std::string id = job.id;
   if (options.json_output && !options.wait && options.output.empty())
     print_json(protocol::to_json(job));

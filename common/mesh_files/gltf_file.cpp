@@ -42,7 +42,7 @@ bool read_whole(std::vector<unsigned char>* out, std::string* err, const std::st
   if (!path) return false;
   auto* files = static_cast<BundleFiles*>(user);
   try {
-    const ModelSource file{*path, name, files->source->bundle, files->source->request};
+    const ModelSource file{*path, name, files->source->bundle, files->source->request, {}};
     const std::string bytes = file.read(std::uint64_t{1} << 32);
     out->assign(bytes.begin(), bytes.end());
     return true;

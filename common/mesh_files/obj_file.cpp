@@ -48,7 +48,7 @@ class BundleMaterials : public tinyobj::MaterialReader {
                   std::map<std::string, int>* names, std::string* warn, std::string* err) override {
     const std::string where = line_at(find_line(obj_, "mtllib", 0, name));
     const std::filesystem::path path = source_.dependency(name, where);
-    ModelSource mtl{path, name, source_.bundle, source_.request};
+    ModelSource mtl{path, name, source_.bundle, source_.request, {}};
     const std::string text = mtl.read(std::uint64_t{1} << 28);
     std::istringstream stream(text);
     tinyobj::LoadMtl(names, materials, &stream, warn, err);

@@ -12,6 +12,7 @@
 
 #include "common/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
+#include "common/scn_import.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
 
 namespace tessera {
@@ -38,8 +39,15 @@ std::vector<Example> examples() {
   list.push_back({"mesh", fs::path(TESSERA_BINARY_DIR) / "examples" / "mesh.json"});
   list.push_back(
       {"gltf_carousel", fs::path(TESSERA_BINARY_DIR) / "examples" / "gltf_carousel.json"});
+  list.push_back(
+      {"course_temple", fs::path(TESSERA_SOURCE_DIR) / "examples" / "course" / "temple.scn"});
   std::sort(list.begin(), list.end(), [](auto& a, auto& b) { return a.name < b.name; });
   return list;
+}
+
+// An example's scene: JSON, or a COS 426 .scn converted as `tessera render` converts it.
+nlohmann::json read_example(const fs::path& path) {
+  return path.extension() == ".scn" ? import_scn(path) : read_json_file(path);
 }
 
 void PrintTo(const Example& example, std::ostream* out) { *out << example.name; }
@@ -47,7 +55,7 @@ void PrintTo(const Example& example, std::ostream* out) { *out << example.name; 
 class Golden : public ::testing::TestWithParam<Example> {};
 
 TEST_P(Golden, MatchesReferenceImage) {
-  nlohmann::json document = read_json_file(GetParam().path);
+  nlohmann::json document = read_example(GetParam().path);
   const int width = document["image"]["width"];
   const int height = document["image"]["height"];
   document["image"]["width"] = kGoldenWidth;
@@ -97,7 +105,7 @@ TEST(Examples, CoverEveryFeature) {
   bool checker = false, transmissive = false, deep = false, big_mesh = false;
   for (const Example& example : examples()) {
     const FolderSceneFiles files(example.path.parent_path());
-    const Scene scene = parse_scene(read_json_file(example.path), Limits{}, nullptr, &files);
+    const Scene scene = parse_scene(read_example(example.path), Limits{}, nullptr, &files);
     for (const Light& light : scene.lights) lights.insert(std::to_string(light.index()));
     for (const Object& object : scene.objects) {
       shapes.insert(std::to_string(object.shape.index()));
