@@ -5,6 +5,7 @@
 #include <numbers>
 #include <string>
 
+#include "common/scene_files.hpp"
 #include "common/scn_importer.hpp"
 
 namespace tessera::scn {
@@ -21,16 +22,6 @@ json row_major(const Mat4& m) {
   for (int row = 0; row < 4; ++row)
     for (int col = 0; col < 4; ++col) rows.push_back(m[col][row]);
   return rows;
-}
-
-// As parse_scene's test: zero area relative to the triangle's own size.
-bool is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 e1 = b - a;
-  const Vec3 e2 = c - a;
-  const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z), std::abs(e2.x),
-                                 std::abs(e2.y), std::abs(e2.z)});
-  if (!(scale > 0.0) || !std::isfinite(scale)) return true;
-  return glm::length(glm::cross(e1 / scale, e2 / scale)) <= 1e-12;
 }
 
 Vec3 unit(const Vec3& v) { return v / std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); }

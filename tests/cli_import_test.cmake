@@ -3,13 +3,7 @@
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}/scenes" "${WORK_DIR}/meshes" "${WORK_DIR}/out")
 
-# expect(<if() condition words...> MESSAGE <text>): fails the test unless the condition holds.
-function(expect)
-  cmake_parse_arguments(PARSE_ARGV 0 arg "" "MESSAGE" "")
-  if(NOT (${arg_UNPARSED_ARGUMENTS}))
-    message(FATAL_ERROR "${arg_MESSAGE}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_expect.cmake)
 
 # A .scn scene becomes a JSON scene that renders.
 file(WRITE "${WORK_DIR}/scenes/room.scn" [=[

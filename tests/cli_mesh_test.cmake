@@ -4,12 +4,7 @@
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}/models")
 
-function(expect)
-  cmake_parse_arguments(PARSE_ARGV 0 arg "" "MESSAGE" "")
-  if(NOT (${arg_UNPARSED_ARGUMENTS}))
-    message(FATAL_ERROR "${arg_MESSAGE}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_expect.cmake)
 
 # The example's OBJ and MTL are found beside the scene, from any working directory.
 execute_process(

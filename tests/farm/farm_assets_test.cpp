@@ -232,30 +232,14 @@ TEST(FarmAssets, CollectionRemovesOldAssetsButNeverOneAQueuedJobNeeds) {
   EXPECT_TRUE(eventually([&] { return !fs::exists(assets / obj); }, std::chrono::seconds(20)));
 }
 
-// Runs a command to completion; true when it exited 0.
-bool run_command(const std::string& binary, const std::vector<std::string>& args,
-                 const fs::path& log) {
-  Process process(binary, args, log);
-  const auto status = process.wait_for(std::chrono::seconds(20));
-  return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
-}
-
 TEST(FarmAssets, ADiskThatFillsMidUploadLeavesNoPartialAssetAndTheServerKeepsServing) {
   const fs::path dir = fresh_dir("farm-asset-disk-full");
   const fs::path data = dir / "data";
-  fs::create_directories(data);
-  // A 4 MiB file system for the data dir: as root, a tmpfs of that size.
-  if (::geteuid() != 0 ||
-      !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=4m", "tmpfs", data.string()},
-                   dir / "mount.log"))
+  // A 4 MiB file system for the data dir.
+  const SmallDisk disk(data, "4m");
+  if (!disk.mounted())
     GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
                  << (dir / "mount.log");
-  struct Unmount {
-    fs::path path;
-    ~Unmount() {
-      run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log");
-    }
-  } unmount{data};
   Process server(TESSERA_SERVER_BIN,
                  {"--listen", "127.0.0.1:0", "--data-dir", data.string(), "--local-workers", "0",
                   "--port-file", (dir / "port").string(), "--log-level", "warn"},

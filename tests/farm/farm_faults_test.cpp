@@ -271,30 +271,14 @@ TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob
   EXPECT_GE(reporters, 2) << "the tile was not retried on another worker";
 }
 
-// Runs a command to completion; true when it exited 0.
-bool run_command(const std::string& binary, const std::vector<std::string>& args,
-                 const fs::path& log) {
-  test::Process process(binary, args, log);
-  const auto status = process.wait_for(20s);
-  return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
-}
-
 TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   const fs::path dir = test::fresh_dir("fault-disk-full");
   const fs::path data = dir / "data";
-  fs::create_directories(data);
-  // A 2 MiB file system for the data dir: as root, a tmpfs of that size.
-  if (::geteuid() != 0 ||
-      !run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=2m", "tmpfs", data.string()},
-                   dir / "mount.log"))
+  // A 2 MiB file system for the data dir.
+  const test::SmallDisk disk(data, "2m");
+  if (!disk.mounted())
     GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
                  << (dir / "mount.log");
-  struct Unmount {
-    fs::path path;
-    ~Unmount() {
-      run_command("/bin/umount", {"-l", path.string()}, path.parent_path() / "umount.log");
-    }
-  } unmount{data};
 
   auto server = std::make_unique<test::Process>(
       TESSERA_SERVER_BIN,

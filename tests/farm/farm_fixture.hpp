@@ -4,6 +4,9 @@
 // never share a data dir or a log.
 #pragma once
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -180,6 +183,39 @@ inline ::testing::AssertionResult same_pixels(const Image& actual, const Image& 
 inline bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
+
+// Runs a command to completion; true when it exited 0.
+inline bool run_command(const std::string& binary, const std::vector<std::string>& args,
+                        const farm_fs::path& log) {
+  Process process(binary, args, log);
+  const auto status = process.wait_for(std::chrono::seconds(20));
+  return status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0;
+}
+
+// A file system of `size` bytes (mount's size=, "2m") on `dir` while it lives, for tests of
+// a full disk: a tmpfs, which needs root. mounted() says whether it is there; why not is in
+// `dir`'s sibling mount.log.
+class SmallDisk {
+ public:
+  SmallDisk(const farm_fs::path& dir, const std::string& size) : dir_(dir) {
+    farm_fs::create_directories(dir);
+    mounted_ =
+        ::geteuid() == 0 &&
+        run_command("/bin/mount", {"-t", "tmpfs", "-o", "size=" + size, "tmpfs", dir.string()},
+                    dir.parent_path() / "mount.log");
+  }
+  ~SmallDisk() {
+    if (mounted_)
+      run_command("/bin/umount", {"-l", dir_.string()}, dir_.parent_path() / "umount.log");
+  }
+  SmallDisk(const SmallDisk&) = delete;
+  SmallDisk& operator=(const SmallDisk&) = delete;
+  bool mounted() const { return mounted_; }
+
+ private:
+  farm_fs::path dir_;
+  bool mounted_ = false;
+};
 
 // A finished tessera CLI run: its exit code and everything it printed (stdout and stderr).
 struct CliRun {
