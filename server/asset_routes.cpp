@@ -2,6 +2,9 @@
 // /v1/scene-assets/{digest} for workers (GET fetches). An upload streams to the disk
 // through a BodySink, a mebibyte at a time, written on the blocking pool: the network's
 // threads neither hold the body nor wait on the disk.
+#include <deque>
+#include <mutex>
+
 #include "common/protocol/assets.hpp"
 #include "common/protocol/paths.hpp"
 #include "server/access.hpp"
@@ -29,41 +32,118 @@ HttpResponse bad_digest(const HttpRequest& request) {
                             request.params.at("digest") + "\"");
 }
 
-class UploadSink : public BodySink {
+// Pieces are written in order by one task at a time on the disk pool, while the session
+// reads the next: the sink takes a piece at once while fewer than kQueued wait, so the
+// network and the disk work side by side with at most that many mebibytes held.
+class UploadSink : public BodySink, public std::enable_shared_from_this<UploadSink> {
  public:
   UploadSink(std::unique_ptr<AssetStore::Upload> upload, ApiContext& context)
       : upload_(std::move(upload)), context_(context) {}
 
   void write(std::string piece, std::function<void(bool)> done) override {
-    context_.run_disk(
-        [this, piece = std::move(piece), done = std::move(done)] { done(upload_->write(piece)); });
+    std::unique_lock lock(mutex_);
+    if (failed_) {
+      lock.unlock();
+      return done(false);  // the disk refused an earlier piece: stop reading the body
+    }
+    queue_.push_back(std::move(piece));
+    start_writing();
+    if (queue_.size() < kQueued) {
+      lock.unlock();
+      return done(true);
+    }
+    waiting_ = std::move(done);  // told once the writer has made room
+  }
+
+  // Calls `then` (on the disk pool, or here) once every piece taken is written: with
+  // whether all were.
+  void when_written(std::function<void(bool)> then) {
+    std::unique_lock lock(mutex_);
+    if (writing_) {
+      written_ = std::move(then);
+      return;
+    }
+    const bool ok = !failed_;
+    lock.unlock();
+    then(ok);
   }
   AssetStore::Upload& upload() { return *upload_; }
 
  private:
+  static constexpr std::size_t kQueued = 2;
+
+  void start_writing() {  // with mutex_ held
+    if (writing_ || queue_.empty()) return;
+    writing_ = true;
+    context_.run_disk([self = shared_from_this()] { self->write_queued(); });
+  }
+
+  void write_queued() {
+    std::unique_lock lock(mutex_);
+    while (!queue_.empty()) {
+      std::string piece = std::move(queue_.front());
+      queue_.pop_front();
+      lock.unlock();
+      const bool ok = failed_ ? false : upload_->write(piece);
+      lock.lock();
+      if (!ok) {
+        failed_ = true;
+        queue_.clear();
+      }
+      if (waiting_ && (queue_.size() < kQueued || failed_)) {
+        auto resume = std::move(waiting_);
+        waiting_ = nullptr;
+        const bool taken = !failed_;
+        lock.unlock();
+        resume(taken);
+        lock.lock();
+      }
+    }
+    writing_ = false;
+    auto then = std::move(written_);
+    written_ = nullptr;
+    const bool ok = !failed_;
+    lock.unlock();
+    if (then) then(ok);
+  }
+
   std::unique_ptr<AssetStore::Upload> upload_;
   ApiContext& context_;
+  std::mutex mutex_;
+  std::deque<std::string> queue_;
+  bool writing_ = false;
+  bool failed_ = false;
+  std::function<void(bool)> waiting_;  // the session's, for a piece taken once there is room
+  std::function<void(bool)> written_;  // put_asset's, once the queue is written
 };
+
+HttpResponse stored(ApiContext& context, UploadSink& sink, const std::string& digest) {
+  std::string actual;
+  switch (context.assets->commit(sink.upload(), digest, &actual)) {
+    case AssetStore::Committed::added:
+      return body_response(201, protocol::AssetStored{"sha256:" + digest, true});
+    case AssetStore::Committed::already_held:
+      return body_response(200, protocol::AssetStored{"sha256:" + digest, false});
+    case AssetStore::Committed::wrong_digest:
+      return error_response(400, "digest_mismatch",
+                            "the body's SHA-256 is sha256:" + actual + ", not sha256:" + digest +
+                                "; nothing was stored");
+    case AssetStore::Committed::failed:
+      break;
+  }
+  return error_response(507, "insufficient_storage", "the coordinator could not store the asset");
+}
 
 void put_asset(ApiContext& context, HttpRequest&& request, Respond respond) {
   const auto digest = digest_of(request);
   auto sink = std::static_pointer_cast<UploadSink>(request.body_sink);
   if (!digest || !sink) return respond(bad_digest(request));
-  context.run_disk([&context, sink, digest = *digest, respond = std::move(respond)] {
-    std::string actual;
-    switch (context.assets->commit(sink->upload(), digest, &actual)) {
-      case AssetStore::Committed::added:
-        return respond(body_response(201, protocol::AssetStored{"sha256:" + digest, true}));
-      case AssetStore::Committed::already_held:
-        return respond(body_response(200, protocol::AssetStored{"sha256:" + digest, false}));
-      case AssetStore::Committed::wrong_digest:
-        return respond(error_response(400, "digest_mismatch",
-                                      "the body's SHA-256 is sha256:" + actual +
-                                          ", not sha256:" + digest + "; nothing was stored"));
-      case AssetStore::Committed::failed:
-        return respond(error_response(507, "insufficient_storage",
-                                      "the coordinator could not store the asset"));
-    }
+  sink->when_written([&context, sink, digest = *digest, respond = std::move(respond)](bool ok) {
+    if (!ok)
+      return respond(
+          error_response(507, "insufficient_storage", "the coordinator could not store the asset"));
+    context.run_disk(
+        [&context, sink, digest, respond] { respond(stored(context, *sink, digest)); });
   });
 }
 
