@@ -1,5 +1,7 @@
 #include "common/mesh_files/folder_scene_files.hpp"
 
+#include <map>
+
 #include "common/mesh_files/model_source.hpp"
 
 namespace tessera {
@@ -52,20 +54,23 @@ Model AssetSceneFiles::load_model(const MeshFileRequest& request) const {
   }
   const auto model = locate_(*request.asset);
   if (!model) throw AssetNotHeld{"", *request.asset};
-  // Every asset the scene names must be there, whether or not the model reads it.
-  for (const auto& [name, digest] : request.files)
-    if (!locate_(digest)) throw AssetNotHeld{name, digest};
+  // Every asset the scene names must be there, whether or not the model reads it; each is
+  // located once (on a worker, fetched or checked against its digest) and read from there.
+  std::map<std::string, std::filesystem::path> held;
+  for (const auto& [name, digest] : request.files) {
+    auto path = locate_(digest);
+    if (!path) throw AssetNotHeld{name, digest};
+    held.emplace(name, std::move(*path));
+  }
   ModelSource source{*model, request.file, {}, &request, {}};
-  source.lookup = [this, &request](const std::string& name, const std::string& where) {
-    const auto digest = request.files.find(name);
-    if (digest == request.files.end()) {
+  source.lookup = [&held, &request](const std::string& name, const std::string& where) {
+    const auto path = held.find(name);
+    if (path == held.end()) {
       throw SceneFileError(
           request.file, where,
           "names \"" + name + "\", which the scene's \"files\" do not map to an asset");
     }
-    const auto path = locate_(digest->second);
-    if (!path) throw AssetNotHeld{name, digest->second};
-    return *path;
+    return path->second;
   };
   return read_model(source);
 }
