@@ -16,10 +16,12 @@
 
 #include "bench/median.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
+#include "examples/gltf_bytes.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using tessera::gltf_bytes::append;
 
 // A side × side grid of squares, two triangles each, rippled so that no triangle is flat
 // with its neighbour.
@@ -29,11 +31,6 @@ struct Grid {
   float y(int i, int j) const { return 0.05f * static_cast<float>(((i * 7 + j * 13) % 11)) / 11.f; }
   std::uint32_t index(int i, int j) const { return static_cast<std::uint32_t>(j * (side + 1) + i); }
 };
-
-template <typename T>
-void put(std::string& out, T value) {
-  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
-}
 
 void write_file(const fs::path& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary)
@@ -62,17 +59,17 @@ void vertices_and_indices(const Grid& g, std::string& vertices, std::string& ind
                           bool ply_faces) {
   for (int j = 0; j <= g.side; ++j)
     for (int i = 0; i <= g.side; ++i) {
-      put(vertices, g.x(i));
-      put(vertices, g.y(i, j));
-      put(vertices, g.x(j));
+      append(vertices, g.x(i));
+      append(vertices, g.y(i, j));
+      append(vertices, g.x(j));
     }
   for (int j = 0; j < g.side; ++j)
     for (int i = 0; i < g.side; ++i)
       for (const auto& t :
            {std::array{g.index(i, j), g.index(i, j + 1), g.index(i + 1, j)},
             std::array{g.index(i + 1, j), g.index(i, j + 1), g.index(i + 1, j + 1)}}) {
-        if (ply_faces) put(indices, std::uint8_t{3});
-        for (const std::uint32_t v : t) put(indices, v);
+        if (ply_faces) append(indices, std::uint8_t{3});
+        for (const std::uint32_t v : t) append(indices, v);
       }
 }
 
@@ -108,18 +105,7 @@ std::string glb(const Grid& g) {
       "},{\"buffer\":0,\"byteOffset\":" + std::to_string(vertex_bytes) +
       ",\"byteLength\":" + std::to_string(indices.size()) +
       "}],\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + "}]}";
-  while (json.size() % 4) json += ' ';
-  while (bin.size() % 4) bin += '\0';
-  std::string out;
-  put(out, std::uint32_t{0x46546C67});
-  put(out, std::uint32_t{2});
-  put(out, static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
-  put(out, static_cast<std::uint32_t>(json.size()));
-  put(out, std::uint32_t{0x4E4F534A});
-  out += json;
-  put(out, static_cast<std::uint32_t>(bin.size()));
-  put(out, std::uint32_t{0x004E4942});
-  return out + bin;
+  return tessera::gltf_bytes::glb(std::move(json), std::move(bin));
 }
 
 }  // namespace

@@ -16,25 +16,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "examples/gltf_bytes.hpp"
+
 namespace {
 
 using nlohmann::json;
-
-std::string base64(const std::string& bytes) {
-  static constexpr char digits[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    std::uint32_t n = static_cast<unsigned char>(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) n |= static_cast<unsigned char>(bytes[i + 1]) << 8;
-    if (i + 2 < bytes.size()) n |= static_cast<unsigned char>(bytes[i + 2]);
-    out += digits[(n >> 18) & 63];
-    out += digits[(n >> 12) & 63];
-    out += i + 1 < bytes.size() ? digits[(n >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? digits[n & 63] : '=';
-  }
-  return out;
-}
 
 // The buffer and its views and accessors, filled one array at a time.
 struct Builder {
@@ -152,7 +138,8 @@ json model() {
           {"bufferViews", b.views},
           {"buffers",
            {{{"byteLength", b.bytes.size()},
-             {"uri", "data:application/octet-stream;base64," + base64(b.bytes)}}}}};
+             {"uri",
+              "data:application/octet-stream;base64," + tessera::gltf_bytes::base64(b.bytes)}}}}};
 }
 
 json scene() {

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "common/net/file_digest.hpp"
+#include "examples/gltf_bytes.hpp"
 #include "tests/farm/farm_fixture.hpp"
 
 namespace tessera::test {
@@ -20,16 +21,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-template <typename T>
-void put(std::string& out, T value) {
-  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
-}
-
 // A tetrahedron in a .gltf whose buffer is a .bin beside it.
 void write_tetrahedron_gltf(const fs::path& dir) {
   std::string bin;
-  for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f}) put(bin, v);
-  for (const std::uint16_t i : {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}) put(bin, i);
+  for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f})
+    gltf_bytes::append(bin, v);
+  for (const std::uint16_t i : {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}) gltf_bytes::append(bin, i);
   write_text(dir / "tetra.bin", bin);
   write_text(dir / "tetra.gltf", nlohmann::json::parse(R"({
     "asset": {"version": "2.0"},

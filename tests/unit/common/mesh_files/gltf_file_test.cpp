@@ -4,39 +4,22 @@
 #include <gmock/gmock.h>
 #include <nlohmann/json.hpp>
 
+#include "examples/gltf_bytes.hpp"
 #include "mesh_file_support.hpp"
 
 namespace tessera {
 namespace {
 
+using gltf_bytes::append;
+using gltf_bytes::base64;
 using ::testing::HasSubstr;
-
-std::string base64(std::string_view bytes) {
-  static constexpr char digits[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    std::uint32_t n = static_cast<unsigned char>(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) n |= static_cast<unsigned char>(bytes[i + 1]) << 8;
-    if (i + 2 < bytes.size()) n |= static_cast<unsigned char>(bytes[i + 2]);
-    out += digits[(n >> 18) & 63];
-    out += digits[(n >> 12) & 63];
-    out += i + 1 < bytes.size() ? digits[(n >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? digits[n & 63] : '=';
-  }
-  return out;
-}
-
-template <typename T>
-void put(std::string& out, T value) {
-  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
-}
 
 // A unit square as two triangles: four float positions, then six 16-bit indices.
 std::string square_buffer(std::array<std::uint16_t, 6> indices = {0, 1, 2, 0, 2, 3}) {
   std::string bytes;
-  for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 1.f, 0.f, 0.f, 1.f, 0.f}) put(bytes, v);
-  for (const std::uint16_t i : indices) put(bytes, i);
+  for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 1.f, 0.f, 0.f, 1.f, 0.f})
+    append(bytes, v);
+  for (const std::uint16_t i : indices) append(bytes, i);
   return bytes;
 }
 
@@ -147,14 +130,13 @@ TEST_F(GltfFile, StripsAndFansBecomeCounterClockwiseTriangles) {
 }
 
 // A .glb with interleaved positions and normals (stride 24) and 8-bit indices.
-std::string glb() {
+std::string interleaved_glb() {
   std::string bin;
   const float vertices[3][6] = {{0, 0, 0, 0, 0, 1}, {1, 0, 0, 0, 0, 1}, {0, 1, 0, 0, 0, 1}};
   for (const auto& v : vertices)
-    for (const float f : v) put(bin, f);
-  for (const std::uint8_t i : {0, 1, 2}) put(bin, i);
-  while (bin.size() % 4) bin += '\0';
-  std::string json = nlohmann::json::parse(R"({
+    for (const float f : v) append(bin, f);
+  for (const std::uint8_t i : {0, 1, 2}) append(bin, i);
+  const std::string json = nlohmann::json::parse(R"({
     "asset": {"version": "2.0"},
     "nodes": [{"mesh": 0}],
     "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}]}],
@@ -166,23 +148,12 @@ std::string glb() {
                     {"buffer": 0, "byteOffset": 72, "byteLength": 3}],
     "buffers": [{"byteLength": 76}]
   })")
-                         .dump();
-  while (json.size() % 4) json += ' ';
-  std::string out;
-  put(out, std::uint32_t{0x46546C67});
-  put(out, std::uint32_t{2});
-  put(out, static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
-  put(out, static_cast<std::uint32_t>(json.size()));
-  put(out, std::uint32_t{0x4E4F534A});
-  out += json;
-  put(out, static_cast<std::uint32_t>(bin.size()));
-  put(out, std::uint32_t{0x004E4942});
-  out += bin;
-  return out;
+                               .dump();
+  return gltf_bytes::glb(json, bin);
 }
 
 TEST_F(GltfFile, GlbWithInterleavedAttributesAndByteIndices) {
-  write("tri.glb", glb());
+  write("tri.glb", interleaved_glb());
   const Mesh mesh = load("tri.glb").parts[0].mesh;
   ASSERT_EQ(mesh.triangles.size(), 1u);
   EXPECT_EQ(mesh.positions[2], Vec3(0, 1, 0));
