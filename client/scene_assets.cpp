@@ -70,14 +70,12 @@ AssetUploads send_scene_assets(nlohmann::json& scene, const std::filesystem::pat
       continue;
     const std::string name = object["file"].get<std::string>();
     const std::filesystem::path path = folder / name;
-    MeshFormat format = MeshFormat::obj;
-    if (object.contains("format") && object["format"].is_string()) {
-      const std::string wanted = object["format"].get<std::string>();
-      for (std::size_t i = 0; i < std::size(mesh_format_names); ++i)
-        if (mesh_format_names[i] == wanted) format = static_cast<MeshFormat>(i);
-    } else if (const auto known = mesh_format_of(name)) {
-      format = *known;
-    }
+    // The scene was checked (parse_scene) before: the format is one of them.
+    const std::optional<MeshFormat> named =
+        object.contains("format") && object["format"].is_string()
+            ? mesh_format_named(object["format"].get<std::string>())
+            : mesh_format_of(name);
+    const MeshFormat format = named.value_or(MeshFormat::obj);
     nlohmann::json files = nlohmann::json::object();
     for (const std::string& reference : model_references(path, format, name)) {
       const std::filesystem::path file = path.parent_path() / reference;

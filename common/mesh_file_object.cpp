@@ -40,9 +40,7 @@ void read_asset(const ObjectReader& object, MeshFileRequest& request) {
 
 MeshFormat read_format(const ObjectReader& reader, const ValueReader& file) {
   if (const auto format = reader.find("format")) {
-    const std::string_view name = format->choice(mesh_format_names);
-    const auto* found = std::find(std::begin(mesh_format_names), std::end(mesh_format_names), name);
-    return static_cast<MeshFormat>(found - std::begin(mesh_format_names));
+    return *mesh_format_named(format->choice(mesh_format_names));
   }
   const auto format = mesh_format_of(file.string());
   if (!format) {
@@ -63,6 +61,12 @@ NormalsMode read_normals(const ObjectReader& reader) {
 
 }  // namespace
 
+std::optional<MeshFormat> mesh_format_named(std::string_view name) {
+  for (std::size_t i = 0; i < std::size(mesh_format_names); ++i)
+    if (name == mesh_format_names[i]) return static_cast<MeshFormat>(i);
+  return std::nullopt;
+}
+
 std::optional<MeshFormat> mesh_format_of(std::string_view file) {
   const auto dot = file.rfind('.');
   if (dot == std::string_view::npos || file.find('/', dot) != std::string_view::npos)
@@ -70,9 +74,7 @@ std::optional<MeshFormat> mesh_format_of(std::string_view file) {
   std::string extension(file.substr(dot + 1));
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  for (std::size_t i = 0; i < std::size(mesh_format_names); ++i)
-    if (extension == mesh_format_names[i]) return static_cast<MeshFormat>(i);
-  return std::nullopt;
+  return mesh_format_named(extension);
 }
 
 bool is_mesh_file(const ObjectReader& object) {

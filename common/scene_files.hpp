@@ -118,6 +118,8 @@ class SceneFiles {
 // and drops from a file's.
 bool is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c);
 
+// The format of one of mesh_format_names, if `name` is one.
+std::optional<MeshFormat> mesh_format_named(std::string_view name);
 // The format a file's extension names (case-insensitive), if any.
 std::optional<MeshFormat> mesh_format_of(std::string_view file);
 

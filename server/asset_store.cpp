@@ -106,12 +106,7 @@ AssetStore::Committed AssetStore::commit(Upload& upload, std::string_view sha256
   unsigned length = 0;
   if (EVP_DigestFinal_ex(upload.digest_->context, digest.data(), &length) != 1)
     return Committed::failed;
-  static constexpr char hex[] = "0123456789abcdef";
-  std::string text;
-  for (unsigned i = 0; i < length; ++i) {
-    text += hex[digest[i] >> 4];
-    text += hex[digest[i] & 15];
-  }
+  const std::string text = to_hex(digest.data(), length);
   if (actual) *actual = text;
   if (text != sha256) return Committed::wrong_digest;
   // On the disk before it is named, so that a crash never leaves a named asset whose

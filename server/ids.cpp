@@ -8,7 +8,6 @@
 #include <openssl/rand.h>
 
 namespace tessera {
-namespace {
 
 std::string to_hex(const unsigned char* bytes, std::size_t count) {
   static constexpr char digits[] = "0123456789abcdef";
@@ -20,8 +19,6 @@ std::string to_hex(const unsigned char* bytes, std::size_t count) {
   }
   return hex;
 }
-
-}  // namespace
 
 std::string random_hex(std::size_t chars) {
   std::vector<unsigned char> bytes((chars + 1) / 2);

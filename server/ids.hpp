@@ -11,6 +11,9 @@ namespace tessera {
 // fencing tokens, so they must not be guessable from earlier ones.
 std::string random_hex(std::size_t chars);
 
+// `count` bytes as lowercase hex, two digits each.
+std::string to_hex(const unsigned char* bytes, std::size_t count);
+
 // Lowercase hex SHA-256 of `data`.
 std::string sha256_hex(std::string_view data);
 
