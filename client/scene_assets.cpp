@@ -57,14 +57,38 @@ class Sender {
   AssetUploads report_;
 };
 
+// A material's textures, {"texture": FILE, ...}, sent and named by digest instead:
+// {"asset": "sha256:...", "name": FILE, ...}.
+void send_textures(nlohmann::json& material, const std::filesystem::path& folder, Sender& sender) {
+  if (!material.is_object()) return;
+  for (const std::string_view term : textured_term_names) {
+    const auto found = material.find(term);
+    if (found == material.end() || !found->is_object()) continue;
+    nlohmann::json& texture = *found;
+    if (!texture.contains("texture") || !texture["texture"].is_string()) continue;
+    const std::string name = texture["texture"].get<std::string>();
+    const std::filesystem::path path = folder / name;
+    const std::string digest = digest_of(path, name);
+    sender.send(path, name, digest);
+    texture.erase("texture");
+    texture["asset"] = "sha256:" + digest;
+    texture["name"] = name;
+  }
+}
+
 }  // namespace
 
 AssetUploads send_scene_assets(nlohmann::json& scene, const std::filesystem::path& folder,
                                CoordinatorClient& api, std::FILE* progress) {
   Sender sender(api, progress);
+  if (const auto materials = scene.find("materials");
+      materials != scene.end() && materials->is_object())
+    for (auto& [name, material] : materials->items()) send_textures(material, folder, sender);
   const auto objects = scene.find("objects");
   if (objects == scene.end() || !objects->is_array()) return sender.report();
   for (nlohmann::json& object : *objects) {
+    if (object.is_object() && object.contains("material"))
+      send_textures(object["material"], folder, sender);
     if (!object.is_object() || object.value("type", "") != "mesh" || !object.contains("file") ||
         !object["file"].is_string())
       continue;

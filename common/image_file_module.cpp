@@ -6,6 +6,8 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "common/texture_files.hpp"
+
 namespace tessera {
 namespace {
 
@@ -48,7 +50,8 @@ void encode_on_calling_thread() {
   OIIO::attribute("exr_threads", -1);  // -1: OpenEXR without a thread pool of its own
 }
 
-constexpr ImageFileModule kModule{&write, &read, &encode_on_calling_thread};
+constexpr ImageFileModule kModule{&write, &read, &encode_on_calling_thread, &open_textures,
+                                  &check_texture};
 
 }  // namespace
 }  // namespace tessera

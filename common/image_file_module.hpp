@@ -10,11 +10,14 @@
 // unchanged; errors cross as exceptions.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/image_format.hpp"
+#include "common/scene.hpp"
 
 namespace tessera {
 
@@ -29,6 +32,31 @@ struct ImageFileContent {
   const void* pixels = nullptr;
 };
 
+// Where a texture is looked up: s across the image from its left edge, t down from its top,
+// both 0 to 1 over the image, and how far each moves from one edge of the ray's footprint
+// to the other (its two axes, x and y).
+struct TextureFootprint {
+  float s, t;
+  float dsdx, dtdx;
+  float dsdy, dtdy;
+};
+
+// A scene's textures, decoded, in linear RGB and mip-mapped, ready for filtered lookups from
+// any thread (OpenImageIO's TextureSystem, texture_files.cpp).
+class TextureSampler {
+ public:
+  virtual ~TextureSampler() = default;
+  // Texture `index`'s colour, filtered over the footprint: bilinear within a mip level, the
+  // levels (and the anisotropic probes along the footprint's long axis) chosen by its size.
+  // The result depends only on the arguments.
+  virtual void sample(std::size_t index, TextureWrap wrap, const TextureFootprint& at,
+                      float (&rgb)[3]) const = 0;
+};
+
+// The most pixels a texture may have: 8192 x 8192. Its decoded mip-map takes 16 bytes a
+// pixel, so a file cannot make a worker spend more than about 1.4 GiB on one texture.
+inline constexpr std::uint64_t kMaxTexturePixels = std::uint64_t{8192} * 8192;
+
 struct ImageFileModule {
   // Writes `content` to `path` (whose extension names the format): EXR, TIFF and JPEG, PNGs
   // being written without the module (png_file.hpp). Throws std::runtime_error saying what
@@ -39,6 +67,12 @@ struct ImageFileModule {
   std::vector<float> (*read)(const std::string& path, int& width, int& height);
   // OpenImageIO and OpenEXR start no threads of their own from now on.
   void (*encode_on_calling_thread)();
+  // Decodes each image (8- and 16-bit images from sRGB, unless the file says it is linear)
+  // and builds its mip-map. Throws std::runtime_error naming the image that fails.
+  std::unique_ptr<TextureSampler> (*open_textures)(const std::vector<TextureImage>& images);
+  // Reads an image's header only: throws std::runtime_error naming the image when it is not
+  // one that open_textures() can read, or has more than kMaxTexturePixels.
+  void (*check_texture)(const TextureImage& image);
 };
 
 }  // namespace tessera

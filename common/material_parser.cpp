@@ -17,6 +17,63 @@ Checker parse_checker(const ValueReader& value, const Material& material) {
   return checker;
 }
 
+TextureWrap read_wrap(const ObjectReader& reader) {
+  const auto wrap = reader.find("wrap");
+  if (!wrap) return TextureWrap::repeat;
+  const std::string_view name = wrap->choice(texture_wrap_names);
+  const auto* found = std::find(std::begin(texture_wrap_names), std::end(texture_wrap_names), name);
+  return static_cast<TextureWrap>(found - std::begin(texture_wrap_names));
+}
+
+// {"texture": FILE, "scale": colour, "wrap": ...}, or the farm's form with "asset" (and
+// "name") for "texture".
+TexturedColor parse_texture(const ValueReader& value, const SceneFiles* files) {
+  const ObjectReader reader(value, "a colour or a texture object");
+  const bool asset = reader.members().contains("asset");
+  TextureRequest request;
+  const ValueReader file = reader.require(asset ? "asset" : "texture");
+  if (asset) {
+    reader.allow_only({"asset", "name", "scale", "wrap"});
+    request.asset = read_digest(file);
+    const auto name = reader.find("name");
+    if (name && !name->json().is_string()) name->fail_type("a file name (string)");
+    request.file = name ? name->string() : "sha256:" + request.asset->substr(0, 12);
+  } else {
+    reader.allow_only({"texture", "scale", "wrap"});
+    if (!file.json().is_string()) file.fail_type("an image file's name (string)");
+    if (file.string().empty()) file.fail("must name a file, got \"\"");
+    request.file = file.string();
+  }
+  TexturedColor textured;
+  textured.scale = reader.color_or("scale", Color(1.0));
+  textured.wrap = read_wrap(reader);
+  if (files == nullptr) {
+    file.fail(
+        "names a texture, which this reader of the scene cannot open (tessera render reads "
+        "files beside the scene; tessera submit uploads them as assets)");
+  }
+  try {
+    textured.image = files->locate_texture(request);
+  } catch (const AssetNotHeld& missing) {
+    throw MissingAssetError(file.pointer(), missing.digest);
+  } catch (const SceneFileError& error) {
+    file.fail(error.what());
+  }
+  return textured;
+}
+
+// A term that is a colour, or a texture object.
+void read_term(const ObjectReader& reader, TexturedTerm term, Color& color, Material& m,
+               const SceneFiles* files) {
+  const std::string_view key = textured_term_names[static_cast<std::size_t>(term)];
+  const auto value = reader.find(key);
+  if (!value) return;
+  if (value->json().is_object())
+    m.texture(term) = parse_texture(*value, files);
+  else
+    color = value->color();
+}
+
 // Lists a few names so that an unknown-name error shows what the scene does offer.
 std::string describe_names(const std::vector<std::string_view>& names) {
   constexpr std::size_t shown = 8;
@@ -29,25 +86,29 @@ std::string describe_names(const std::vector<std::string_view>& names) {
 
 }  // namespace
 
-Material parse_material(const ValueReader& value) {
+Material parse_material(const ValueReader& value, const SceneFiles* files) {
   const ObjectReader reader(value, "a material object");
   reader.allow_only({"emission", "ambient", "diffuse", "specular", "shininess", "reflection",
                      "transmission", "ior", "checker"});
   Material m;
-  m.emission = reader.color_or("emission", m.emission);
-  m.ambient = reader.color_or("ambient", m.ambient);
-  m.diffuse = reader.color_or("diffuse", m.diffuse);
-  m.specular = reader.color_or("specular", m.specular);
+  read_term(reader, TexturedTerm::emission, m.emission, m, files);
+  read_term(reader, TexturedTerm::ambient, m.ambient, m, files);
+  read_term(reader, TexturedTerm::diffuse, m.diffuse, m, files);
+  read_term(reader, TexturedTerm::specular, m.specular, m, files);
   m.shininess = reader.number_or("shininess", m.shininess, Range::at_least(0.0));
   m.reflection = reader.color_or("reflection", m.specular);
   m.transmission = reader.color_or("transmission", m.transmission);
   m.ior = reader.number_or("ior", m.ior, Range::above(0.0));
-  if (const auto checker = reader.find("checker")) m.checker = parse_checker(*checker, m);
+  if (const auto checker = reader.find("checker")) {
+    if (m.texture(TexturedTerm::ambient) || m.texture(TexturedTerm::diffuse))
+      checker->fail("cannot colour a material whose ambient or diffuse term is a texture");
+    m.checker = parse_checker(*checker, m);
+  }
   return m;
 }
 
-MaterialTable::MaterialTable(const Limits& limits)
-    : max_materials_(limits.max_materials), materials_(1) {}
+MaterialTable::MaterialTable(const Limits& limits, const SceneFiles* files)
+    : max_materials_(limits.max_materials), files_(files), materials_(1) {}
 
 void MaterialTable::add_named(const ValueReader& materials) {
   const ObjectReader reader(materials, "an object mapping material names to materials");
@@ -59,12 +120,12 @@ void MaterialTable::add_named(const ValueReader& materials) {
   }
   for (const auto& [name, unused] : reader.members()) {
     const ValueReader value = reader.value().member(name);
-    by_name_.emplace(name, add(parse_material(value), value));
+    by_name_.emplace(name, add(parse_material(value, files_), value));
   }
 }
 
 std::uint32_t MaterialTable::resolve(const ValueReader& reference) {
-  if (reference.json().is_object()) return add(parse_material(reference), reference);
+  if (reference.json().is_object()) return add(parse_material(reference, files_), reference);
   if (!reference.json().is_string())
     reference.fail_type("a material name (string) or a material object");
   const std::string& name = reference.string();

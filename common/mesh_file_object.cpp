@@ -12,7 +12,8 @@ constexpr std::string_view mesh_file_keys[] = {"type",   "material", "transform"
 constexpr std::string_view mesh_asset_keys[] = {"type", "material", "transform", "asset", "files",
                                                 "name", "format",   "normals",   "thin"};
 
-// "sha256:" and 64 lower-case hex digits: the 64 digits, or a SceneError at `value`.
+}  // namespace
+
 std::string read_digest(const ValueReader& value) {
   if (!value.json().is_string()) value.fail_type("an asset digest \"sha256:<64 hex digits>\"");
   const std::string& text = value.string();
@@ -24,6 +25,8 @@ std::string read_digest(const ValueReader& value) {
   if (!hex) value.fail("must be \"sha256:\" and 64 lower-case hex digits, got " + quote(text));
   return text.substr(prefix.size());
 }
+
+namespace {
 
 // The farm's form: {"asset": "sha256:...", "format": "obj", "files": {"x.mtl": "sha256:..."}}.
 void read_asset(const ObjectReader& object, MeshFileRequest& request) {

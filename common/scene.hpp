@@ -3,9 +3,12 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -23,6 +26,33 @@ struct Checker {
   Color diffuse{0.0};
 };
 
+// How a texture repeats beyond [0, 1] in u and v (docs/scene-format.md, "Textures").
+enum class TextureWrap : std::uint8_t { repeat, clamp, mirror };
+inline constexpr std::string_view texture_wrap_names[] = {"repeat", "clamp", "mirror"};
+
+// An image a material reads colours from: a file on this machine, or bytes a model file
+// held (a glTF's embedded image).
+struct TextureImage {
+  std::string name;  // as the scene or the model names it, for messages
+  std::string path;  // the file; empty when `bytes` holds the image
+  std::shared_ptr<const std::string> bytes;
+  std::string extension;  // of `bytes`' format, such as ".png", which names the decoder
+};
+
+// A colour that varies over a surface: `scale` times the texture's linear RGB at the hit's
+// uv coordinates.
+struct TexturedColor {
+  TextureImage image;
+  Color scale{1.0};
+  TextureWrap wrap = TextureWrap::repeat;
+};
+
+// The terms of a material that a texture may colour, as indices of Material::textures.
+enum class TexturedTerm : std::uint8_t { emission, ambient, diffuse, specular };
+inline constexpr std::size_t kTexturedTerms = 4;
+inline constexpr std::string_view textured_term_names[] = {"emission", "ambient", "diffuse",
+                                                           "specular"};
+
 struct Material {
   Color emission{0.0};      // I_E
   Color ambient{0.2};       // K_A
@@ -33,6 +63,20 @@ struct Material {
   Color transmission{0.0};  // K_T
   double ior = 1.0;
   std::optional<Checker> checker;
+  // A term with a texture takes its colour from it, and the colour above is unused.
+  std::array<std::optional<TexturedColor>, kTexturedTerms> textures;
+
+  const std::optional<TexturedColor>& texture(TexturedTerm term) const {
+    return textures[static_cast<std::size_t>(term)];
+  }
+  std::optional<TexturedColor>& texture(TexturedTerm term) {
+    return textures[static_cast<std::size_t>(term)];
+  }
+  bool textured() const {
+    for (const auto& t : textures)
+      if (t) return true;
+    return false;
+  }
 };
 
 struct Attenuation {
@@ -71,6 +115,7 @@ struct Sphere {
 struct Plane {
   Vec3 point{0.0};
   Vec3 normal{0.0, 1.0, 0.0};  // unit
+  glm::dvec2 uv_scale{1.0};    // the lengths along the plane of one unit of u and of v, > 0
 };
 
 struct Box {
@@ -78,15 +123,20 @@ struct Box {
   Vec3 max{1.0};
 };
 
+// Texture coordinates: u to the right, v up the image (docs/scene-format.md).
+using Uv = glm::vec2;
+
 struct Triangle {
   std::array<Vec3, 3> vertices;
   std::optional<std::array<Vec3, 3>> normals;  // unit, per vertex
+  std::optional<std::array<Uv, 3>> uvs;        // per vertex; (0,0), (1,0), (0,1) when absent
 };
 
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside
   std::vector<Vec3> normals;                            // empty, or one unit normal per position
+  std::vector<Uv> uvs;  // empty (each triangle as a Triangle without uvs), or one per position
   bool thin = false;
 };
 

@@ -55,6 +55,12 @@ struct MeshFileRequest {
   std::size_t limit_max_triangles = 0;  // Limits::max_triangles itself, for the message
 };
 
+// What the scene asks of one texture: {"texture": FILE} or the farm's {"asset": DIGEST}.
+struct TextureRequest {
+  std::string file;  // as the scene writes it; for an asset, its "name" or its digest
+  std::optional<std::string> asset;  // 64 hex digits
+};
+
 // A mistake in a file a scene names. `where` is "line 12" for the text formats, "byte 4096"
 // for binary ones, a JSON Pointer ("/accessors/3") in a glTF, or "" for the file as a whole.
 class SceneFileError : public std::runtime_error {
@@ -112,6 +118,9 @@ class SceneFiles {
   // Reads a model; throws SceneFileError for a file that is missing, malformed or over a
   // limit.
   virtual Model load_model(const MeshFileRequest& request) const = 0;
+  // The image a material's texture names. Throws SceneFileError for a file that is not
+  // there (its pixels are read by the tracer, worker/scene_textures.hpp).
+  virtual TextureImage locate_texture(const TextureRequest& request) const = 0;
 };
 
 // A triangle of zero area up to rounding, which the parser refuses in a scene's own meshes

@@ -87,7 +87,7 @@ Scene read_scene(const nlohmann::json& document, const Limits& limits, const Lif
   scene.background = root.color_or("background", scene.background);
   scene.ambient_light = root.color_or("ambient_light", scene.ambient_light);
 
-  MaterialTable materials(limits);
+  MaterialTable materials(limits, files);
   if (const auto named = root.find("materials")) materials.add_named(*named);
   if (const auto lights = root.find("lights")) scene.lights = parse_lights(*lights, limits);
   if (const auto objects = root.find("objects")) {

@@ -52,13 +52,16 @@ std::optional<Role> role_in_envelope(const std::vector<Frame>& stack, bool array
 
 // --- material_parser.cpp ---
 
-Material parse_material(const ValueReader& value);
+// `files` locates the textures the material names (none: a texture is refused).
+Material parse_material(const ValueReader& value, const SceneFiles* files);
+// "sha256:" and 64 lower-case hex digits: the 64 digits, or a SceneError at `value`.
+std::string read_digest(const ValueReader& value);
 
 // Scene::materials as it fills up: the default material at 0, then the named ones, then
 // the inline ones in the order objects define them.
 class MaterialTable {
  public:
-  explicit MaterialTable(const Limits& limits);
+  MaterialTable(const Limits& limits, const SceneFiles* files);
 
   void add_named(const ValueReader& materials);  // the top-level "materials" object
   // An object's "material": a name from "materials" or an inline material object.
@@ -69,6 +72,7 @@ class MaterialTable {
 
  private:
   std::size_t max_materials_;
+  const SceneFiles* files_;
   std::vector<Material> materials_;
   std::map<std::string, std::uint32_t, std::less<>> by_name_;
 };

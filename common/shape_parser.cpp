@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/scene_parser_parts.hpp"
 
@@ -17,10 +18,39 @@ Shape parse_sphere(const ObjectReader& object) {
   return sphere;
 }
 
+// [u, v], two finite numbers.
+Uv read_uv(const ValueReader& value) {
+  value.expect_array_of(2, "a [u, v] pair of numbers");
+  return Uv(static_cast<float>(value.element(0).number()),
+            static_cast<float>(value.element(1).number()));
+}
+
+// "uvs": one [u, v] per vertex, `count` of them.
+std::vector<Uv> read_uvs(const ValueReader& value, std::size_t count, std::string_view of) {
+  const std::size_t size = value.array_size("an array of [u, v] pairs");
+  if (size != count) {
+    value.fail("must have one [u, v] per " + std::string(of) + " (" + std::to_string(count) +
+               "), got " + std::to_string(size));
+  }
+  std::vector<Uv> uvs;
+  uvs.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) uvs.push_back(read_uv(value.element(i)));
+  return uvs;
+}
+
 Shape parse_plane(const ObjectReader& object) {
   Plane plane;
   plane.point = object.require("point").vec3();
   plane.normal = object.require("normal").direction();
+  if (const auto scale = object.find("uv_scale")) {
+    if (scale->json().is_array()) {
+      scale->expect_array_of(2, "a number or a [u, v] pair of numbers");
+      plane.uv_scale = glm::dvec2(scale->element(0).number(Range::above(0.0)),
+                                  scale->element(1).number(Range::above(0.0)));
+    } else {
+      plane.uv_scale = glm::dvec2(scale->number(Range::above(0.0)));
+    }
+  }
   return plane;
 }
 
@@ -51,6 +81,10 @@ Shape parse_triangle(const ObjectReader& object) {
     std::array<Vec3, 3> unit;
     for (std::size_t i = 0; i < 3; ++i) unit[i] = normals->element(i).direction();
     triangle.normals = unit;
+  }
+  if (const auto uvs = object.find("uvs")) {
+    const std::vector<Uv> read = read_uvs(*uvs, 3, "vertex");
+    triangle.uvs = std::array<Uv, 3>{read[0], read[1], read[2]};
   }
   return triangle;
 }
@@ -166,6 +200,8 @@ Shape parse_mesh(const ObjectReader& object) {
     read_lifted_positions(*lifted_positions, mesh);
     read_lifted_triangles(*lifted_triangles, mesh);
     if (lifted_normals != nullptr) read_lifted_normals(*lifted_normals, mesh);
+    if (const auto uvs = object.find("uvs"))
+      mesh.uvs = read_uvs(*uvs, mesh.positions.size(), "position");
     mesh.thin = object.boolean_or("thin", false);
     return mesh;
   }
@@ -206,15 +242,16 @@ Shape parse_mesh(const ObjectReader& object) {
       mesh.normals.push_back(unit ? *unit : normals->element(i).direction());
     }
   }
+  if (const auto uvs = object.find("uvs")) mesh.uvs = read_uvs(*uvs, position_count, "position");
   mesh.thin = object.boolean_or("thin", false);
   return mesh;
 }
 
 constexpr std::string_view sphere_keys[] = {"center", "radius"};
-constexpr std::string_view plane_keys[] = {"point", "normal"};
+constexpr std::string_view plane_keys[] = {"point", "normal", "uv_scale"};
 constexpr std::string_view box_keys[] = {"min", "max"};
-constexpr std::string_view triangle_keys[] = {"vertices", "normals"};
-constexpr std::string_view mesh_keys[] = {"positions", "triangles", "normals", "thin"};
+constexpr std::string_view triangle_keys[] = {"vertices", "normals", "uvs"};
+constexpr std::string_view mesh_keys[] = {"positions", "triangles", "normals", "uvs", "thin"};
 constexpr std::string_view cylinder_keys[] = {"center", "radius", "height"};
 constexpr std::string_view cone_keys[] = {"center", "radius", "height"};
 

@@ -6,6 +6,7 @@
 #include <malloc.h>
 #endif
 
+#include "common/image_file_loader.hpp"
 #include "common/image_format.hpp"
 #include "common/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
@@ -138,6 +139,20 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   });
 }
 
+// Each texture's header, read now so that an image no worker could decode is refused at
+// submit rather than failing every tile.
+void check_textures(const Scene& scene) {
+  for (const Material& material : scene.materials)
+    for (const auto& texture : material.textures) {
+      if (!texture) continue;
+      try {
+        image_files().check_texture(texture->image);
+      } catch (const std::runtime_error& e) {
+        throw SceneError("/materials", e.what());
+      }
+    }
+}
+
 void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<SubmissionMemory> memory,
                       Respond respond) {
   protocol::JobSubmission& submission = taken.submission;
@@ -154,6 +169,7 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
   Scene scene;
   try {
     scene = check_scene(submission.scene, context.limits, objects, files ? &*files : nullptr);
+    check_textures(scene);
   } catch (const MissingAssetError& e) {
     const std::string path = "/scene" + e.pointer();
     return answer(error_response(422, "missing_asset", path + ": " + e.detail(), path));

@@ -66,6 +66,8 @@ fi
 
 scenes=("$source_dir"/examples/*.json "$source_dir"/bench/scenes/*.json)
 [ -f "$binary_dir/examples/mesh.json" ] && scenes+=("$binary_dir/examples/mesh.json")
+[ -f "$binary_dir/examples/textured_globe.json" ] &&
+  scenes+=("$binary_dir/examples/textured_globe.json")
 for index in "${!variants[@]}"; do
   variant=${variants[$index]}
   # LD_LIBRARY_PATH is searched before the RUNPATH, so a directory holding only this

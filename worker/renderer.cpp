@@ -204,7 +204,8 @@ void store_block(const TileOutput& out, const Block& block, const double (&sums)
 Renderer::Renderer(Scene scene)
     : scene_(std::move(scene)),
       geometry_(scene_, device_),
-      tracer_(scene_, geometry_),
+      textures_(scene_),
+      tracer_(scene_, geometry_, &textures_),
       camera_(scene_.camera, scene_.width, scene_.height) {}
 
 RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) const {

@@ -10,6 +10,7 @@
 #include "worker/camera.hpp"
 #include "worker/embree_device.hpp"
 #include "worker/scene_geometry.hpp"
+#include "worker/scene_textures.hpp"
 #include "worker/tracer.hpp"
 
 namespace tessera {
@@ -34,6 +35,7 @@ class TESSERA_TRACER_API Renderer {
   Scene scene_;
   EmbreeDevice device_;
   SceneGeometry geometry_;
+  SceneTextures textures_;
   Tracer tracer_;
   PinholeCamera camera_;
 };

@@ -261,6 +261,7 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
                                float u, float v, double exact_t, SurfaceHit& hit) const {
   const GeometryRecord& record = records_[geometry];
   hit.object = record.object;
+  hit.primitive = record.kind == Kind::plane ? 0 : primitive;
   switch (record.kind) {
     case Kind::sphere:
       finish_sphere_hit(ray, *spheres_[record.index], exact_t, hit);

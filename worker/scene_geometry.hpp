@@ -30,6 +30,9 @@ struct SurfaceHit {
   Vec3 normal;           // geometric, unit: outward for solids, as built for thin shapes
   Vec3 shading_normal;   // unit; interpolated on smooth meshes, else `normal`
   std::uint32_t object;  // index into Scene::objects
+  // Which part of the object: a mesh's triangle, a box's face (2·axis, +1 for the face at
+  // its max), a cylinder's or a cone's AxialPart; 0 for spheres and planes.
+  std::uint32_t primitive;
 };
 
 // A secondary ray leaving the surface at `hit`, its origin moved off the surface to the

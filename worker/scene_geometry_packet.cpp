@@ -256,6 +256,7 @@ void SceneGeometry::store_hits(const RayPacket& packet, const PacketQuery& query
     };
     const Vec3 n = pick(lanes.sphere_normal, lanes.normal);
     SurfaceHit& hit = hits[i];
+    hit.primitive = 0;
     hit.t = lanes.t[i];
     hit.position = pick(lanes.sphere_point, lanes.plane_point);
     hit.normal = n;

@@ -13,7 +13,7 @@ using shading_detail::reflect;
 
 }  // namespace
 
-Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry)
+Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry, const SceneTextures* textures)
     : scene_(scene), geometry_(geometry) {
   for (const Light& light : scene.lights) {
     PreparedLight prepared{};
@@ -69,17 +69,18 @@ Tracer::Tracer(const Scene& scene, const SceneGeometry& geometry)
       surface.start[odd] = material.emission + *ambient[odd] * scene.ambient_light;
     surfaces_.push_back(surface);
   }
+  prepare_textures(textures);
 }
 
 const Material& Tracer::material_of(std::uint32_t object) const {
   return *surfaces_[object].material;
 }
 
-Color Tracer::trace(const Ray& ray, int depth, RayCounts& counts) const {
+Color Tracer::trace(const Ray& ray, int depth, RayCounts& counts, double travelled) const {
   (depth == 0 ? counts.primary : counts.secondary) += 1;
   const auto hit = geometry_.intersect(ray, kInfinity);
   if (!hit) return scene_.background;
-  return shade(ray, *hit, depth, counts);
+  return shade(ray, *hit, depth, counts, travelled);
 }
 
 Color Tracer::shadow_factor(const SurfaceHit& hit, const LightSample& light,
@@ -115,10 +116,12 @@ Color Tracer::unblocked_factor(const LightSample& light, Ray ray, float reach,
   return factor;
 }
 
-Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const {
-  if (lights_.empty() && depth >= scene_.render.max_depth) return emitted_and_ambient(hit);
+Color Tracer::shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts,
+                    double travelled) const {
+  if (lights_.empty() && depth >= scene_.render.max_depth)
+    return emitted_and_ambient(ray, hit, travelled);
   Shading shading;
-  begin_shading(ray, hit, shading);
+  begin_shading(ray, hit, travelled, shading);
   for (const PreparedLight& light : lights_) {
     const LightSample sample = sample_light(light, hit.position);
     double n_dot_l;
@@ -136,10 +139,11 @@ Color Tracer::finish_shading(const Shading& shading, const SurfaceHit& hit, int 
   const Vec3& d = shading.d;
   const Vec3& n = shading.n;
   if (!is_zero(material.reflection))
-    result += material.reflection * trace(ray_from(hit, reflect(d, n)), depth + 1, counts);
+    result += material.reflection *
+              trace(ray_from(hit, reflect(d, n)), depth + 1, counts, shading.travelled);
   if (!is_zero(material.transmission))
-    result += material.transmission *
-              trace(ray_from(hit, transmitted_direction(shading, hit)), depth + 1, counts);
+    result += material.transmission * trace(ray_from(hit, transmitted_direction(shading, hit)),
+                                            depth + 1, counts, shading.travelled);
   return result;
 }
 

@@ -2,13 +2,16 @@
 //   I = I_E + K_A·I_A + Σ_L (K_D·(N·L) + K_S·(V·R)^n)·S_L·I_L + K_R·I_R + K_T·I_T
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
 
+#include "common/image_file_module.hpp"
 #include "common/scene.hpp"
 #include "worker/ray.hpp"
 #include "worker/scene_geometry.hpp"
+#include "worker/scene_textures.hpp"
 
 namespace tessera {
 
@@ -29,20 +32,25 @@ struct RayCounts {
 // Exported from the tracer's library member by member, as SceneGeometry is.
 class Tracer {
  public:
-  // Both must outlive the tracer.
-  TESSERA_TRACER_API Tracer(const Scene& scene, const SceneGeometry& geometry);
+  // All must outlive the tracer; `textures` may be null for a scene without any.
+  TESSERA_TRACER_API Tracer(const Scene& scene, const SceneGeometry& geometry,
+                            const SceneTextures* textures = nullptr);
 
-  // The radiance arriving along `ray`; `depth` is the number of bounces before it.
-  TESSERA_TRACER_API Color trace(const Ray& ray, int depth, RayCounts& counts) const;
+  // The radiance arriving along `ray`; `depth` is the number of bounces before it, and
+  // `travelled` the length of the path from the camera to the ray's origin, which sizes the
+  // pixel's cone (and so the filter of the textures it meets).
+  TESSERA_TRACER_API Color trace(const Ray& ray, int depth, RayCounts& counts,
+                                 double travelled = 0.0) const;
   // The radiance along each active ray of a packet, `depth` bounces after the camera. The
   // packet's hits, the shadow rays of its hits towards each light, and its reflected and
   // transmitted rays go to Embree sixteen at a time; the arithmetic of each lane is
   // trace()'s own, in the same order, so a pixel gets the same bits either way. Only the
   // lanes in `keep` are shaded in full and counted: the others are traced only so that the
   // packets Embree sees never depend on which of their lanes a tile holds.
+  // `travelled`: each lane's, as trace() takes it; null for rays from the camera.
   TESSERA_TRACER_API void trace_packet(const RayPacket& packet, int depth,
                                        const bool (&keep)[kPacketSize], Color (&out)[kPacketSize],
-                                       RayCounts& counts) const;
+                                       RayCounts& counts, const double* travelled = nullptr) const;
 
  private:
   // No default values: packets hold sixteen per light, and every member is always set.
@@ -75,7 +83,19 @@ class Tracer {
     Vec3 n;  // the shading normal, turned to face the ray
     bool front;
     Color diffuse;
-    Color result;  // I_E + K_A·I_A, then each light's term as it is added
+    Color specular;
+    Color result;      // I_E + K_A·I_A, then each light's term as it is added
+    double travelled;  // from the camera to the hit, along the path
+  };
+
+  // The textures of a textured object's material, by TexturedTerm: the index of each
+  // term's image in SceneTextures (-1 where the term has none), its scale and wrap.
+  struct SurfaceTextures {
+    std::array<int, kTexturedTerms> image;
+    std::array<Color, kTexturedTerms> scale;
+    std::array<TextureWrap, kTexturedTerms> wrap;
+    const Object* object;
+    Mat4 world_to_object;
   };
 
   // What begin_shading() needs of an object's material, worked out once, so that shading a
@@ -86,15 +106,25 @@ class Tracer {
     double checker_inverse_size;  // 1 / the cell's edge; 0 where there is no checker
     Color diffuse[2];             // K_D in even and in odd cells (the same without a checker)
     Color start[2];               // I_E + K_A·I_A in even and in odd cells
+    const SurfaceTextures* textures = nullptr;  // where the material has any
   };
 
-  Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts) const;
+  Color shade(const Ray& ray, const SurfaceHit& hit, int depth, RayCounts& counts,
+              double travelled) const;
   // 1 where the hit lies in an odd cell of its surface's checkerboard, else 0.
   static int checker_parity(const Surface& surface, const SurfaceHit& hit);
   // I_E + K_A·I_A at the hit: all there is to the colour of a hit that sends no ray on (no
   // lights, and no bounce left), which then needs nothing else begin_shading() works out.
-  Color emitted_and_ambient(const SurfaceHit& hit) const;
-  void begin_shading(const Ray& ray, const SurfaceHit& hit, Shading& shading) const;
+  Color emitted_and_ambient(const Ray& ray, const SurfaceHit& hit, double travelled) const;
+  // `travelled`: the path's length to the ray's origin.
+  void begin_shading(const Ray& ray, const SurfaceHit& hit, double travelled,
+                     Shading& shading) const;
+  // The textured terms' colours at the hit, in place of the material's (tracer_textures.cpp):
+  // `odd` is the hit's checker parity.
+  void apply_textures(const SurfaceTextures& textures, int odd, const SurfaceHit& hit,
+                      Shading& shading) const;
+  // Tracer's constructor for the textures of each object's material.
+  void prepare_textures(const SceneTextures* textures);
   // False when the light cannot reach the side of the surface facing the ray.
   static bool lit_by(const Shading& shading, const LightSample& sample, double& n_dot_l);
   void add_light(Shading& shading, const LightSample& sample, double n_dot_l,
@@ -147,6 +177,11 @@ class Tracer {
   std::vector<bool> solid_;  // by object
   bool any_transmissive_ = false;
   std::vector<Surface> surfaces_;  // by object
+  const SceneTextures* textures_ = nullptr;
+  std::vector<SurfaceTextures> surface_textures_;  // of the textured objects; not resized
+  // The angle between neighbouring samples' rays: a pixel's cone widens by this much per
+  // unit of distance travelled.
+  double spread_ = 0.0;
 };
 
 }  // namespace tessera

@@ -12,7 +12,8 @@ using shading_detail::kMaxShadowCrossings;
 using shading_detail::reflect;
 
 void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)[kPacketSize],
-                          Color (&out)[kPacketSize], RayCounts& counts) const {
+                          Color (&out)[kPacketSize], RayCounts& counts,
+                          const double* travelled) const {
   SurfaceHit hits[kPacketSize];
   bool found[kPacketSize];
   geometry_.intersect(packet, hits, found);
@@ -25,11 +26,12 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   for (int i = 0; i < kPacketSize; ++i) {
     if (packet.active[i] & keep[i]) (depth == 0 ? counts.primary : counts.secondary) += 1;
     if (!found[i]) continue;
+    const double before = travelled != nullptr ? travelled[i] : 0.0;
     if (!rays_leave) {
-      shading[i].result = emitted_and_ambient(hits[i]);
+      shading[i].result = emitted_and_ambient(packet.ray(i), hits[i], before);
       continue;
     }
-    begin_shading(packet.ray(i), hits[i], shading[i]);
+    begin_shading(packet.ray(i), hits[i], before, shading[i]);
     lifted[0][i] = offset_ray_origin(hits[i].position, hits[i].normal, 1.0f);
     lifted[1][i] = offset_ray_origin(hits[i].position, hits[i].normal, -1.0f);
   }
@@ -73,8 +75,10 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
   auto bounce = [&](Color Material::*coefficient, auto direction) {
     RayPacket rays;
     bool any = false;
+    double along[kPacketSize];
     for (int i = 0; i < kPacketSize; ++i) {
       rays.active[i] = found[i] && !is_zero(shading[i].material->*coefficient);
+      along[i] = rays.active[i] ? shading[i].travelled : 0.0;
       if (!rays.active[i]) continue;
       // ray_from(), from the point already moved off the surface.
       const Vec3 towards = direction(i);
@@ -83,7 +87,7 @@ void Tracer::trace_packet(const RayPacket& packet, int depth, const bool (&keep)
     }
     if (!any) return;
     Color incoming[kPacketSize];
-    trace_packet(rays, depth + 1, keep, incoming, counts);
+    trace_packet(rays, depth + 1, keep, incoming, counts, along);
     for (int i = 0; i < kPacketSize; ++i)
       if (rays.active[i]) out[i] += shading[i].material->*coefficient * incoming[i];
   };

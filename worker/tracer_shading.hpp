@@ -79,12 +79,19 @@ inline int Tracer::checker_parity(const Surface& surface, const SurfaceHit& hit)
          shading_detail::in_odd_checker_cell(surface.checker_inverse_size, hit);
 }
 
-inline Color Tracer::emitted_and_ambient(const SurfaceHit& hit) const {
+inline Color Tracer::emitted_and_ambient(const Ray& ray, const SurfaceHit& hit,
+                                         double travelled) const {
   const Surface& surface = surfaces_[hit.object];
+  if (surface.textures != nullptr) [[unlikely]] {
+    Shading shading;
+    begin_shading(ray, hit, travelled, shading);
+    return shading.result;
+  }
   return surface.start[checker_parity(surface, hit)];
 }
 
-inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, Shading& shading) const {
+inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, double travelled,
+                                  Shading& shading) const {
   const Surface& surface = surfaces_[hit.object];
   shading.material = surface.material;
   shading.d = Vec3(ray.direction);
@@ -92,7 +99,11 @@ inline void Tracer::begin_shading(const Ray& ray, const SurfaceHit& hit, Shading
   shading.n = shading.front ? hit.shading_normal : -hit.shading_normal;  // faces the ray
   const int odd = checker_parity(surface, hit);
   shading.diffuse = surface.diffuse[odd];
+  shading.specular = surface.material->specular;
   shading.result = surface.start[odd];
+  shading.travelled = travelled + hit.t;
+  if (surface.textures != nullptr) [[unlikely]]
+    apply_textures(*surface.textures, odd, hit, shading);
 }
 
 inline double Tracer::inverse_attenuation(const PreparedLight& light, double distance) {
@@ -159,11 +170,11 @@ inline void Tracer::add_light(Shading& shading, const LightSample& sample, doubl
   Color specular(0.0);
   // The power is the dearest step of shading; where K_S·(V·R)^n is exactly zero anyway (no
   // specular colour, or V·R <= 0 with n > 0) it is skipped, which changes no bit.
-  if (!shading_detail::is_zero(material.specular)) {
+  if (!shading_detail::is_zero(shading.specular)) {
     const Vec3 r = 2.0 * n_dot_l * shading.n - sample.to_light;
     const double v_dot_r = std::max(0.0, glm::dot(-shading.d, r));
     if (v_dot_r > 0.0 || material.shininess == 0.0)
-      specular = material.specular * shading_detail::power(v_dot_r, material.shininess);
+      specular = shading.specular * shading_detail::power(v_dot_r, material.shininess);
   }
   shading.result += (shading.diffuse * n_dot_l + specular) * shadow * sample.intensity;
 }

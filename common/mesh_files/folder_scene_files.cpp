@@ -46,6 +46,30 @@ Model FolderSceneFiles::load_model(const MeshFileRequest& request) const {
   return read_model_file(folder_ / request.file, request);
 }
 
+TextureImage FolderSceneFiles::locate_texture(const TextureRequest& request) const {
+  if (request.asset) {
+    throw SceneFileError(request.file, "",
+                         "is an asset (sha256:...), which only the farm holds; name the file "
+                         "itself with \"texture\" to render here");
+  }
+  const std::filesystem::path path = folder_ / request.file;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw SceneFileError(request.file, "", "is not there (looked for " + path.string() + ")");
+  return {request.file, path.string(), nullptr, {}};
+}
+
+TextureImage AssetSceneFiles::locate_texture(const TextureRequest& request) const {
+  if (!request.asset) {
+    throw SceneFileError(request.file, "",
+                         "is a file on the machine that sent the scene; the farm reads textures "
+                         "as assets (tessera submit uploads them)");
+  }
+  const auto path = locate_(*request.asset);
+  if (!path) throw AssetNotHeld{"", *request.asset};
+  return {request.file, path->string(), nullptr, {}};
+}
+
 Model AssetSceneFiles::load_model(const MeshFileRequest& request) const {
   if (!request.asset) {
     throw SceneFileError(request.file, "",

@@ -14,6 +14,7 @@ class FolderSceneFiles : public SceneFiles {
  public:
   explicit FolderSceneFiles(std::filesystem::path folder) : folder_(std::move(folder)) {}
   Model load_model(const MeshFileRequest& request) const override;
+  TextureImage locate_texture(const TextureRequest& request) const override;
 
  private:
   std::filesystem::path folder_;
@@ -28,6 +29,7 @@ class AssetSceneFiles : public SceneFiles {
   explicit AssetSceneFiles(Locate locate) : locate_(std::move(locate)) {}
   // Throws AssetNotHeld for an asset `locate` does not find.
   Model load_model(const MeshFileRequest& request) const override;
+  TextureImage locate_texture(const TextureRequest& request) const override;
 
  private:
   Locate locate_;

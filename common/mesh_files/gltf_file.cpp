@@ -56,17 +56,24 @@ bool write_nothing(std::string*, const std::string&, const std::vector<unsigned 
   return false;
 }
 
-// Images are textures, which the tracer does not read yet: their bytes are not decoded.
-bool keep_image_undecoded(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                          const unsigned char*, int, void*) {
+// Images are kept as their file's bytes, undecoded: the tracer decodes the textures
+// (worker/scene_textures.hpp), and a model read only to be checked decodes none.
+bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void* user) {
+  auto& kept = *static_cast<std::vector<std::shared_ptr<const std::string>>*>(user);
+  if (index < 0 || size < 0) return true;
+  if (kept.size() <= static_cast<std::size_t>(index)) kept.resize(index + 1);
+  kept[index] = std::make_shared<const std::string>(reinterpret_cast<const char*>(bytes),
+                                                    static_cast<std::size_t>(size));
   return true;
 }
 
-tinygltf::Model load(const ModelSource& source, MeshFormat format) {
+tinygltf::Model load(const ModelSource& source, MeshFormat format,
+                     std::vector<std::shared_ptr<const std::string>>& images) {
   const std::string bytes = source.read(std::uint64_t{1} << 32);
   BundleFiles files{&source, std::nullopt};
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(keep_image_undecoded, nullptr);
+  loader.SetImageLoader(keep_image_bytes, &images);
   loader.SetFsCallbacks({file_exists, expand, read_whole, write_nothing, &files});
   tinygltf::Model model;
   std::string err, warn;
@@ -88,8 +95,9 @@ tinygltf::Model load(const ModelSource& source, MeshFormat format) {
 }  // namespace
 
 Model read_gltf(const ModelSource& source) {
-  const tinygltf::Model gltf = load(source, source.request->format);
-  return gltf_model(gltf, source);
+  std::vector<std::shared_ptr<const std::string>> images;
+  const tinygltf::Model gltf = load(source, source.request->format, images);
+  return gltf_model(gltf, source, images);
 }
 
 }  // namespace tessera

@@ -46,8 +46,9 @@ std::size_t component_size(int type) {
 
 class GltfReader {
  public:
-  GltfReader(const tinygltf::Model& gltf, const ModelSource& source)
-      : gltf_(gltf), source_(source) {}
+  GltfReader(const tinygltf::Model& gltf, const ModelSource& source,
+             const std::vector<std::shared_ptr<const std::string>>& images)
+      : gltf_(gltf), source_(source), images_(images) {}
 
   AccessorView view(int index, int type, std::size_t components, bool indices,
                     const std::string& from) const {
@@ -58,8 +59,9 @@ class GltfReader {
     if (accessor.sparse.isSparse)
       source_.fail(pointer + "/sparse", "sparse accessors are not read");
     if (accessor.type != type)
-      source_.fail(pointer + "/type",
-                   "must be " + std::string(components == 1 ? "SCALAR" : "VEC3"));
+      source_.fail(pointer + "/type", "must be " + std::string(components == 1   ? "SCALAR"
+                                                               : components == 2 ? "VEC2"
+                                                                                 : "VEC3"));
     const int ct = accessor.componentType;
     if (indices ? (ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
                    ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
@@ -102,6 +104,71 @@ class GltfReader {
       out[i] = Vec3(f[0], f[1], f[2]);
     }
     return out;
+  }
+
+  // TEXCOORD_0, its v turned to run up the image as Mesh::uvs has it (glTF's runs down).
+  std::vector<Uv> uvs(int index, const std::string& from) const {
+    const AccessorView v = view(index, TINYGLTF_TYPE_VEC2, 2, false, from);
+    std::vector<Uv> out(v.count);
+    for (std::size_t i = 0; i < v.count; ++i) {
+      float f[2];
+      std::memcpy(f, v.data + i * v.stride, sizeof f);
+      if (!std::isfinite(f[0]) || !std::isfinite(f[1]))
+        source_.fail(at("accessors", index), "holds a value that is not a finite number");
+      out[i] = Uv(f[0], 1.0f - f[1]);
+    }
+    return out;
+  }
+
+  // The texture of a material's textureInfo, if it has one: `pointer` is the textureInfo's.
+  std::optional<TexturedColor> texture(const tinygltf::TextureInfo& info, const Color& scale,
+                                       const std::string& pointer) const {
+    if (info.index < 0) return std::nullopt;
+    if (static_cast<std::size_t>(info.index) >= gltf_.textures.size())
+      source_.fail(pointer + "/index", "names a texture that does not exist");
+    if (info.texCoord != 0)
+      source_.fail(pointer + "/texCoord", "only TEXCOORD_0 is read; this names another set");
+    const tinygltf::Texture& texture = gltf_.textures[info.index];
+    const std::string texture_pointer = at("textures", info.index);
+    if (texture.source < 0 || static_cast<std::size_t>(texture.source) >= gltf_.images.size())
+      source_.fail(texture_pointer + "/source", "must name an image");
+    const std::size_t image = texture.source;
+    if (image >= images_.size() || !images_[image])
+      source_.fail(at("images", image), "has no bytes that could be read");
+    TexturedColor out;
+    const tinygltf::Image& info_image = gltf_.images[image];
+    out.image.name = source_.name + ":" + at("images", image);
+    out.image.bytes = images_[image];
+    out.image.extension = info_image.mimeType == "image/jpeg" ? ".jpg"
+                          : info_image.mimeType == "image/png"
+                              ? ".png"
+                              : std::filesystem::path(info_image.uri).extension().string();
+    out.scale = scale;
+    if (texture.sampler >= 0 && static_cast<std::size_t>(texture.sampler) < gltf_.samplers.size()) {
+      const int wrap = gltf_.samplers[texture.sampler].wrapS;
+      out.wrap = wrap == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? TextureWrap::clamp
+                 : wrap == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::mirror
+                                                                 : TextureWrap::repeat;
+    }
+    return out;
+  }
+
+  // The material of a primitive, with its base colour and emissive textures: the base
+  // colour's colours K_D and K_A, as its factor does (docs/scene-format.md).
+  Material material(int index) const {
+    const tinygltf::Material& file_material = gltf_.materials[index];
+    Material m = gltf_material(file_material);
+    const std::string pointer = at("materials", index);
+    const auto& pbr = file_material.pbrMetallicRoughness;
+    if (auto base = texture(pbr.baseColorTexture, m.diffuse,
+                            pointer + "/pbrMetallicRoughness/baseColorTexture")) {
+      m.texture(TexturedTerm::diffuse) = *base;
+      base->scale = m.ambient;
+      m.texture(TexturedTerm::ambient) = std::move(*base);
+    }
+    m.texture(TexturedTerm::emission) =
+        texture(file_material.emissiveTexture, m.emission, pointer + "/emissiveTexture");
+    return m;
   }
 
   std::vector<std::uint32_t> indices(int index, std::size_t vertices,
@@ -147,6 +214,11 @@ class GltfReader {
       if (raw.normals.size() != raw.positions.size())
         source_.fail(at("accessors", normal->second), "must have as many normals as positions");
     }
+    if (const auto uv = primitive.attributes.find("TEXCOORD_0"); uv != primitive.attributes.end()) {
+      raw.uvs = uvs(uv->second, pointer + "/attributes/TEXCOORD_0");
+      if (raw.uvs.size() != raw.positions.size())
+        source_.fail(at("accessors", uv->second), "must have as many uvs as positions");
+    }
     std::vector<std::uint32_t> order;
     if (primitive.indices >= 0) {
       order = indices(primitive.indices, raw.positions.size(), pointer + "/indices");
@@ -163,7 +235,7 @@ class GltfReader {
     ModelPart part{std::move(*mesh_out), std::nullopt, gltf_.meshes[mesh].name};
     if (primitive.material >= 0 &&
         static_cast<std::size_t>(primitive.material) < gltf_.materials.size())
-      part.material = gltf_material(gltf_.materials[primitive.material]);
+      part.material = material(primitive.material);
     else if (primitive.material >= 0)
       source_.fail(pointer + "/material", "names a material that does not exist");
     model.parts.push_back(std::move(part));
@@ -259,6 +331,7 @@ class GltfReader {
   static constexpr int max_depth = 1000;
   const tinygltf::Model& gltf_;
   const ModelSource& source_;
+  const std::vector<std::shared_ptr<const std::string>>& images_;
   std::size_t triangles_ = 0;
   std::vector<bool> visited_;
 };
@@ -308,8 +381,9 @@ Material gltf_material(const tinygltf::Material& material) {
   return m;
 }
 
-Model gltf_model(const tinygltf::Model& gltf, const ModelSource& source) {
-  GltfReader reader(gltf, source);
+Model gltf_model(const tinygltf::Model& gltf, const ModelSource& source,
+                 const std::vector<std::shared_ptr<const std::string>>& images) {
+  GltfReader reader(gltf, source, images);
   Model model;
   for (const int root : reader.roots()) reader.node(root, Mat4(1.0), 0, model);
   return model;

@@ -9,7 +9,9 @@
 
 namespace tessera {
 
-Model gltf_model(const tinygltf::Model& gltf, const ModelSource& source);
+// `images`: the bytes of each of the glTF's images, by index (null where none were read).
+Model gltf_model(const tinygltf::Model& gltf, const ModelSource& source,
+                 const std::vector<std::shared_ptr<const std::string>>& images = {});
 Material gltf_material(const tinygltf::Material& material);
 
 }  // namespace tessera

@@ -1,7 +1,9 @@
 #include "common/mesh_files/mesh_builder.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <unordered_map>
 
 namespace tessera {
 namespace {
@@ -14,23 +16,51 @@ std::optional<Vec3> unit(const Vec3& v) {
   return v / length;
 }
 
-// Each position's normal as the sum of its faces' cross products, which weighs each face by
-// its area; a position whose faces cancel out takes its first face's normal.
+// For each position, the first position at the same point: where a file gives one point
+// several uvs (a texture's seam), the reader made a position of each, and smooth normals
+// must not crease there.
+std::vector<std::uint32_t> weld_points(const std::vector<Vec3>& positions, bool split) {
+  std::vector<std::uint32_t> point(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) point[i] = static_cast<std::uint32_t>(i);
+  if (!split) return point;
+  struct Bits {
+    std::size_t operator()(const Vec3& v) const {
+      std::uint64_t h = 0;
+      for (int k = 0; k < 3; ++k) {
+        std::uint64_t b;
+        std::memcpy(&b, &v[k], sizeof b);
+        h = (h ^ b) * 0x9e3779b97f4a7c15ull;
+      }
+      return static_cast<std::size_t>(h ^ (h >> 29));
+    }
+  };
+  std::unordered_map<Vec3, std::uint32_t, Bits> first;
+  first.reserve(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    point[i] = first.try_emplace(positions[i], static_cast<std::uint32_t>(i)).first->second;
+  return point;
+}
+
+// Each point's normal as the sum of its faces' cross products, which weighs each face by
+// its area; a point whose faces cancel out takes its first face's normal.
 std::vector<Vec3> smooth_normals(const Mesh& mesh) {
+  const std::vector<std::uint32_t> point = weld_points(mesh.positions, !mesh.uvs.empty());
   std::vector<Vec3> sums(mesh.positions.size(), Vec3(0.0));
   std::vector<Vec3> first(mesh.positions.size(), Vec3(0.0));
   for (const auto& t : mesh.triangles) {
     const Vec3 face = glm::cross(mesh.positions[t[1]] - mesh.positions[t[0]],
                                  mesh.positions[t[2]] - mesh.positions[t[0]]);
-    for (const std::uint32_t i : t) {
+    for (const std::uint32_t corner : t) {
+      const std::uint32_t i = point[corner];
       if (sums[i] == Vec3(0.0) && first[i] == Vec3(0.0)) first[i] = face;
       sums[i] += face;
     }
   }
   std::vector<Vec3> normals(sums.size());
   for (std::size_t i = 0; i < sums.size(); ++i) {
-    auto n = unit(sums[i]);
-    if (!n) n = unit(first[i]);
+    const std::uint32_t p = point[i];
+    auto n = unit(sums[p]);
+    if (!n) n = unit(first[p]);
     normals[i] = n ? *n : Vec3(0.0, 1.0, 0.0);
   }
   return normals;
@@ -56,6 +86,18 @@ std::optional<Mesh> finish_mesh(RawMesh raw, NormalsMode mode) {
     mesh.triangles.push_back(kept);
   }
   if (mesh.triangles.empty()) return std::nullopt;
+  if (raw.uvs.size() == raw.positions.size()) {
+    mesh.uvs.resize(mesh.positions.size());
+    for (std::size_t i = 0; i < renumbered.size(); ++i) {
+      if (renumbered[i] == unused) continue;
+      const Uv uv = raw.uvs[i];
+      if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {  // as a file without uvs
+        mesh.uvs.clear();
+        break;
+      }
+      mesh.uvs[renumbered[i]] = uv;
+    }
+  }
 
   if (mode == NormalsMode::smooth) {
     mesh.normals = smooth_normals(mesh);

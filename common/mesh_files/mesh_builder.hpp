@@ -16,12 +16,13 @@ struct RawMesh {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;  // empty, or one per position (any length, even zero)
   std::vector<std::array<std::uint32_t, 3>> triangles;  // indices below positions.size()
+  std::vector<Uv> uvs;  // empty, or one per position (OBJ's v up, as Mesh::uvs)
 };
 
 // Drops degenerate triangles and the positions no triangle uses, and chooses the shading
 // normals by `mode`: the file's where every kept position has a usable one (else none),
-// none, or the area-weighted average of the faces around each position. Nothing when no
-// triangle is left.
+// none, or the area-weighted average of the faces around each point (positions that a uv
+// seam split count as one point). Keeps the uvs. Nothing when no triangle is left.
 std::optional<Mesh> finish_mesh(RawMesh raw, NormalsMode mode);
 
 // Triangles of a convex polygon as a fan from its first corner: `corners` are indices.

@@ -63,7 +63,23 @@ class BundleMaterials : public tinyobj::MaterialReader {
 Color color(const tinyobj::real_t (&c)[3]) { return Color(c[0], c[1], c[2]); }
 Color non_negative(const Color& c) { return glm::max(c, Color(0.0)); }
 
-Material from_mtl(const tinyobj::material_t& mtl) {
+// A map statement's texture, named relative to the model's folder as the MTL is.
+std::optional<TexturedColor> map_texture(const ModelSource& source, const std::string& name,
+                                         const tinyobj::texture_option_t& options,
+                                         const Color& scale) {
+  if (name.empty()) return std::nullopt;
+  TexturedColor texture;
+  const std::filesystem::path path = source.dependency(name, "");
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    source.fail("", "its MTL names the texture \"" + name + "\", which is not there");
+  texture.image = {name, path.string(), nullptr, {}};
+  texture.scale = scale;
+  texture.wrap = options.clamp ? TextureWrap::clamp : TextureWrap::repeat;
+  return texture;
+}
+
+Material from_mtl(const tinyobj::material_t& mtl, const ModelSource& source) {
   Material m;
   m.ambient = non_negative(color(mtl.ambient));
   m.diffuse = non_negative(color(mtl.diffuse));
@@ -85,13 +101,41 @@ Material from_mtl(const tinyobj::material_t& mtl) {
   } else if ((illum == 6 || illum == 7) && filter != Color(0.0)) {
     m.transmission = tf;
   }
+  // Each map is multiplied by its colour, as the MTL format has it; map_Kd colours K_A too
+  // where there is no map_Ka (docs/scene-format.md, "Materials from MTL").
+  m.texture(TexturedTerm::diffuse) =
+      map_texture(source, mtl.diffuse_texname, mtl.diffuse_texopt, m.diffuse);
+  m.texture(TexturedTerm::ambient) =
+      mtl.ambient_texname.empty()
+          ? map_texture(source, mtl.diffuse_texname, mtl.diffuse_texopt, m.ambient)
+          : map_texture(source, mtl.ambient_texname, mtl.ambient_texopt, m.ambient);
+  if (illum != 1)
+    m.texture(TexturedTerm::specular) =
+        map_texture(source, mtl.specular_texname, mtl.specular_texopt, m.specular);
+  m.texture(TexturedTerm::emission) =
+      map_texture(source, mtl.emissive_texname, mtl.emissive_texopt, m.emission);
   return m;
 }
 
+// A face corner's indices: its position, normal and uv (-1: none).
+struct Corner {
+  int v, vn, vt;
+  bool operator==(const Corner&) const = default;
+};
+struct CornerHash {
+  std::size_t operator()(const Corner& c) const {
+    std::uint64_t h = static_cast<std::uint32_t>(c.v);
+    h = h * 0x9e3779b97f4a7c15ull + static_cast<std::uint32_t>(c.vn);
+    h = h * 0x9e3779b97f4a7c15ull + static_cast<std::uint32_t>(c.vt);
+    return static_cast<std::size_t>(h ^ (h >> 31));
+  }
+};
+
 struct PartBuilder {
   RawMesh raw;
-  std::unordered_map<std::uint64_t, std::uint32_t> corners;  // (v, vn) -> position index
+  std::unordered_map<Corner, std::uint32_t, CornerHash> corners;  // -> position index
   bool all_normals = true;
+  bool all_uvs = true;
 };
 
 }  // namespace
@@ -116,6 +160,7 @@ Model read_obj(const ModelSource& source) {
   }
   const std::size_t positions = attrib.vertices.size() / 3;
   const std::size_t normals = attrib.normals.size() / 3;
+  const std::size_t uvs = attrib.texcoords.size() / 2;
   const bool use_file_normals = source.request->normals == NormalsMode::file;
   std::vector<PartBuilder> parts(materials.size() + 1);  // the last: faces with no material
   std::size_t face_number = 0;
@@ -134,20 +179,29 @@ Model read_obj(const ModelSource& source) {
       for (std::size_t k = 0; k < n; ++k) {
         const tinyobj::index_t& index = shape.mesh.indices[next + k];
         const bool has_normal = use_file_normals && index.normal_index >= 0;
+        const bool has_uv = index.texcoord_index >= 0;
         if (index.vertex_index < 0 || static_cast<std::size_t>(index.vertex_index) >= positions ||
-            (has_normal && static_cast<std::size_t>(index.normal_index) >= normals)) {
+            (has_normal && static_cast<std::size_t>(index.normal_index) >= normals) ||
+            (has_uv && static_cast<std::size_t>(index.texcoord_index) >= uvs)) {
           source.fail(line_at(find_line(text, "f", face_number)),
-                      "a face names a vertex or normal that does not exist (" +
-                          std::to_string(positions) + " vertices and " + std::to_string(normals) +
-                          " normals are defined)");
+                      "a face names a vertex, uv or normal that does not exist (" +
+                          std::to_string(positions) + " vertices, " + std::to_string(uvs) +
+                          " uvs and " + std::to_string(normals) + " normals are defined)");
         }
-        const std::uint64_t key = static_cast<std::uint64_t>(index.vertex_index) * (normals + 1) +
-                                  (has_normal ? index.normal_index + 1 : 0);
+        const Corner key{index.vertex_index, has_normal ? index.normal_index : -1,
+                         has_uv ? index.texcoord_index : -1};
         const auto [at, added] =
             part.corners.try_emplace(key, static_cast<std::uint32_t>(part.raw.positions.size()));
         if (added) {
           const float* v = &attrib.vertices[3 * index.vertex_index];
           part.raw.positions.emplace_back(v[0], v[1], v[2]);
+          if (has_uv) {
+            const float* vt = &attrib.texcoords[2 * index.texcoord_index];
+            part.raw.uvs.emplace_back(vt[0], vt[1]);
+          } else {
+            part.all_uvs = false;
+            part.raw.uvs.emplace_back(0.0f);
+          }
           if (has_normal) {
             const float* vn = &attrib.normals[3 * index.normal_index];
             part.raw.normals.emplace_back(vn[0], vn[1], vn[2]);
@@ -170,10 +224,11 @@ Model read_obj(const ModelSource& source) {
   for (std::size_t i = 0; i < parts.size(); ++i) {
     PartBuilder& part = parts[i];
     if (!part.all_normals) part.raw.normals.clear();  // a face without normals: shaded flat
+    if (!part.all_uvs) part.raw.uvs.clear();          // a face without uvs: as if none had them
     auto mesh = finish_mesh(std::move(part.raw), source.request->normals);
     if (!mesh) continue;
     if (i < materials.size())
-      model.parts.push_back({std::move(*mesh), from_mtl(materials[i]), materials[i].name});
+      model.parts.push_back({std::move(*mesh), from_mtl(materials[i], source), materials[i].name});
     else
       model.parts.push_back({std::move(*mesh), std::nullopt, "(no material)"});
   }

@@ -250,18 +250,24 @@ struct ElementReader {
 };
 
 void read_vertices(const ElementReader& in, RawMesh& raw) {
-  std::array<int, 6> slot{-1, -1, -1, -1, -1, -1};
-  static constexpr std::string_view names[] = {"x", "y", "z", "nx", "ny", "nz"};
+  // Texture coordinates go by three pairs of names in the wild: u v, s t, texture_u
+  // texture_v; the last pair found wins.
+  constexpr int kSlots = 8;
+  std::array<int, kSlots> slot{-1, -1, -1, -1, -1, -1, -1, -1};
+  static constexpr std::string_view names[] = {"x", "y", "z", "nx", "ny",        "nz",
+                                               "u", "v", "s", "t",  "texture_u", "texture_v"};
   for (std::size_t p = 0; p < in.element.properties.size(); ++p)
-    for (int k = 0; k < 6; ++k)
+    for (int k = 0; k < static_cast<int>(std::size(names)); ++k)
       if (in.element.properties[p].name == names[k] && !in.element.properties[p].list)
-        slot[k] = static_cast<int>(p);
+        slot[k < kSlots ? k : 6 + (k - 6) % 2] = static_cast<int>(p);
   if (slot[0] < 0 || slot[1] < 0 || slot[2] < 0)
     in.source.fail(line_at(in.element.line), "the vertex element has no x, y and z");
   const bool normals = slot[3] >= 0 && slot[4] >= 0 && slot[5] >= 0;
+  const bool uvs = slot[6] >= 0 && slot[7] >= 0;
   raw.positions.resize(in.element.count);
   if (normals) raw.normals.resize(in.element.count);
-  std::array<double, 6> v{};
+  if (uvs) raw.uvs.resize(in.element.count);
+  std::array<double, kSlots> v{};
   for (std::uint64_t i = 0; i < in.element.count; ++i) {
     in.values.begin_instance();
     for (std::size_t p = 0; p < in.element.properties.size(); ++p) {
@@ -273,12 +279,13 @@ void read_vertices(const ElementReader& in, RawMesh& raw) {
       } else {
         value = in.values.number(property.type);
       }
-      for (int k = 0; k < 6; ++k)
+      for (int k = 0; k < kSlots; ++k)
         if (slot[k] == static_cast<int>(p)) v[k] = value;
     }
     in.values.end_instance();
     raw.positions[i] = Vec3(v[0], v[1], v[2]);
     if (normals) raw.normals[i] = Vec3(v[3], v[4], v[5]);
+    if (uvs) raw.uvs[i] = Uv(static_cast<float>(v[6]), static_cast<float>(v[7]));
   }
 }
 

@@ -43,7 +43,22 @@ void write_tetrahedron_gltf(const fs::path& dir) {
                                      .dump());
 }
 
-// examples/still_life.json's OBJ and MTL, and a glTF with its .bin, in one scene.
+// A PNG whose texels vary in every channel, so that any texel read wrong shows.
+void write_texture(const fs::path& path, int seed) {
+  fs::create_directories(path.parent_path());
+  Image image(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      float* p = image.pixel(x, y);
+      p[0] = static_cast<float>((x * 7 + y * 3 + seed) % 16) / 15.0f;
+      p[1] = static_cast<float>((x + y * 5 + 2 * seed) % 16) / 15.0f;
+      p[2] = static_cast<float>((x * y + seed) % 16) / 15.0f;
+    }
+  write_image(image, path, OutputTransfer::srgb);
+}
+
+// examples/still_life.json's OBJ and MTL, a glTF with its .bin, and a textured OBJ (its
+// MTL maps a PNG) on a floor with a PNG of its own, in one scene.
 fs::path write_scene(const fs::path& dir) {
   fs::create_directories(dir / "models");
   const fs::path examples = fs::path(TESSERA_SOURCE_DIR) / "examples";
@@ -54,6 +69,17 @@ fs::path write_scene(const fs::path& dir) {
   scene["image"] = {{"width", 96}, {"height", 72}};
   scene["render"] = {{"samples_per_pixel", 1}, {"max_depth", 6}, {"tile_size", 16}};
   scene["objects"].push_back({{"type", "mesh"}, {"file", "models/tetra.gltf"}});
+  write_text(dir / "models" / "quad.obj",
+             "mtllib quad.mtl\nv -1 0 0\nv 1 0 0\nv 1 2 0\nv -1 2 0\n"
+             "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\nf 1/1 2/2 3/3 4/4\n");
+  write_text(dir / "models" / "quad.mtl", "newmtl painted\nKd 1 1 1\nmap_Kd tex/paint.png\n");
+  write_texture(dir / "models" / "tex" / "paint.png", 1);
+  write_texture(dir / "textures" / "floor.png", 5);
+  scene["objects"].push_back({{"type", "mesh"},
+                              {"file", "models/quad.obj"},
+                              {"transform", {{{"translate", {-1.6, 0, -1.2}}}}}});
+  scene["objects"][0]["material"] = {{"diffuse", {{"texture", "textures/floor.png"}}},
+                                     {"specular", 0.1}};
   write_text(dir / "scene.json", scene.dump(2));
   return dir / "scene.json";
 }
@@ -66,8 +92,9 @@ TEST(FarmAssets, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
       {"--server", farm.url(), "submit", scene.string(), "-o", (farm.dir() / "farm.exr").string()},
       std::chrono::seconds(120));
   ASSERT_EQ(first.exit_code, 0) << first.output;
-  // The OBJ, its MTL, the glTF and its .bin.
-  EXPECT_TRUE(contains(first.output, "assets: 4 uploaded")) << first.output;
+  // The OBJ, its MTL, the glTF and its .bin, the textured OBJ, its MTL and its PNG, and the
+  // floor's PNG.
+  EXPECT_TRUE(contains(first.output, "assets: 8 uploaded")) << first.output;
   const CliRun local = run_cli(farm.dir(), {"render", scene.string(), "-o",
                                             (farm.dir() / "local.exr").string(), "--threads", "2"});
   ASSERT_EQ(local.exit_code, 0) << local.output;
@@ -80,7 +107,7 @@ TEST(FarmAssets, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
       {"--server", farm.url(), "submit", scene.string(), "-o", (farm.dir() / "again.exr").string()},
       std::chrono::seconds(120));
   ASSERT_EQ(second.exit_code, 0) << second.output;
-  EXPECT_TRUE(contains(second.output, "assets: 0 uploaded (0 bytes), 4 already on the coordinator"))
+  EXPECT_TRUE(contains(second.output, "assets: 0 uploaded (0 bytes), 8 already on the coordinator"))
       << second.output;
   EXPECT_FALSE(contains(second.output, "uploading")) << second.output;
   EXPECT_TRUE(
@@ -136,6 +163,31 @@ TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   EXPECT_EQ(refused.status, 422);
   EXPECT_TRUE(contains(refused.body, "\"path\":\"/scene/objects/0/files/x.mtl\"")) << refused.body;
   EXPECT_TRUE(contains(refused.body, other)) << refused.body;
+
+  // A texture the coordinator holds but no worker could decode: refused at submit, naming
+  // it, and a texture it lacks: 422 at the texture's pointer.
+  EXPECT_EQ(http.request("PUT", asset_target(digest), bytes, "application/octet-stream").status,
+            200);
+  const auto textured = [&](const std::string& texture_digest) {
+    return nlohmann::json{
+        {"scene",
+         {{"image", {{"width", 8}, {"height", 8}}},
+          {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
+          {"objects",
+           {{{"type", "sphere"},
+             {"center", {0, 0, 0}},
+             {"radius", 1},
+             {"material",
+              {{"diffuse", {{"asset", "sha256:" + texture_digest}, {"name", "paint.png"}}}}}}}}}}};
+  };
+  const HttpResult undecodable = http.request("POST", "/v1/jobs", textured(digest).dump());
+  EXPECT_EQ(undecodable.status, 400) << undecodable.body;
+  EXPECT_TRUE(contains(undecodable.body, "texture paint.png")) << undecodable.body;
+  const HttpResult absent = http.request("POST", "/v1/jobs", textured(other).dump());
+  EXPECT_EQ(absent.status, 422);
+  EXPECT_TRUE(contains(absent.body, "\"path\":\"/scene/objects/0/material/diffuse/asset\""))
+      << absent.body;
+  EXPECT_EQ(http.request("GET", "/healthz").status, 200);
 }
 
 TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {

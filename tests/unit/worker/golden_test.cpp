@@ -40,6 +40,8 @@ std::vector<Example> examples() {
   list.push_back(
       {"gltf_carousel", fs::path(TESSERA_BINARY_DIR) / "examples" / "gltf_carousel.json"});
   list.push_back(
+      {"textured_globe", fs::path(TESSERA_BINARY_DIR) / "examples" / "textured_globe.json"});
+  list.push_back(
       {"course_temple", fs::path(TESSERA_SOURCE_DIR) / "examples" / "course" / "temple.scn"});
   std::sort(list.begin(), list.end(), [](auto& a, auto& b) { return a.name < b.name; });
   return list;

@@ -187,5 +187,53 @@ TEST_F(GltfFile, ErrorsNameAJsonPointerIntoTheGltf) {
   EXPECT_THAT(load_error("broken.gltf"), HasSubstr("broken.gltf: "));
 }
 
+TEST_F(GltfFile, TexcoordsAndTheBaseColourAndEmissiveTextures) {
+  // The square's buffer, then four uvs (glTF's v runs down the image).
+  std::string buffer = square_buffer();
+  for (const float v : {0.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f, 0.f}) append(buffer, v);
+  nlohmann::json gltf = square_gltf("data:application/octet-stream;base64," + base64(buffer));
+  gltf["buffers"][0]["byteLength"] = buffer.size();
+  gltf["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", 60}, {"byteLength", 32}});
+  gltf["accessors"].push_back(
+      {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}});
+  gltf["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
+  gltf["images"] = {{{"uri", "data:image/png;base64," + base64("not decoded here")}},
+                    {{"uri", "glow.png"}}};
+  gltf["samplers"] = {{{"wrapS", 33648}, {"wrapT", 33648}}};
+  gltf["textures"] = {{{"source", 0}, {"sampler", 0}}, {{"source", 1}}};
+  gltf["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  gltf["materials"][0]["emissiveTexture"] = {{"index", 1}};
+  write("glow.png", "glow bytes");
+  write("square.gltf", gltf.dump());
+  const Model model = load("square.gltf");
+  ASSERT_EQ(model.parts.size(), 1u);
+  const Mesh& mesh = model.parts[0].mesh;
+  ASSERT_EQ(mesh.uvs.size(), 4u);
+  EXPECT_EQ(mesh.uvs[0], Uv(0.0f, 0.0f));
+  EXPECT_EQ(mesh.uvs[2], Uv(1.0f, 1.0f));
+  const Material& m = *model.parts[0].material;
+  ASSERT_TRUE(m.texture(TexturedTerm::diffuse));
+  const TexturedColor& base = *m.texture(TexturedTerm::diffuse);
+  ASSERT_TRUE(base.image.bytes);
+  EXPECT_EQ(*base.image.bytes, "not decoded here");
+  EXPECT_EQ(base.image.extension, ".png");
+  EXPECT_EQ(base.image.name, "square.gltf:/images/0");
+  EXPECT_EQ(base.wrap, TextureWrap::mirror);
+  EXPECT_EQ(base.scale, m.diffuse);
+  ASSERT_TRUE(m.texture(TexturedTerm::ambient));  // K_A follows K_D, as its factor does
+  ASSERT_TRUE(m.texture(TexturedTerm::emission));
+  EXPECT_EQ(*m.texture(TexturedTerm::emission)->image.bytes, "glow bytes");
+  EXPECT_EQ(m.texture(TexturedTerm::emission)->scale, m.emission);
+}
+
+TEST_F(GltfFile, ATextureThatNamesNoImageIsAnErrorAtItsPointer) {
+  nlohmann::json gltf =
+      square_gltf("data:application/octet-stream;base64," + base64(square_buffer()));
+  gltf["textures"] = {{{"source", 3}}};
+  gltf["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  write("square.gltf", gltf.dump());
+  EXPECT_THAT(load_error("square.gltf"), HasSubstr("/textures/0/source"));
+}
+
 }  // namespace
 }  // namespace tessera

@@ -107,8 +107,9 @@ TEST_F(ObjFile, TheSameCornerWithTwoNormalsBecomesTwoPositions) {
 
 TEST_F(ObjFile, ErrorsNameTheLine) {
   write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2 9\n");
-  EXPECT_THAT(load_error("range.obj"),
-              HasSubstr("range.obj:line 6: a face names a vertex or normal that does not exist"));
+  EXPECT_THAT(
+      load_error("range.obj"),
+      HasSubstr("range.obj:line 6: a face names a vertex, uv or normal that does not exist"));
   write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
   EXPECT_THAT(load_error("zero.obj"), HasSubstr("zero.obj:line 4: "));
   write("points.obj", "v 0 0 0\nv 1 0 0\n");
@@ -135,6 +136,59 @@ TEST_F(ObjFile, TrianglesOverTheLimitAreRefusedAtTheFaceThatCrossesIt) {
     EXPECT_EQ(e.limit(), "max_triangles");
     EXPECT_THAT(e.what(), HasSubstr("many.obj:line 7: needs at least 3 triangles"));
   }
+}
+
+TEST_F(ObjFile, UvsSplitCornersAtSeamsAndMapsBecomeTextures) {
+  write("tex/wood.png", "png bytes: the reader only locates the file");
+  write("box.mtl", "newmtl wood\nKa 0.5 0.5 0.5\nKd 0.8 0.6 0.4\nmap_Kd -clamp on tex/wood.png\n");
+  // Two triangles sharing the edge 1-3, whose corner 3 has a different uv in each: a seam.
+  write("box.obj", R"(mtllib box.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vt 0.5 0.5
+usemtl wood
+f 1/1 2/2 3/3
+f 1/1 3/5 4/4
+)");
+  const Model model = load("box.obj", NormalsMode::smooth);
+  ASSERT_EQ(model.parts.size(), 1u);
+  const Mesh& mesh = model.parts[0].mesh;
+  ASSERT_EQ(mesh.positions.size(), 5u);  // corner 3 twice, once per uv
+  ASSERT_EQ(mesh.uvs.size(), 5u);
+  EXPECT_EQ(mesh.uvs[mesh.triangles[1][1]], Uv(0.5f, 0.5f));
+  EXPECT_EQ(mesh.uvs[mesh.triangles[0][2]], Uv(1.0f, 1.0f));
+  // The seam does not crease the smooth normals: both copies of corner 3 face +z.
+  EXPECT_EQ(mesh.normals[mesh.triangles[1][1]], mesh.normals[mesh.triangles[0][2]]);
+  const Material& wood = *model.parts[0].material;
+  ASSERT_TRUE(wood.texture(TexturedTerm::diffuse));
+  const TexturedColor& kd = *wood.texture(TexturedTerm::diffuse);
+  EXPECT_EQ(kd.image.name, "tex/wood.png");
+  EXPECT_EQ(std::filesystem::path(kd.image.path), dir_ / "tex/wood.png");
+  EXPECT_EQ(kd.scale, Color(0.8f, 0.6f, 0.4f));  // as the MTL's floats
+  EXPECT_EQ(kd.wrap, TextureWrap::clamp);
+  // With no map_Ka, map_Kd colours K_A too, scaled by Ka.
+  ASSERT_TRUE(wood.texture(TexturedTerm::ambient));
+  EXPECT_EQ(wood.texture(TexturedTerm::ambient)->scale, Color(0.5f));
+  EXPECT_FALSE(wood.texture(TexturedTerm::specular));
+}
+
+TEST_F(ObjFile, AMissingOrEscapingTextureIsAnError) {
+  write("a.obj", "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
+  write("a.mtl", "newmtl m\nmap_Kd gone.png\n");
+  EXPECT_THAT(load_error("a.obj"), HasSubstr("gone.png"));
+  write("a.mtl", "newmtl m\nmap_Kd ../../etc/passwd\n");
+  EXPECT_THAT(load_error("a.obj"), HasSubstr("outside the model's own folder"));
+}
+
+TEST_F(ObjFile, AFaceNamingAMissingUvNamesItsLine) {
+  write("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n");
+  EXPECT_THAT(load_error("a.obj"), HasSubstr("a.obj:line 5"));
 }
 
 }  // namespace

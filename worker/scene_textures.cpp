@@ -1,0 +1,35 @@
+#include "worker/scene_textures.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "common/image_file_loader.hpp"
+
+namespace tessera {
+namespace {
+
+bool same_image(const TextureImage& a, const TextureImage& b) {
+  return a.bytes ? a.bytes == b.bytes : !b.bytes && a.path == b.path;
+}
+
+}  // namespace
+
+SceneTextures::SceneTextures(const Scene& scene) {
+  for (const Material& material : scene.materials)
+    for (const auto& texture : material.textures)
+      if (texture && std::none_of(images_.begin(), images_.end(), [&](const TextureImage& known) {
+            return same_image(known, texture->image);
+          }))
+        images_.push_back(texture->image);
+  if (!images_.empty()) sampler_ = image_files().open_textures(images_);
+}
+
+std::size_t SceneTextures::index_of(const TextureImage& image) const {
+  const auto found = std::find_if(images_.begin(), images_.end(), [&](const TextureImage& known) {
+    return same_image(known, image);
+  });
+  if (found == images_.end()) throw std::logic_error("a texture the scene's materials do not name");
+  return static_cast<std::size_t>(found - images_.begin());
+}
+
+}  // namespace tessera
