@@ -1,5 +1,8 @@
 #include "client/scene_assets.hpp"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -27,7 +30,43 @@ std::string digest_of(const std::filesystem::path& path, const std::string& name
   return digest;
 }
 
-// Sends each file once, when the coordinator lacks it.
+// An upload's progress: on a terminal, a bar redrawn in place as the pieces go out; in a
+// log or a pipe, one line when it starts.
+class ProgressBar {
+ public:
+  ProgressBar(std::FILE* out, const std::string& name, std::uint64_t total)
+      : out_(out), name_(printable(name)), terminal_(out != nullptr && ::isatty(::fileno(out))) {
+    if (out_ != nullptr && !terminal_)
+      std::fprintf(out_, "uploading %s (%s) ...\n", name_.c_str(), size_text(total).c_str());
+    update(0, total);
+  }
+  ~ProgressBar() {
+    if (terminal_) std::fputc('\n', out_);
+  }
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+
+  void update(std::uint64_t sent, std::uint64_t total) {
+    if (!terminal_) return;
+    constexpr int kWidth = 30;
+    const int percent = total == 0 ? 100 : static_cast<int>(sent * 100 / total);
+    if (percent == shown_) return;
+    shown_ = percent;
+    const int filled = percent * kWidth / 100;
+    std::fprintf(out_, "\ruploading %s [%s%s] %3d%% %s / %s", name_.c_str(),
+                 std::string(filled, '#').c_str(), std::string(kWidth - filled, '-').c_str(),
+                 percent, size_text(sent).c_str(), size_text(total).c_str());
+    std::fflush(out_);
+  }
+
+ private:
+  std::FILE* out_;
+  std::string name_;
+  bool terminal_;
+  int shown_ = -1;
+};
+
+// Sends each file once, when the coordinator lacks it, streamed from disk.
 class Sender {
  public:
   Sender(CoordinatorClient& api, std::FILE* progress) : api_(api), progress_(progress) {}
@@ -38,12 +77,18 @@ class Sender {
       ++report_.held;
       return;
     }
-    const std::string bytes = read_text_file(path);
-    if (progress_)
-      std::fprintf(progress_, "uploading %s (%s) ...\n", printable(name).c_str(),
-                   size_text(bytes.size()).c_str());
-    report_.bytes += bytes.size();
-    if (api_.put_asset(digest, bytes))
+    std::error_code error;
+    const std::uint64_t size = std::filesystem::file_size(path, error);
+    if (error) throw SceneFileError(name, "", "cannot be read: " + error.message());
+    bool added = false;
+    {
+      ProgressBar bar(progress_, name, size);
+      added = api_.put_asset_file(digest, path, [&bar](std::uint64_t sent, std::uint64_t total) {
+        bar.update(sent, total);
+      });
+    }
+    report_.bytes += size;
+    if (added)
       ++report_.uploaded;
     else
       ++report_.held;  // arrived meanwhile, from another submission

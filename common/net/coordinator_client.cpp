@@ -156,6 +156,14 @@ bool CoordinatorClient::put_asset(std::string_view sha256, std::string bytes) {
   return result.status == 201;
 }
 
+bool CoordinatorClient::put_asset_file(std::string_view sha256, const std::filesystem::path& path,
+                                       const HttpClient::UploadProgress& progress) {
+  const HttpResult result =
+      checked(http_.send_file("PUT", fill(route::asset, "sha256:" + std::string(sha256)), path,
+                              "application/octet-stream", progress));
+  return result.status == 201;
+}
+
 std::string CoordinatorClient::scene_asset(std::string_view sha256) {
   return call("GET", fill(route::scene_asset, "sha256:" + std::string(sha256))).body;
 }

@@ -71,6 +71,9 @@ class CoordinatorClient {
   // an upload, true when it was new (201), false when already held (200).
   bool has_asset(std::string_view sha256);
   bool put_asset(std::string_view sha256, std::string bytes);
+  // The same for the file at `path`, streamed from disk (HttpClient::send_file()).
+  bool put_asset_file(std::string_view sha256, const std::filesystem::path& path,
+                      const HttpClient::UploadProgress& progress = {});
 
   // The worker's routes. A registration of another protocol version throws ApiError 409
   // (protocol_mismatch); an answer of another version throws protocol::ProtocolMismatch.

@@ -24,6 +24,7 @@
 #include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/http/file_body.hpp>
 #include <boost/beast/ssl.hpp>
 
 namespace tessera {
@@ -266,12 +267,44 @@ struct HttpClient::Connection {
     bool got_some = false;  // some of an answer arrived before the error
   };
 
-  Outcome exchange(const http::request<http::string_body>& request) {
+  // Writes the request in one go within the timeout, or, with `progress` (a file's
+  // upload), a piece at a time, each within the timeout, calling it (where set) after each.
+  template <typename Body>
+  error_code write(http::request<Body>& request, const HttpClient::UploadProgress* progress) {
+    lowest().expires_after(timeout);
+    if (progress == nullptr)
+      return run([&](auto handler) {
+        with_stream([&](auto& stream) { http::async_write(stream, request, std::move(handler)); });
+      });
+    http::request_serializer<Body> serializer(request);
+    const std::uint64_t total = request.payload_size().value_or(0);
+    std::uint64_t written = 0;  // the header's bytes too: a few hundred, in a count of millions
+    while (!serializer.is_done()) {
+      lowest().expires_after(timeout);
+      std::size_t bytes = 0;
+      const error_code ec = run([&](auto handler) {
+        with_stream([&](auto& stream) {
+          http::async_write_some(stream, serializer,
+                                 [&bytes, handler](error_code e, std::size_t n) mutable {
+                                   bytes = n;
+                                   handler(e);
+                                 });
+        });
+      });
+      if (ec) return ec;
+      written += bytes;
+      if (*progress) (*progress)(std::min(written, total), total);
+    }
+    return {};
+  }
+
+  template <typename Body>
+  Outcome exchange(http::request<Body>& request, const HttpClient::UploadProgress* progress) {
     Outcome outcome;
-    lowest().expires_after(timeout);  // covers the write and the read together
-    const error_code write_error = run([&](auto handler) {
-      with_stream([&](auto& stream) { http::async_write(stream, request, std::move(handler)); });
-    });
+    const error_code write_error = write(request, progress);
+    // A piecewise upload's answer has a timeout of its own; else one covers both.
+    if (progress != nullptr) lowest().expires_after(timeout);
+
     if (write_error == beast::error::timeout) {
       outcome.error = write_error;
       return outcome;
@@ -390,8 +423,56 @@ void HttpClient::interrupt() {
 
 void HttpClient::clear_interrupt() { pool_->interrupted = false; }
 
+template <typename Message>
+void HttpClient::prepare(Message& message, std::string_view method, std::string_view target,
+                         bool has_body, std::string_view content_type,
+                         const Headers& headers) const {
+  message.version(11);
+  const http::verb verb = http::string_to_verb(to_beast(method));
+  if (verb == http::verb::unknown)
+    message.method_string(to_beast(method));
+  else
+    message.method(verb);
+  message.target(to_beast(target));
+  message.set(http::field::user_agent, "tessera");
+  // Also on a bodiless POST or PUT: the coordinator requires it of every request that
+  // changes state, since a web page cannot send it to another site without asking.
+  const bool changes =
+      verb == http::verb::post || verb == http::verb::put || verb == http::verb::patch;
+  if ((has_body || changes) && !content_type.empty())
+    message.set(http::field::content_type, to_beast(content_type));
+  if (!authorization_.empty()) message.set(http::field::authorization, authorization_);
+  for (const auto& [name, value] : headers) message.set(name, value);
+}
+
 HttpResult HttpClient::request(std::string_view method, std::string_view target, std::string body,
                                std::string_view content_type, const Headers& headers) {
+  http::request<http::string_body> message;
+  prepare(message, method, target, !body.empty(), content_type, headers);
+  message.body() = std::move(body);
+  message.prepare_payload();
+  return send(message, method, target, nullptr, [] {});
+}
+
+HttpResult HttpClient::send_file(std::string_view method, std::string_view target,
+                                 const std::filesystem::path& path, std::string_view content_type,
+                                 const UploadProgress& progress) {
+  http::request<http::file_body> message;
+  prepare(message, method, target, true, content_type, {});
+  error_code ec;
+  message.body().open(path.c_str(), beast::file_mode::scan, ec);
+  if (ec) throw std::runtime_error("cannot open " + path.string() + ": " + ec.message());
+  message.prepare_payload();
+  auto& file = message.body();
+  return send(message, method, target, &progress, [&file] {
+    error_code ignored;
+    file.file().seek(0, ignored);
+  });
+}
+
+template <typename Message>
+HttpResult HttpClient::send(Message& message, std::string_view method, std::string_view target,
+                            const UploadProgress* progress, const std::function<void()>& rewind) {
   const auto interrupted = [&] {
     return HttpError(HttpError::Kind::interrupted, std::string(method) + " " + std::string(target) +
                                                        " on " + pool_->where + ": interrupted");
@@ -407,27 +488,7 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
     ~Return() { pool.give_back(std::move(c), taken_in); }
   } give_back{*pool_, connection, taken_in};
   Connection& c = *connection;
-
-  http::request<http::string_body> message;
-  message.version(11);
-  const http::verb verb = http::string_to_verb(to_beast(method));
-  if (verb == http::verb::unknown)
-    message.method_string(to_beast(method));
-  else
-    message.method(verb);
-  message.target(to_beast(target));
   message.set(http::field::host, c.host_header);
-  message.set(http::field::user_agent, "tessera");
-  // Also on a bodiless POST or PUT: the coordinator requires it of every request that
-  // changes state, since a web page cannot send it to another site without asking.
-  const bool changes =
-      verb == http::verb::post || verb == http::verb::put || verb == http::verb::patch;
-  if ((!body.empty() || changes) && !content_type.empty())
-    message.set(http::field::content_type, to_beast(content_type));
-  if (!authorization_.empty()) message.set(http::field::authorization, authorization_);
-  for (const auto& [name, value] : headers) message.set(name, value);
-  message.body() = std::move(body);
-  message.prepare_payload();
 
   for (int attempt = 0;; ++attempt) {
     if (pool_->interrupted) throw interrupted();
@@ -440,14 +501,17 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
         throw;
       }
     }
-    Connection::Outcome outcome = c.exchange(message);
+    Connection::Outcome outcome = c.exchange(message, progress);
     if (outcome.result) {
       if (observer_) observer_(method, target, *outcome.result);
       return std::move(*outcome.result);
     }
     c.close();
     if (pool_->interrupted) throw interrupted();
-    if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) continue;
+    if (reused && attempt == 0 && !outcome.got_some && is_closed_by_peer(outcome.error)) {
+      rewind();
+      continue;
+    }
 
     const std::string what = std::string(method) + " " + std::string(target) + " on " + c.where();
     if (outcome.error == beast::error::timeout)

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <memory>
@@ -87,6 +88,16 @@ class HttpClient {
                      std::string_view content_type = "application/json",
                      const Headers& headers = {});
 
+  // How much of a body has gone out, and its size.
+  using UploadProgress = std::function<void(std::uint64_t sent, std::uint64_t total)>;
+  // request() with the file at `path` as the body, read from disk a piece at a time and
+  // never held whole; `progress`, if set, is called after each piece. The timeout bounds
+  // each piece and the answer, not the whole upload. Throws std::runtime_error for a file
+  // that cannot be opened.
+  HttpResult send_file(std::string_view method, std::string_view target,
+                       const std::filesystem::path& path, std::string_view content_type,
+                       const UploadProgress& progress = {});
+
   // For requests that may legitimately take long, such as a long-polled claim; from the
   // next request on.
   void set_timeout(std::chrono::milliseconds timeout);
@@ -110,6 +121,14 @@ class HttpClient {
  private:
   struct Connection;
   struct Pool;
+  // Sends `message` (whose body type is a string's or a file's) and reads the answer, on a
+  // kept-alive connection or a new one; `rewind` makes the body ready to be sent again.
+  template <typename Message>
+  HttpResult send(Message& message, std::string_view method, std::string_view target,
+                  const UploadProgress* progress, const std::function<void()>& rewind);
+  template <typename Message>
+  void prepare(Message& message, std::string_view method, std::string_view target, bool has_body,
+               std::string_view content_type, const Headers& headers) const;
   std::string base_url_;
   std::string authorization_;  // the whole header value; "" for none
   Observer observer_;

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <thread>
@@ -12,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/net/coordinator_client.hpp"
 #include "common/net/file_digest.hpp"
 #include "examples/gltf_bytes.hpp"
 #include "tests/farm/farm_fixture.hpp"
@@ -188,6 +190,31 @@ TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   EXPECT_TRUE(contains(absent.body, "\"path\":\"/scene/objects/0/material/diffuse/asset\""))
       << absent.body;
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
+}
+
+TEST(FarmAssets, AFileUploadsStreamedFromDiskAPieceAtATime) {
+  Farm farm("farm-asset-file", 0);
+  // 24 MiB of varied bytes: many pieces for the socket.
+  std::string bytes(24u << 20, '\0');
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+    bytes[i] = static_cast<char>((i * 2654435761u) >> 13);
+  const fs::path file = farm.dir() / "big.bin";
+  write_text(file, bytes);
+  const std::string digest = bytes_sha256(bytes);
+  CoordinatorClient client(farm.url(), "", std::chrono::seconds(30));
+  std::vector<std::uint64_t> sent;
+  std::uint64_t announced = 0;
+  EXPECT_TRUE(client.put_asset_file(digest, file, [&](std::uint64_t done, std::uint64_t total) {
+    sent.push_back(done);
+    announced = total;
+  }));
+  EXPECT_EQ(announced, bytes.size());
+  ASSERT_GT(sent.size(), 2u) << "the body went out in one piece";
+  EXPECT_TRUE(std::is_sorted(sent.begin(), sent.end()));
+  EXPECT_EQ(sent.back(), bytes.size());
+  EXPECT_EQ(file_sha256(farm.dir() / "data" / "assets" / digest), digest);
+  // Again: held already.
+  EXPECT_FALSE(client.put_asset_file(digest, file));
 }
 
 TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {
