@@ -10,7 +10,8 @@
 //       with the file read through FolderSceneFiles, the Renderer built (geometry, BVH), and
 //       one 32 x 32 tile rendered; prints the seconds of each and the process's peak RSS
 //       growth over its RSS before the file was read
-// Lines are "key value" pairs, for bench/run.
+// Lines are "key value" pairs, for bench/run. Like tessera-worker, the program starts itself
+// again with glibc's malloc on transparent huge pages (common/huge_page_malloc.hpp).
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -25,6 +26,7 @@
 #include <embree3/rtcore.h>
 
 #include "bench/grid_mesh.hpp"
+#include "common/huge_page_malloc.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/scene_parser.hpp"
 #include "worker/renderer.hpp"
@@ -132,6 +134,8 @@ int tessera_path(const fs::path& file) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // As tessera-worker starts (worker_main.cpp), both sides alike.
+  tessera::restart_with_huge_page_malloc(argv);
   const std::string mode = argc > 1 ? argv[1] : "";
   if (mode == "write" && argc == 4) {
     const tessera::bench::Grid grid = tessera::bench::grid_of(std::atol(argv[2]));

@@ -201,9 +201,9 @@ void store_block(const TileOutput& out, const Block& block, const double (&sums)
 
 }  // namespace
 
-Renderer::Renderer(Scene scene)
+Renderer::Renderer(Scene scene, std::size_t compact_above)
     : scene_(std::move(scene)),
-      geometry_(scene_, device_),
+      geometry_(scene_, device_, OpaquePlanes::outside_embree, compact_above),
       textures_(scene_),
       tracer_(scene_, geometry_, &textures_),
       camera_(scene_.camera, scene_.width, scene_.height) {}

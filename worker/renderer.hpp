@@ -17,7 +17,8 @@ namespace tessera {
 
 class TESSERA_TRACER_API Renderer {
  public:
-  explicit Renderer(Scene scene);
+  // `compact_above`: SceneGeometry's (kCompactMeshTriangles); the tests lower it to compare.
+  explicit Renderer(Scene scene, std::size_t compact_above = kCompactMeshTriangles);
 
   const Scene& scene() const { return scene_; }
   const SceneGeometry& geometry() const { return geometry_; }

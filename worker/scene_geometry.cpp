@@ -178,20 +178,28 @@ void finish_plane_hit(const Ray& ray, const PlaneSet& set, unsigned index, doubl
 // recomputation finds the ray parallel to the triangle.
 void finish_triangle_hit(const Ray& ray, const TriangleMesh& mesh, unsigned index, float t, float u,
                          float v, SurfaceHit& hit) {
-  const MeshTriangle& triangle = mesh.triangles[index];
-  const Vec3 v0(triangle.corners[0]);
-  const Vec3 v1(triangle.corners[1]);
-  const Vec3 v2(triangle.corners[2]);
+  glm::vec3 corners[3];
+  mesh_corners(mesh, index, corners);
+  const Vec3 v0(corners[0]);
+  const Vec3 v1(corners[1]);
+  const Vec3 v2(corners[2]);
   const TriangleHit th = intersect_triangle(v0, v1, v2, ray).value_or(TriangleHit{t, u, v});
   hit.t = th.t;
   // Barycentric reconstruction keeps the point on the triangle's own plane.
   hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;
-  hit.normal = triangle.normal;
+  hit.normal = mesh.compact() ? triangle_normal(corners[0], corners[1], corners[2])
+                              : mesh.triangles[index].normal;
   hit.shading_normal = hit.normal;
-  if (!mesh.normals.empty()) {
-    const MeshTriangleNormals& normals = mesh.normals[index];
-    const Vec3 n = (1.0 - th.u - th.v) * Vec3(normals.corners[0]) +
-                   th.u * Vec3(normals.corners[1]) + th.v * Vec3(normals.corners[2]);
+  const bool smooth = mesh.compact() ? !mesh.vertex_normals.empty() : !mesh.normals.empty();
+  if (smooth) {
+    glm::vec3 normals[3];
+    if (mesh.compact()) {
+      for (int k = 0; k < 3; ++k) normals[k] = mesh.vertex_normals[mesh.indices[3 * index + k]];
+    } else {
+      for (int k = 0; k < 3; ++k) normals[k] = mesh.normals[index].corners[k];
+    }
+    const Vec3 n =
+        (1.0 - th.u - th.v) * Vec3(normals[0]) + th.u * Vec3(normals[1]) + th.v * Vec3(normals[2]);
     if (glm::dot(n, n) > 0.0) hit.shading_normal = glm::normalize(n);
   }
 }

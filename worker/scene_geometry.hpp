@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -114,15 +115,50 @@ static_assert(sizeof(MeshTriangle) == 64);
 struct MeshTriangleNormals {
   glm::vec3 corners[3];  // unit
 };
+
+// Meshes of more triangles than this keep no MeshTriangle copy of their corners beside
+// Embree's buffers (64 bytes a triangle, more than Embree's BVH takes): a hit reads its
+// corners through Embree's index and vertex buffers instead, and works out the normal, a
+// few cache lines more per hit. On a scan of millions of triangles that is a small price
+// for a third of the memory; below it, the speed is worth the bytes.
+inline constexpr std::size_t kCompactMeshTriangles = std::size_t{1} << 20;
+
 struct TriangleMesh {
   std::vector<MeshTriangle> triangles;
   std::vector<MeshTriangleNormals> normals;  // by triangle; empty for flat shading
+  // A compact mesh (above kCompactMeshTriangles) has neither of the above but these: Embree's
+  // own buffers, which live as long as its geometry, and its unit normals by vertex.
+  const float* vertices = nullptr;         // x, y, z by vertex
+  const std::uint32_t* indices = nullptr;  // three by triangle, as Embree holds them
+  std::vector<glm::vec3> vertex_normals;   // empty for flat shading
+  std::size_t triangle_count = 0;
+  bool compact() const { return vertices != nullptr; }
 };
 
-struct PreparedTriangles {
-  std::vector<Vec3> positions;                          // world space
-  std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside
-  std::vector<Vec3> normals;                            // world space, unit; may be empty
+// normalize(cross(c1 - c0, c2 - c0)) in double, of a triangle's float corners: a
+// MeshTriangle's normal, and a compact mesh's at each hit, by one expression.
+inline Vec3 triangle_normal(const glm::vec3& c0, const glm::vec3& c1, const glm::vec3& c2) {
+  const Vec3 v0(c0);
+  return glm::normalize(glm::cross(Vec3(c1) - v0, Vec3(c2) - v0));
+}
+
+// The corners of triangle `t` of a mesh, compact or not: the same floats either way.
+inline void mesh_corners(const TriangleMesh& mesh, std::size_t t, glm::vec3 (&out)[3]) {
+  if (!mesh.compact()) {
+    for (int k = 0; k < 3; ++k) out[k] = mesh.triangles[t].corners[k];
+    return;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const float* p = mesh.vertices + 3 * static_cast<std::size_t>(mesh.indices[3 * t + k]);
+    out[k] = glm::vec3(p[0], p[1], p[2]);
+  }
+}
+
+// A triangle list as the scene holds it, in object space, and the transform that places it.
+struct ObjectTriangles {
+  std::span<const Vec3> positions;
+  std::span<const std::array<std::uint32_t, 3>> triangles;  // counter-clockwise from outside
+  std::span<const Vec3> normals;                            // unit; empty, or one per position
 };
 
 // Every plane of one mask, as a single Embree primitive whose callback tests them all in one
@@ -193,8 +229,10 @@ enum class OpaquePlanes { outside_embree, also_in_embree };
 // calls, such as may_meet_transmissive(), stay hidden (tracer_api.hpp).
 class SceneGeometry {
  public:
+  // `compact_above`: see kCompactMeshTriangles (the tests set it to 0, to compare).
   TESSERA_TRACER_API SceneGeometry(const Scene& scene, const EmbreeDevice& device,
-                                   OpaquePlanes opaque_planes = OpaquePlanes::outside_embree);
+                                   OpaquePlanes opaque_planes = OpaquePlanes::outside_embree,
+                                   std::size_t compact_above = kCompactMeshTriangles);
 
   // The closest hit with 0 < t < t_max, if any.
   TESSERA_TRACER_API std::optional<SurfaceHit> intersect(const Ray& ray, float t_max,
@@ -269,7 +307,9 @@ class SceneGeometry {
   void add_box(const Box& box, const Mat4& transform, std::uint32_t object, unsigned mask);
   void add_plane(const Plane& plane, const Mat4& transform, std::uint32_t object,
                  bool transmissive);
-  void add_triangles(PreparedTriangles triangles, std::uint32_t object, unsigned mask);
+  // Fills Embree's buffers straight from the scene's arrays, placed in world space.
+  void add_triangles(const ObjectTriangles& triangles, const Mat4& transform, std::uint32_t object,
+                     unsigned mask, std::size_t compact_above);
   void add_analytic_shape(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
   // Lower and upper corners of the box around any record's shape but a plane's.
   std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;

@@ -12,7 +12,7 @@
 namespace tessera {
 
 SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
-                             OpaquePlanes opaque_planes)
+                             OpaquePlanes opaque_planes, std::size_t compact_above)
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
@@ -34,7 +34,7 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
           else if constexpr (std::is_same_v<T, Cone>)
             add_cone(shape, object.transform, i, mask);
           else
-            add_triangles(triangulate(shape, object.transform), i, mask);
+            add_triangles(triangles_of(shape), object.transform, i, mask, compact_above);
         },
         object.shape);
     convex_.push_back(std::holds_alternative<Sphere>(object.shape) ||
@@ -204,44 +204,68 @@ void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::ui
   set.objects.push_back(object);
 }
 
-void SceneGeometry::add_triangles(PreparedTriangles triangles, std::uint32_t object,
-                                  unsigned mask) {
+void SceneGeometry::add_triangles(const ObjectTriangles& triangles, const Mat4& transform,
+                                  std::uint32_t object, unsigned mask, std::size_t compact_above) {
   RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryMask(geometry, mask);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                               triangles.positions.size()));
-  auto* indices = static_cast<unsigned*>(
+  const std::size_t vertex_count = triangles.positions.size();
+  const std::size_t triangle_count = triangles.triangles.size();
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertex_count));
+  auto* indices = static_cast<std::uint32_t*>(
       rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                              3 * sizeof(unsigned), triangles.triangles.size()));
+                              3 * sizeof(std::uint32_t), triangle_count));
   device_.check("allocating a triangle mesh");
-  for (std::size_t i = 0; i < triangles.positions.size(); ++i)
-    for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(triangles.positions[i][k]);
-  static_assert(sizeof(triangles.triangles[0]) == 3 * sizeof(unsigned));
-  std::memcpy(indices, triangles.triangles.data(),
-              triangles.triangles.size() * 3 * sizeof(unsigned));
+  // Each point in world space in double, then rounded once to the floats Embree intersects.
+  for (std::size_t i = 0; i < vertex_count; ++i) {
+    const Vec3 p(transform * glm::dvec4(triangles.positions[i], 1.0));
+    for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(p[k]);
+  }
+  // A mirroring transform turns counter-clockwise into clockwise: two corners trade places.
+  const glm::dmat3 linear(transform);
+  const bool mirrors = glm::determinant(linear) < 0.0;
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    const auto& tri = triangles.triangles[t];
+    indices[3 * t] = tri[0];
+    indices[3 * t + 1] = mirrors ? tri[2] : tri[1];
+    indices[3 * t + 2] = mirrors ? tri[1] : tri[2];
+  }
+  std::vector<glm::vec3> normals;
+  if (!triangles.normals.empty()) {
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(linear));
+    normals.reserve(vertex_count);
+    for (const Vec3& n : triangles.normals) normals.emplace_back(glm::normalize(normal_matrix * n));
+  }
   rtcCommitGeometry(geometry);
   const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
-  rtcReleaseGeometry(geometry);
+  rtcReleaseGeometry(geometry);  // the scene holds it, and so its buffers, from here on
   device_.check("adding a triangle mesh");
   if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
+
   TriangleMesh mesh;
-  mesh.triangles.reserve(triangles.triangles.size());
-  if (!triangles.normals.empty()) mesh.normals.reserve(triangles.triangles.size());
-  for (const auto& tri : triangles.triangles) {
-    MeshTriangle& corners = mesh.triangles.emplace_back();
-    for (int k = 0; k < 3; ++k) corners.corners[k] = glm::vec3(triangles.positions[tri[k]]);
-    if (triangles.normals.empty()) continue;
-    MeshTriangleNormals& normals = mesh.normals.emplace_back();
-    for (int k = 0; k < 3; ++k) normals.corners[k] = glm::vec3(triangles.normals[tri[k]]);
-  }
-  // From the stored floats, in a pass of its own: in the loop above, GCC 12's vectoriser
-  // was seen to use the doubles the floats were rounded from (a different normal, and other
-  // pixels, than finish_hit() computed from the floats).
-  for (MeshTriangle& triangle : mesh.triangles) {
-    const Vec3 v0(triangle.corners[0]);
-    triangle.normal =
-        glm::normalize(glm::cross(Vec3(triangle.corners[1]) - v0, Vec3(triangle.corners[2]) - v0));
+  mesh.triangle_count = triangle_count;
+  const auto corner = [&](std::size_t t, int k) {
+    const float* p = vertices + 3 * static_cast<std::size_t>(indices[3 * t + k]);
+    return glm::vec3(p[0], p[1], p[2]);
+  };
+  if (triangle_count > compact_above) {
+    mesh.vertices = vertices;
+    mesh.indices = indices;
+    mesh.vertex_normals = std::move(normals);
+  } else {
+    mesh.triangles.resize(triangle_count);
+    if (!normals.empty()) mesh.normals.resize(triangle_count);
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+      for (int k = 0; k < 3; ++k) mesh.triangles[t].corners[k] = corner(t, k);
+      if (normals.empty()) continue;
+      for (int k = 0; k < 3; ++k) mesh.normals[t].corners[k] = normals[indices[3 * t + k]];
+    }
+    // From the stored floats, in a pass of its own: in the loop above, GCC 12's vectoriser
+    // was seen to use the doubles the floats were rounded from (a different normal, and
+    // other pixels, than finish_hit() computed from the floats).
+    for (MeshTriangle& triangle : mesh.triangles)
+      triangle.normal =
+          triangle_normal(triangle.corners[0], triangle.corners[1], triangle.corners[2]);
   }
   meshes_.push_back(std::move(mesh));
   records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
@@ -271,11 +295,15 @@ std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(const GeometryRec
   // A mesh: its corners are floats already, so their extremes bound it exactly.
   glm::vec3 lo(kInfinity);
   glm::vec3 hi(-kInfinity);
-  for (const MeshTriangle& triangle : meshes_[record.index].triangles)
-    for (const glm::vec3& p : triangle.corners) {
+  const TriangleMesh& mesh = meshes_[record.index];
+  for (std::size_t t = 0; t < mesh.triangle_count; ++t) {
+    glm::vec3 corners[3];
+    mesh_corners(mesh, t, corners);
+    for (const glm::vec3& p : corners) {
       lo = glm::min(lo, p);
       hi = glm::max(hi, p);
     }
+  }
   return {lo, hi};
 }
 

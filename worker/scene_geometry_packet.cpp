@@ -191,6 +191,10 @@ void SceneGeometry::gather_shapes(PacketLanes& lanes, SurfaceHit (&hits)[kPacket
       // a large mesh's are far out of cache: asking for all sixteen before finish_hit()
       // reads the first lets their misses overlap instead of coming one after another.
       const TriangleMesh& mesh = meshes_[record.index];
+      if (mesh.compact()) {  // its corners are found through the indices, one step later
+        __builtin_prefetch(mesh.indices + 3 * static_cast<std::size_t>(primitive));
+        continue;
+      }
       __builtin_prefetch(&mesh.triangles[primitive]);
       if (mesh.normals.empty()) continue;
       // Both ends: 36 bytes often straddle two cache lines.

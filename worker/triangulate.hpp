@@ -1,5 +1,5 @@
-// Triangles and meshes as world-space triangle lists. Winding stays counter-clockwise seen
-// from outside even under a mirroring transform.
+// Triangles and meshes as triangle lists in object space, without a copy: views of the
+// scene's own arrays, which SceneGeometry places in world space as it fills Embree's buffers.
 #pragma once
 
 #include "common/scene.hpp"
@@ -7,7 +7,7 @@
 
 namespace tessera {
 
-PreparedTriangles triangulate(const Triangle& triangle, const Mat4& transform);
-PreparedTriangles triangulate(const Mesh& mesh, const Mat4& transform);
+ObjectTriangles triangles_of(const Triangle& triangle);
+ObjectTriangles triangles_of(const Mesh& mesh);
 
 }  // namespace tessera
