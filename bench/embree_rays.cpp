@@ -101,7 +101,9 @@ int main(int argc, char** argv) {
     document["lights"] = nlohmann::json::array();
     const int threads = std::stoi(argv[4]);
     const int runs = std::stoi(argv[5]);
-    const tessera::Renderer renderer(tessera::parse_scene(document, tessera::Limits::none()));
+    // The meshes kept: the bare loop builds its own geometry from the renderer's scene.
+    const tessera::Renderer renderer(tessera::parse_scene(document, tessera::Limits::none()),
+                                     {tessera::kCompactMeshTriangles, true});
     // Embree's own scene of the same shapes: the renderer's leaves the opaque planes out,
     // since it tests them itself.
     const tessera::EmbreeDevice device;

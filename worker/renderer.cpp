@@ -201,9 +201,10 @@ void store_block(const TileOutput& out, const Block& block, const double (&sums)
 
 }  // namespace
 
-Renderer::Renderer(Scene scene, std::size_t compact_above)
+Renderer::Renderer(Scene scene, const RendererOptions& options)
     : scene_(std::move(scene)),
-      geometry_(scene_, device_, OpaquePlanes::outside_embree, compact_above),
+      geometry_(scene_, device_, OpaquePlanes::outside_embree, options.compact_above,
+                options.keep_meshes ? nullptr : &scene_),
       textures_(scene_),
       tracer_(scene_, geometry_, &textures_),
       camera_(scene_.camera, scene_.width, scene_.height) {}

@@ -15,10 +15,18 @@
 
 namespace tessera {
 
+// How a Renderer keeps its scene's meshes.
+struct RendererOptions {
+  std::size_t compact_above = kCompactMeshTriangles;  // SceneGeometry's; tests lower it
+  // False: the arrays of untextured meshes are freed once Embree holds them, and scene()
+  // has them empty (SceneGeometry's `release`). True, for a caller that builds more
+  // geometry from scene(): the benchmark's bare Embree loop, the tests.
+  bool keep_meshes = false;
+};
+
 class TESSERA_TRACER_API Renderer {
  public:
-  // `compact_above`: SceneGeometry's (kCompactMeshTriangles); the tests lower it to compare.
-  explicit Renderer(Scene scene, std::size_t compact_above = kCompactMeshTriangles);
+  explicit Renderer(Scene scene, const RendererOptions& options = {});
 
   const Scene& scene() const { return scene_; }
   const SceneGeometry& geometry() const { return geometry_; }

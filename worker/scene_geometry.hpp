@@ -230,9 +230,13 @@ enum class OpaquePlanes { outside_embree, also_in_embree };
 class SceneGeometry {
  public:
   // `compact_above`: see kCompactMeshTriangles (the tests set it to 0, to compare).
+  // `release`, where given, is `scene` itself: the arrays of each mesh whose material has no
+  // texture (which would read its uvs and corners) are freed as soon as Embree holds them,
+  // before the BVH is built, so that a big mesh is never held twice at the peak.
   TESSERA_TRACER_API SceneGeometry(const Scene& scene, const EmbreeDevice& device,
                                    OpaquePlanes opaque_planes = OpaquePlanes::outside_embree,
-                                   std::size_t compact_above = kCompactMeshTriangles);
+                                   std::size_t compact_above = kCompactMeshTriangles,
+                                   Scene* release = nullptr);
 
   // The closest hit with 0 < t < t_max, if any.
   TESSERA_TRACER_API std::optional<SurfaceHit> intersect(const Ray& ray, float t_max,

@@ -12,7 +12,7 @@
 namespace tessera {
 
 SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
-                             OpaquePlanes opaque_planes, std::size_t compact_above)
+                             OpaquePlanes opaque_planes, std::size_t compact_above, Scene* release)
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
@@ -37,6 +37,14 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
             add_triangles(triangles_of(shape), object.transform, i, mask, compact_above);
         },
         object.shape);
+    if (release != nullptr && !scene.materials[object.material].textured()) {
+      if (auto* mesh = std::get_if<Mesh>(&release->objects[i].shape)) {
+        std::vector<Vec3>().swap(mesh->positions);
+        std::vector<std::array<std::uint32_t, 3>>().swap(mesh->triangles);
+        std::vector<Vec3>().swap(mesh->normals);
+        std::vector<Uv>().swap(mesh->uvs);
+      }
+    }
     convex_.push_back(std::holds_alternative<Sphere>(object.shape) ||
                       std::holds_alternative<Box>(object.shape) ||
                       std::holds_alternative<Cylinder>(object.shape) ||

@@ -166,7 +166,19 @@ class PlyValues {
     return format_ == PlyFormat::ascii ? line_at(line_offset_ + lines_.number())
                                        : "byte " + std::to_string(position_);
   }
+  // where() of the value of `type` just read: made only for a message, never per value.
+  std::string where_last(PlyType type) const {
+    return format_ == PlyFormat::ascii ? where()
+                                       : "byte " + std::to_string(position_ - size_of(type));
+  }
   [[noreturn]] void fail(const std::string& detail) const { source_.fail(where(), detail); }
+  // For the fast paths of the common binary layouts: whether the values are little-endian
+  // binary, as this machine's, the bytes not read yet, and a step past those read there.
+  bool native_binary() const {
+    return format_ == PlyFormat::little_endian && std::endian::native == std::endian::little;
+  }
+  std::string_view unread() const { return text_.substr(position_); }
+  void skip(std::size_t bytes) { position_ += bytes; }
   std::size_t remaining_bytes() const {
     return format_ == PlyFormat::ascii ? lines_.remaining_bytes() : text_.size() - position_;
   }
@@ -249,6 +261,29 @@ struct ElementReader {
   const ModelSource& source;
 };
 
+// Vertices whose properties are all floats, little-endian, as scanners and exporters write
+// them: read straight from the bytes. Returns how many were read, stopping before one that
+// holds a value that is not finite, which the general path then reports.
+std::uint64_t read_float_vertices(const ElementReader& in, const std::array<int, 8>& slot,
+                                  RawMesh& raw) {
+  const std::size_t stride = in.element.properties.size() * sizeof(float);
+  const std::string_view bytes = in.values.unread();
+  const std::uint64_t whole = std::min<std::uint64_t>(in.element.count, bytes.size() / stride);
+  std::vector<float> v(in.element.properties.size());
+  std::uint64_t i = 0;
+  for (; i < whole; ++i) {
+    std::memcpy(v.data(), bytes.data() + i * stride, stride);
+    bool finite = true;
+    for (const float value : v) finite &= std::isfinite(value);
+    if (!finite) break;
+    raw.positions[i] = Vec3(v[slot[0]], v[slot[1]], v[slot[2]]);
+    if (!raw.normals.empty()) raw.normals[i] = Vec3(v[slot[3]], v[slot[4]], v[slot[5]]);
+    if (!raw.uvs.empty()) raw.uvs[i] = Uv(v[slot[6]], v[slot[7]]);
+  }
+  in.values.skip(i * stride);
+  return i;
+}
+
 void read_vertices(const ElementReader& in, RawMesh& raw) {
   // Texture coordinates go by three pairs of names in the wild: u v, s t, texture_u
   // texture_v; the last pair found wins.
@@ -268,7 +303,13 @@ void read_vertices(const ElementReader& in, RawMesh& raw) {
   if (normals) raw.normals.resize(in.element.count);
   if (uvs) raw.uvs.resize(in.element.count);
   std::array<double, kSlots> v{};
-  for (std::uint64_t i = 0; i < in.element.count; ++i) {
+  const auto& properties = in.element.properties;
+  const bool all_floats =
+      std::all_of(properties.begin(), properties.end(),
+                  [](const PlyProperty& p) { return !p.list && p.type == PlyType::f32; });
+  const std::uint64_t fast =
+      in.values.native_binary() && all_floats ? read_float_vertices(in, slot, raw) : 0;
+  for (std::uint64_t i = fast; i < in.element.count; ++i) {
     in.values.begin_instance();
     for (std::size_t p = 0; p < in.element.properties.size(); ++p) {
       const PlyProperty& property = in.element.properties[p];
@@ -289,6 +330,34 @@ void read_vertices(const ElementReader& in, RawMesh& raw) {
   }
 }
 
+// Faces that are triangles, each a uchar count of 3 and three 32-bit indices, little-endian,
+// as most binary PLY files hold them: read straight from the bytes. Returns how many were
+// read, stopping before the first face that is not such a triangle, or names a vertex that
+// does not exist, or is over the limit: the general path reads on from there, and reports.
+std::uint64_t read_triangle_faces(const ElementReader& in, std::uint64_t vertices,
+                                  std::size_t max_triangles, RawMesh& raw) {
+  constexpr std::size_t kFace = 1 + 3 * sizeof(std::uint32_t);
+  const std::string_view bytes = in.values.unread();
+  const std::uint64_t whole =
+      std::min<std::uint64_t>({in.element.count, bytes.size() / kFace,
+                               max_triangles - std::min(max_triangles, raw.triangles.size())});
+  std::uint64_t f = 0;
+  for (; f < whole; ++f) {
+    const char* face = bytes.data() + f * kFace;
+    std::array<std::uint32_t, 3> corners;
+    std::memcpy(corners.data(), face + 1, sizeof corners);
+    // A negative int32 reads as 2^31 or more, which no index of 2^32 - 1 vertices is
+    // refused by alone; the general path tells the two apart.
+    if (static_cast<unsigned char>(face[0]) != 3 || corners[0] >= vertices ||
+        corners[1] >= vertices || corners[2] >= vertices ||
+        ((corners[0] | corners[1] | corners[2]) >> 31) != 0)
+      break;
+    raw.triangles.push_back(corners);
+  }
+  in.values.skip(f * kFace);
+  return f;
+}
+
 void read_faces(const ElementReader& in, std::uint64_t vertices, RawMesh& raw) {
   const auto is_indices = [](const PlyProperty& p) {
     return p.list && (p.name == "vertex_indices" || p.name == "vertex_index");
@@ -298,7 +367,14 @@ void read_faces(const ElementReader& in, std::uint64_t vertices, RawMesh& raw) {
     in.source.fail(line_at(in.element.line), "the face element has no list vertex_indices");
   const std::size_t max_triangles = in.source.request->max_triangles;
   std::vector<std::uint32_t> corners;
-  for (std::uint64_t f = 0; f < in.element.count; ++f) {
+  raw.triangles.reserve(in.element.count);
+  const std::uint64_t fast =
+      in.values.native_binary() && properties.size() == 1 && is_indices(properties[0]) &&
+              properties[0].count_type == PlyType::u8 &&
+              (properties[0].type == PlyType::u32 || properties[0].type == PlyType::i32)
+          ? read_triangle_faces(in, vertices, max_triangles, raw)
+          : 0;
+  for (std::uint64_t f = fast; f < in.element.count; ++f) {
     in.values.begin_instance();
     for (const PlyProperty& property : properties) {
       if (!property.list) {
@@ -315,11 +391,11 @@ void read_faces(const ElementReader& in, std::uint64_t vertices, RawMesh& raw) {
       if (n < 3) in.values.fail("a face has " + std::to_string(static_cast<int>(n)) + " corners");
       corners.clear();
       for (double k = 0; k < n; ++k) {
-        const std::string where = in.values.where();
         const double index = in.values.number(property.type);
         if (index < 0 || index != std::floor(index) || index >= static_cast<double>(vertices))
-          in.source.fail(where, "vertex index " + number_text(index) + " must be below the " +
-                                    std::to_string(vertices) + " vertices");
+          in.source.fail(in.values.where_last(property.type),
+                         "vertex index " + number_text(index) + " must be below the " +
+                             std::to_string(vertices) + " vertices");
         corners.push_back(static_cast<std::uint32_t>(index));
       }
       if (raw.triangles.size() + corners.size() - 2 > max_triangles)

@@ -1,5 +1,6 @@
 #include <bit>
 #include <cstring>
+#include <limits>
 
 #include <gmock/gmock.h>
 
@@ -111,6 +112,54 @@ TEST_F(PlyFile, ErrorsNameTheLineOrTheByte) {
   EXPECT_EQ(load_error("type.ply"), "type.ply:line 4: unknown property type \"quad\"");
   write("notply.ply", "solid cube\n");
   EXPECT_THAT(load_error("notply.ply"), HasSubstr("a PLY file starts with \"ply\""));
+}
+
+// Float vertices and faces of a uchar count and uint indices: the layout that little-endian
+// files are read from straight, big-endian ones value by value. Two triangles, a quad, then
+// a triangle, so that the straight read hands over to the general one midway.
+std::string float_grid(bool big_endian, std::uint32_t last_index = 4, float last_x = 2) {
+  std::string out =
+      std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+      " 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float u\nproperty float v\nelement face 4\n"
+      "property list uchar uint vertex_indices\nend_header\n";
+  const auto put = [&](auto value) {
+    char bytes[sizeof(value)];
+    std::memcpy(bytes, &value, sizeof(value));
+    if (big_endian) std::reverse(bytes, bytes + sizeof(value));
+    out.append(bytes, sizeof(value));
+  };
+  const float points[6][5] = {{0, 0, 0, 0, 0}, {1, 0, 0, 1, 0},      {1, 1, 0, 1, 1},
+                              {0, 1, 0, 0, 1}, {last_x, 0, 0, 2, 0}, {2, 1, 0, 2, 1}};
+  for (const auto& p : points)
+    for (const float v : p) put(v);
+  const std::vector<std::vector<std::uint32_t>> faces = {
+      {0, 1, 2}, {0, 2, 3}, {1, 4, 5, 2}, {1, 5, last_index}};
+  for (const auto& face : faces) {
+    out += static_cast<char>(face.size());
+    for (const std::uint32_t i : face) put(i);
+  }
+  return out;
+}
+
+TEST_F(PlyFile, LittleEndianFloatsAndTrianglesReadStraightAsTheGeneralPathReadsThem) {
+  write("little.ply", float_grid(false));
+  write("big.ply", float_grid(true));
+  const Mesh little = load("little.ply").parts[0].mesh;
+  const Mesh big = load("big.ply").parts[0].mesh;
+  EXPECT_EQ(little.positions, big.positions);
+  EXPECT_EQ(little.triangles, big.triangles);
+  EXPECT_EQ(little.uvs, big.uvs);
+  EXPECT_EQ(little.triangles.size(), 5u);
+  ASSERT_EQ(little.uvs.size(), little.positions.size());
+  // The straight read stops at a bad value, and the general path names its byte: after the
+  // 204 bytes of the header, the fifth vertex's x at 4 x 20 bytes into the vertices; the
+  // fourth face's third index after the 120 bytes of vertices and 13 + 13 + 17 + 9 of faces.
+  write("index.ply", float_grid(false, 6));
+  EXPECT_EQ(load_error("index.ply"),
+            "index.ply:byte 376: vertex index 6 must be below the 6 vertices");
+  write("nan.ply", float_grid(false, 4, std::numeric_limits<float>::quiet_NaN()));
+  EXPECT_EQ(load_error("nan.ply"), "nan.ply:byte 284: holds a value that is not a finite number");
 }
 
 TEST_F(PlyFile, HugeCountsAreRefusedFromTheHeader) {
