@@ -55,6 +55,32 @@ void obj_references(const ModelSource& source, std::vector<std::string>& names) 
   }
 }
 
+// A buffer's or an image's URI as the file name tinygltf reads for it (the model's own
+// reader, gltf_file.cpp): "%XX" is the byte XX (a digit that is not hex counts as 0) and
+// '+' is a space. Both sides must name a file alike, or the farm's "files" map would hold
+// a name its reader never asks for.
+std::string gltf_file_name(std::string_view uri) {
+  const auto nibble = [](char c) {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return 0;
+  };
+  std::string out;
+  out.reserve(uri.size());
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '+') {
+      out += ' ';
+    } else if (uri[i] == '%' && i + 2 < uri.size()) {
+      out += static_cast<char>(nibble(uri[i + 1]) * 16 + nibble(uri[i + 2]));
+      i += 2;
+    } else {
+      out += uri[i];
+    }
+  }
+  return out;
+}
+
 // A .glb's JSON chunk, or a .gltf's whole text.
 std::string gltf_json(const ModelSource& source, const std::string& bytes) {
   if (source.request->format != MeshFormat::glb) return bytes;
@@ -75,8 +101,9 @@ void gltf_references(const ModelSource& source, std::vector<std::string>& names)
     for (std::size_t i = 0; i < found->size(); ++i) {
       const nlohmann::json& item = (*found)[i];
       if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
-      const std::string& uri = item["uri"].get_ref<const std::string&>();
-      if (uri.starts_with("data:")) continue;
+      const std::string& raw = item["uri"].get_ref<const std::string&>();
+      if (raw.starts_with("data:")) continue;
+      const std::string uri = gltf_file_name(raw);
       const std::string where = "/" + std::string(array) + "/" + std::to_string(i) + "/uri";
       source.dependency(uri, where);
       add_once(names, std::filesystem::path(uri).lexically_normal().generic_string());

@@ -235,5 +235,13 @@ TEST_F(GltfFile, ATextureThatNamesNoImageIsAnErrorAtItsPointer) {
   EXPECT_THAT(load_error("square.gltf"), HasSubstr("/textures/0/source"));
 }
 
+TEST_F(GltfFile, APercentEncodedUriNamesTheDecodedFile) {
+  // The name model_references() sends to the farm under (ModelReferences tests it) is the
+  // one the reader asks for.
+  write("my mesh.bin", square_buffer());
+  write("square.gltf", square_gltf("my%20mesh.bin").dump());
+  EXPECT_EQ(load("square.gltf").parts.size(), 1u);
+}
+
 }  // namespace
 }  // namespace tessera
