@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <fstream>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -16,8 +15,7 @@ AssetCache::AssetCache(std::filesystem::path dir, std::uint64_t max_bytes)
   std::filesystem::create_directories(dir_);
 }
 
-std::filesystem::path AssetCache::get(const std::string& sha256,
-                                      const std::function<std::string()>& fetch) {
+std::filesystem::path AssetCache::get(const std::string& sha256, const Fetch& fetch) {
   const std::filesystem::path path = dir_ / sha256;
   std::error_code error;
   if (std::filesystem::is_regular_file(path, error)) {
@@ -28,23 +26,19 @@ std::filesystem::path AssetCache::get(const std::string& sha256,
     }
     std::filesystem::remove(path, error);  // corrupt: fetched again below
   }
-  const std::string bytes = fetch();
-  const std::string actual = bytes_sha256(bytes);
-  if (actual != sha256)
-    throw std::runtime_error("asset sha256:" + sha256 +
-                             " arrived with the digest sha256:" + actual);
-  // Written beside its name and renamed, so that another worker sharing the folder never
-  // sees a part of it.
+  // Written beside its name as it arrives, and renamed once checked, so that another
+  // worker sharing the folder never sees a part of it.
   const std::filesystem::path part = dir_ / (sha256 + ".part-" + std::to_string(::getpid()) + "-" +
                                              std::to_string(std::random_device{}()));
-  {
-    std::ofstream out(part, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::filesystem::remove(part, error);
-      throw std::runtime_error("cannot write " + part.string());
-    }
+  try {
+    fetch(part);
+    const std::string actual = file_sha256(part);
+    if (actual != sha256)
+      throw std::runtime_error("asset sha256:" + sha256 + " arrived with the digest sha256:" +
+                               (actual.empty() ? std::string("(unreadable)") : actual));
+  } catch (...) {
+    std::filesystem::remove(part, error);
+    throw;
   }
   std::filesystem::rename(part, path);
   return path;

@@ -16,9 +16,10 @@ class AssetCache {
   AssetCache(std::filesystem::path dir, std::uint64_t max_bytes);
 
   // The file of the asset `sha256` (64 hex digits): the cached one when its bytes have
-  // that digest, else `fetch`'s bytes, checked and stored first. Throws std::runtime_error
-  // for bytes of another digest, or a file that cannot be written.
-  std::filesystem::path get(const std::string& sha256, const std::function<std::string()>& fetch);
+  // that digest, else what `fetch` writes to the file it is given, checked and moved into
+  // place. Throws std::runtime_error for bytes of another digest (and keeps none of them).
+  using Fetch = std::function<void(const std::filesystem::path& into)>;
+  std::filesystem::path get(const std::string& sha256, const Fetch& fetch);
 
   // Removes the least recently used entries, but none of `keep`, until the rest fit.
   void trim(const std::set<std::string>& keep);

@@ -244,10 +244,12 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
       [&](const std::string& sha256) -> std::optional<std::filesystem::path> {
         used.insert(sha256);
         try {
-          return asset_cache().get(sha256, [&]() -> std::string {
-            auto bytes = with_retry("asset", [&] { return control_.scene_asset(sha256); });
-            if (!bytes) throw std::runtime_error("stopped while fetching asset " + sha256);
-            return std::move(*bytes);
+          return asset_cache().get(sha256, [&](const std::filesystem::path& into) {
+            const auto fetched = with_retry("asset", [&] {
+              control_.scene_asset_to(sha256, into);
+              return true;
+            });
+            if (!fetched) throw std::runtime_error("stopped while fetching asset " + sha256);
           });
         } catch (const ApiError& e) {
           if (e.status() == 404) return std::nullopt;

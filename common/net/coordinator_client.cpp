@@ -160,12 +160,13 @@ bool CoordinatorClient::put_asset_file(std::string_view sha256, const std::files
                                        const HttpClient::UploadProgress& progress) {
   const HttpResult result =
       checked(http_.send_file("PUT", fill(route::asset, "sha256:" + std::string(sha256)), path,
-                              "application/octet-stream", progress));
+                              "application/octet-stream", progress, identity()));
   return result.status == 201;
 }
 
-std::string CoordinatorClient::scene_asset(std::string_view sha256) {
-  return call("GET", fill(route::scene_asset, "sha256:" + std::string(sha256))).body;
+void CoordinatorClient::scene_asset_to(std::string_view sha256, const std::filesystem::path& into) {
+  checked(http_.receive_file("GET", fill(route::scene_asset, "sha256:" + std::string(sha256)), into,
+                             identity()));
 }
 
 std::string CoordinatorClient::scene(std::string_view digest) {

@@ -88,8 +88,10 @@ class CoordinatorClient {
   // Nothing when the lease is lost (410).
   std::optional<protocol::Lease> heartbeat(std::string_view lease);
   std::optional<protocol::Lease> extend(std::string_view lease, int max_tiles);
-  std::string scene(std::string_view digest);        // the scene's JSON text
-  std::string scene_asset(std::string_view sha256);  // an asset a scene names, for workers
+  std::string scene(std::string_view digest);  // the scene's JSON text
+  // An asset a scene names, for workers: into the file `into` as it arrives, never held
+  // whole (HttpClient::receive_file()).
+  void scene_asset_to(std::string_view sha256, const std::filesystem::path& into);
   // Tiles' pixels (float32 RGB, one tile after another) named by `tiles`, with the rays
   // each took.
   protocol::ResultAnswer upload(std::string_view lease, std::span<const std::uint64_t> tiles,

@@ -8,11 +8,13 @@
 #include <charconv>
 #include <cstdint>
 #include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <type_traits>
 
 #include <openssl/err.h>
 #include <openssl/ssl.h>
@@ -299,23 +301,36 @@ struct HttpClient::Connection {
   }
 
   template <typename Body>
-  Outcome exchange(http::request<Body>& request, const HttpClient::UploadProgress* progress) {
+  Outcome exchange(http::request<Body>& request, const HttpClient::UploadProgress* progress,
+                   const std::filesystem::path* into) {
     Outcome outcome;
     const error_code write_error = write(request, progress);
     // A piecewise upload's answer has a timeout of its own; else one covers both.
     if (progress != nullptr) lowest().expires_after(timeout);
-
     if (write_error == beast::error::timeout) {
       outcome.error = write_error;
       return outcome;
     }
     // Even when the write failed, the server may have answered first (a 413 sent before
     // the whole body arrived), so read what is there.
-    http::response_parser<http::string_body> parser;
+    if (into != nullptr) return read_answer<http::file_body>(request, write_error, into);
+    return read_answer<http::string_body>(request, write_error, nullptr);
+  }
+
+  template <typename ResponseBody>
+  Outcome read_answer(const http::request_header<>& request, error_code write_error,
+                      const std::filesystem::path* into) {
+    Outcome outcome;
+    http::response_parser<ResponseBody> parser;
     // Not boost::none: Beast 1.74 compares a Content-Length with an empty limit as exceeding it.
     parser.body_limit(std::numeric_limits<std::uint64_t>::max());
     parser.header_limit(64 * 1024);
     if (request.method() == http::verb::head) parser.skip(true);
+    if constexpr (std::is_same_v<ResponseBody, http::file_body>) {
+      error_code ec;
+      parser.get().body().open(into->c_str(), beast::file_mode::write, ec);
+      if (ec) throw std::runtime_error("cannot write " + into->string() + ": " + ec.message());
+    }
     const error_code read_error = run([&](auto handler) {
       with_stream(
           [&](auto& stream) { http::async_read(stream, buffer, parser, std::move(handler)); });
@@ -333,7 +348,19 @@ struct HttpClient::Connection {
       auto [it, inserted] = result.headers.try_emplace(lower(field.name_string()), field.value());
       if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
     }
-    result.body = std::move(response.body());
+    if constexpr (std::is_same_v<ResponseBody, http::file_body>) {
+      response.body().close();
+      if (result.status < 200 || result.status >= 300) {
+        std::ifstream error_body(*into, std::ios::binary);
+        result.body.resize(64 * 1024);
+        error_body.read(result.body.data(), static_cast<std::streamsize>(result.body.size()));
+        result.body.resize(static_cast<std::size_t>(error_body.gcount()));
+        std::error_code ignored;
+        std::filesystem::remove(*into, ignored);
+      }
+    } else {
+      result.body = std::move(response.body());
+    }
     if (write_error || !response.keep_alive()) close();
     outcome.result = std::move(result);
     return outcome;
@@ -456,9 +483,9 @@ HttpResult HttpClient::request(std::string_view method, std::string_view target,
 
 HttpResult HttpClient::send_file(std::string_view method, std::string_view target,
                                  const std::filesystem::path& path, std::string_view content_type,
-                                 const UploadProgress& progress) {
+                                 const UploadProgress& progress, const Headers& headers) {
   http::request<http::file_body> message;
-  prepare(message, method, target, true, content_type, {});
+  prepare(message, method, target, true, content_type, headers);
   error_code ec;
   message.body().open(path.c_str(), beast::file_mode::scan, ec);
   if (ec) throw std::runtime_error("cannot open " + path.string() + ": " + ec.message());
@@ -470,9 +497,19 @@ HttpResult HttpClient::send_file(std::string_view method, std::string_view targe
   });
 }
 
+HttpResult HttpClient::receive_file(std::string_view method, std::string_view target,
+                                    const std::filesystem::path& into, const Headers& headers) {
+  http::request<http::empty_body> message;
+  prepare(message, method, target, false, "", headers);
+  message.prepare_payload();
+  return send(
+      message, method, target, nullptr, [] {}, &into);
+}
+
 template <typename Message>
 HttpResult HttpClient::send(Message& message, std::string_view method, std::string_view target,
-                            const UploadProgress* progress, const std::function<void()>& rewind) {
+                            const UploadProgress* progress, const std::function<void()>& rewind,
+                            const std::filesystem::path* into) {
   const auto interrupted = [&] {
     return HttpError(HttpError::Kind::interrupted, std::string(method) + " " + std::string(target) +
                                                        " on " + pool_->where + ": interrupted");
@@ -501,7 +538,7 @@ HttpResult HttpClient::send(Message& message, std::string_view method, std::stri
         throw;
       }
     }
-    Connection::Outcome outcome = c.exchange(message, progress);
+    Connection::Outcome outcome = c.exchange(message, progress, into);
     if (outcome.result) {
       if (observer_) observer_(method, target, *outcome.result);
       return std::move(*outcome.result);

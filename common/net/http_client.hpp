@@ -96,7 +96,12 @@ class HttpClient {
   // that cannot be opened.
   HttpResult send_file(std::string_view method, std::string_view target,
                        const std::filesystem::path& path, std::string_view content_type,
-                       const UploadProgress& progress = {});
+                       const UploadProgress& progress = {}, const Headers& headers = {});
+  // A bodiless request whose answer's body goes to the file `into` as it arrives, never
+  // held whole; the result's body is empty. An answer that is not 2xx leaves no file: its
+  // body (an error, up to 64 KiB of it) is the result's, as request() gives it.
+  HttpResult receive_file(std::string_view method, std::string_view target,
+                          const std::filesystem::path& into, const Headers& headers = {});
 
   // For requests that may legitimately take long, such as a long-polled claim; from the
   // next request on.
@@ -123,9 +128,11 @@ class HttpClient {
   struct Pool;
   // Sends `message` (whose body type is a string's or a file's) and reads the answer, on a
   // kept-alive connection or a new one; `rewind` makes the body ready to be sent again.
+  // `into`: the file the answer's body goes to, where it goes to one.
   template <typename Message>
   HttpResult send(Message& message, std::string_view method, std::string_view target,
-                  const UploadProgress* progress, const std::function<void()>& rewind);
+                  const UploadProgress* progress, const std::function<void()>& rewind,
+                  const std::filesystem::path* into = nullptr);
   template <typename Message>
   void prepare(Message& message, std::string_view method, std::string_view target, bool has_body,
                std::string_view content_type, const Headers& headers) const;
