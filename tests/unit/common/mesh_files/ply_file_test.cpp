@@ -118,11 +118,11 @@ TEST_F(PlyFile, ErrorsNameTheLineOrTheByte) {
 // files are read from straight, big-endian ones value by value. Two triangles, a quad, then
 // a triangle, so that the straight read hands over to the general one midway.
 std::string float_grid(bool big_endian, std::uint32_t last_index = 4, float last_x = 2) {
-  std::string out =
-      std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
-      " 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
-      "property float u\nproperty float v\nelement face 4\n"
-      "property list uchar uint vertex_indices\nend_header\n";
+  std::string out = std::string("ply\nformat ") +
+                    (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+                    "property float u\nproperty float v\nelement face 4\n"
+                    "property list uchar uint vertex_indices\nend_header\n";
   const auto put = [&](auto value) {
     char bytes[sizeof(value)];
     std::memcpy(bytes, &value, sizeof(value));
