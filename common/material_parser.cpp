@@ -19,10 +19,7 @@ Checker parse_checker(const ValueReader& value, const Material& material) {
 
 TextureWrap read_wrap(const ObjectReader& reader) {
   const auto wrap = reader.find("wrap");
-  if (!wrap) return TextureWrap::repeat;
-  const std::string_view name = wrap->choice(texture_wrap_names);
-  const auto* found = std::find(std::begin(texture_wrap_names), std::end(texture_wrap_names), name);
-  return static_cast<TextureWrap>(found - std::begin(texture_wrap_names));
+  return wrap ? enum_choice<TextureWrap>(*wrap, texture_wrap_names) : TextureWrap::repeat;
 }
 
 // {"texture": FILE, "scale": colour, "wrap": ...}, or the farm's form with "asset" (and

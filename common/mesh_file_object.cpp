@@ -56,10 +56,7 @@ MeshFormat read_format(const ObjectReader& reader, const ValueReader& file) {
 
 NormalsMode read_normals(const ObjectReader& reader) {
   const auto normals = reader.find("normals");
-  if (!normals) return NormalsMode::file;
-  const std::string_view name = normals->choice(normals_mode_names);
-  const auto* found = std::find(std::begin(normals_mode_names), std::end(normals_mode_names), name);
-  return static_cast<NormalsMode>(found - std::begin(normals_mode_names));
+  return normals ? enum_choice<NormalsMode>(*normals, normals_mode_names) : NormalsMode::file;
 }
 
 }  // namespace

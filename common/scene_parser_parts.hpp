@@ -1,6 +1,7 @@
 // Internal to the scene parser: the pieces of parse_scene that live in their own files.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -48,6 +49,14 @@ std::optional<Role> role_in_envelope(const std::vector<Frame>& stack, bool array
   if (stack.empty()) return array ? Role::other : scene_member ? Role::envelope : Role::scene;
   if (stack.back().role != Role::envelope) return std::nullopt;
   return !array && stack.back().key == *scene_member ? Role::scene : Role::other;
+}
+
+// The enumerator whose name `value` holds, `names` listing the enum's names in its order (a
+// SceneError at `value` that lists them otherwise).
+template <typename Enum, std::size_t N>
+Enum enum_choice(const ValueReader& value, const std::string_view (&names)[N]) {
+  const std::string_view name = value.choice(names);
+  return static_cast<Enum>(std::find(std::begin(names), std::end(names), name) - std::begin(names));
 }
 
 // --- material_parser.cpp ---

@@ -1,6 +1,7 @@
 #include "common/mesh_files/gltf_reading.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <map>
 
@@ -93,31 +94,32 @@ class GltfReader {
     return result;
   }
 
-  std::vector<Vec3> vec3s(int index, const std::string& from) const {
-    const AccessorView v = view(index, TINYGLTF_TYPE_VEC3, 3, false, from);
-    std::vector<Vec3> out(v.count);
+  // An accessor of N floats an element, each element made into a T by `make`; a value that
+  // is not finite is an error at the accessor.
+  template <std::size_t N, typename T, typename Make>
+  std::vector<T> floats(int index, int type, const std::string& from, Make make) const {
+    const AccessorView v = view(index, type, N, false, from);
+    std::vector<T> out(v.count);
     for (std::size_t i = 0; i < v.count; ++i) {
-      float f[3];
-      std::memcpy(f, v.data + i * v.stride, sizeof f);
-      if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2]))
-        source_.fail(at("accessors", index), "holds a value that is not a finite number");
-      out[i] = Vec3(f[0], f[1], f[2]);
+      std::array<float, N> f;
+      std::memcpy(f.data(), v.data + i * v.stride, sizeof f);
+      for (const float value : f)
+        if (!std::isfinite(value))
+          source_.fail(at("accessors", index), "holds a value that is not a finite number");
+      out[i] = make(f);
     }
     return out;
   }
 
+  std::vector<Vec3> vec3s(int index, const std::string& from) const {
+    return floats<3, Vec3>(index, TINYGLTF_TYPE_VEC3, from,
+                           [](const std::array<float, 3>& f) { return Vec3(f[0], f[1], f[2]); });
+  }
+
   // TEXCOORD_0, its v turned to run up the image as Mesh::uvs has it (glTF's runs down).
   std::vector<Uv> uvs(int index, const std::string& from) const {
-    const AccessorView v = view(index, TINYGLTF_TYPE_VEC2, 2, false, from);
-    std::vector<Uv> out(v.count);
-    for (std::size_t i = 0; i < v.count; ++i) {
-      float f[2];
-      std::memcpy(f, v.data + i * v.stride, sizeof f);
-      if (!std::isfinite(f[0]) || !std::isfinite(f[1]))
-        source_.fail(at("accessors", index), "holds a value that is not a finite number");
-      out[i] = Uv(f[0], 1.0f - f[1]);
-    }
-    return out;
+    return floats<2, Uv>(index, TINYGLTF_TYPE_VEC2, from,
+                         [](const std::array<float, 2>& f) { return Uv(f[0], 1.0f - f[1]); });
   }
 
   // The texture of a material's textureInfo, if it has one: `pointer` is the textureInfo's.
