@@ -30,8 +30,9 @@ std::string digest_of(const std::filesystem::path& path, const std::string& name
   return digest;
 }
 
-// An upload's progress: on a terminal, a bar redrawn in place as the pieces go out; in a
-// log or a pipe, one line when it starts.
+// An upload's progress: on a terminal, a bar redrawn in place as the pieces go out (ending
+// each drawing with "erase to the end of the line", as the line may shrink); in a log or a
+// pipe, one line when it starts.
 class ProgressBar {
  public:
   ProgressBar(std::FILE* out, const std::string& name, std::uint64_t total)
@@ -53,7 +54,7 @@ class ProgressBar {
     if (percent == shown_) return;
     shown_ = percent;
     const int filled = percent * kWidth / 100;
-    std::fprintf(out_, "\ruploading %s [%s%s] %3d%% %s / %s", name_.c_str(),
+    std::fprintf(out_, "\ruploading %s [%s%s] %3d%% %s / %s\x1b[K", name_.c_str(),
                  std::string(filled, '#').c_str(), std::string(kWidth - filled, '-').c_str(),
                  percent, size_text(sent).c_str(), size_text(total).c_str());
     std::fflush(out_);

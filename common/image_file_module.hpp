@@ -53,9 +53,19 @@ class TextureSampler {
                       float (&rgb)[3]) const = 0;
 };
 
-// The most pixels a texture may have: 8192 x 8192. Its decoded mip-map takes 16 bytes a
-// pixel, so a file cannot make a worker spend more than about 1.4 GiB on one texture.
+// The most pixels a texture may have: 8192 x 8192; and all of a scene's textures together:
+// four times that. A decoded mip-map takes about 16 bytes a pixel, so no scene can make a
+// worker spend more than about 4 GiB on its textures.
 inline constexpr std::uint64_t kMaxTexturePixels = std::uint64_t{8192} * 8192;
+inline constexpr std::uint64_t kMaxSceneTexturePixels = 4 * kMaxTexturePixels;
+
+// Why a scene whose distinct textures have `pixels` together, over kMaxSceneTexturePixels,
+// is refused.
+inline std::string too_many_texture_pixels(std::uint64_t pixels) {
+  return "the scene's textures have " + std::to_string(pixels) +
+         " pixels together, more than the " + std::to_string(kMaxSceneTexturePixels) +
+         " a scene's may have";
+}
 
 struct ImageFileModule {
   // Writes `content` to `path` (whose extension names the format): EXR, TIFF and JPEG, PNGs
@@ -68,11 +78,14 @@ struct ImageFileModule {
   // OpenImageIO and OpenEXR start no threads of their own from now on.
   void (*encode_on_calling_thread)();
   // Decodes each image (8- and 16-bit images from sRGB, unless the file says it is linear)
-  // and builds its mip-map. Throws std::runtime_error naming the image that fails.
+  // and builds its mip-map, after reading every header first: throws std::runtime_error
+  // naming the image that fails, or saying the images together have more than
+  // kMaxSceneTexturePixels, before decoding any.
   std::unique_ptr<TextureSampler> (*open_textures)(const std::vector<TextureImage>& images);
-  // Reads an image's header only: throws std::runtime_error naming the image when it is not
-  // one that open_textures() can read, or has more than kMaxTexturePixels.
-  void (*check_texture)(const TextureImage& image);
+  // Reads an image's header only, and returns its pixel count: throws std::runtime_error
+  // naming the image when it is not one that open_textures() can read, or has more than
+  // kMaxTexturePixels.
+  std::uint64_t (*check_texture)(const TextureImage& image);
 };
 
 }  // namespace tessera

@@ -121,6 +121,10 @@ OIIO::TextureOpt::Wrap wrap_mode(TextureWrap wrap) {
 class OiioTextureSampler : public TextureSampler {
  public:
   explicit OiioTextureSampler(const std::vector<TextureImage>& images) {
+    // Every header first, so that nothing is decoded for a scene that asks too much.
+    std::uint64_t pixels = 0;
+    for (const TextureImage& image : images) pixels += check_texture(image);
+    if (pixels > kMaxSceneTexturePixels) throw std::runtime_error(too_many_texture_pixels(pixels));
     folder_ = make_folder();
     try {
       std::vector<std::string> files;
@@ -204,6 +208,9 @@ std::unique_ptr<TextureSampler> open_textures(const std::vector<TextureImage>& i
   return std::make_unique<OiioTextureSampler>(images);
 }
 
-void check_texture(const TextureImage& image) { open_image(image); }
+std::uint64_t check_texture(const TextureImage& image) {
+  const OIIO::ImageSpec& spec = open_image(image).input->spec();
+  return static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+}
 
 }  // namespace tessera

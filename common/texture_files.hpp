@@ -1,6 +1,7 @@
 // Inside the image-file module only (image_file_module.hpp): textures through OpenImageIO.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -9,6 +10,6 @@
 namespace tessera {
 
 std::unique_ptr<TextureSampler> open_textures(const std::vector<TextureImage>& images);
-void check_texture(const TextureImage& image);
+std::uint64_t check_texture(const TextureImage& image);
 
 }  // namespace tessera

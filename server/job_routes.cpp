@@ -1,6 +1,7 @@
 #include <chrono>
 #include <memory>
 #include <optional>
+#include <set>
 
 #ifdef __GLIBC__
 #include <malloc.h>
@@ -142,15 +143,26 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
 // Each texture's header, read now so that an image no worker could decode is refused at
 // submit rather than failing every tile.
 void check_textures(const Scene& scene) {
+  // Each image once, as the workers read them (SceneTextures).
+  std::set<std::string> seen;
+  std::uint64_t pixels = 0;
   for (const Material& material : scene.materials)
     for (const auto& texture : material.textures) {
       if (!texture) continue;
+      const TextureImage& image = texture->image;
+      const std::string key =
+          image.bytes
+              ? "bytes at " + std::to_string(reinterpret_cast<std::uintptr_t>(image.bytes.get()))
+              : image.path;
+      if (!seen.insert(key).second) continue;
       try {
-        image_files().check_texture(texture->image);
+        pixels += image_files().check_texture(image);
       } catch (const std::runtime_error& e) {
         throw SceneError("/materials", e.what());
       }
     }
+  if (pixels > kMaxSceneTexturePixels)
+    throw SceneError("/materials", too_many_texture_pixels(pixels));
 }
 
 void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<SubmissionMemory> memory,

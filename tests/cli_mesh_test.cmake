@@ -1,6 +1,6 @@
 # `tessera render` of scenes that name mesh files, end to end: a real process, the files on
 # disk beside the scene, exit codes and messages.
-# Arguments: -DTESSERA=path -DSOURCE_DIR=repo -DWORK_DIR=scratch
+# Arguments: -DTESSERA=path -DSOURCE_DIR=repo -DBINARY_DIR=build -DWORK_DIR=scratch
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}/models")
 
@@ -14,6 +14,26 @@ execute_process(
   RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
 expect(code EQUAL 0 MESSAGE "rendering the OBJ example failed (${code}): ${out} ${err}")
 expect(EXISTS ${WORK_DIR}/still.png MESSAGE "no image written for the OBJ example")
+
+# The generated textured example: a .glb whose texture is embedded, PNG textures beside it.
+execute_process(
+  COMMAND "${TESSERA}" render "${BINARY_DIR}/examples/textured_globe.json" -o "${WORK_DIR}/globe.exr"
+          --width 64 --height 40 --spp 1 --threads 2
+  WORKING_DIRECTORY "${WORK_DIR}"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 0 MESSAGE "rendering the textured example failed (${code}): ${out} ${err}")
+expect(EXISTS ${WORK_DIR}/globe.exr MESSAGE "no image written for the textured example")
+
+# A texture that is not there: exit 2, naming where the scene names it.
+file(WRITE "${WORK_DIR}/notex.json" [=[{"image": {"width": 8, "height": 8},
+  "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+  "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1,
+               "material": {"diffuse": {"texture": "textures/none.png"}}}]}]=])
+execute_process(COMMAND "${TESSERA}" render "${WORK_DIR}/notex.json" -o "${WORK_DIR}/notex.png"
+  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect(code EQUAL 2 MESSAGE "a missing texture exited ${code}, not 2: ${err}")
+expect(err MATCHES "/objects/0/material/diffuse/texture" MESSAGE "no pointer in: ${err}")
+expect(err MATCHES "textures/none.png" MESSAGE "no file named in: ${err}")
 
 # A scene whose OFF file has a bad index: exit 2, the object's pointer, the file and line.
 file(WRITE "${WORK_DIR}/models/bad.off" "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n")

@@ -189,6 +189,43 @@ TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   EXPECT_EQ(absent.status, 422);
   EXPECT_TRUE(contains(absent.body, "\"path\":\"/scene/objects/0/material/diffuse/asset\""))
       << absent.body;
+  // Textures whose headers claim more pixels together than a scene's may have: refused at
+  // submit from their headers, before any worker could spend memory decoding them.
+  const auto header_only = [](std::uint32_t side) {
+    const auto big_endian = [](std::uint32_t v) {
+      return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                         static_cast<char>(v >> 8), static_cast<char>(v)};
+    };
+    const auto crc32 = [](std::string_view bytes) {
+      std::uint32_t crc = 0xffffffffu;
+      for (const char c : bytes) {
+        crc ^= static_cast<unsigned char>(c);
+        for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+      }
+      return ~crc;
+    };
+    const auto chunk = [&](const std::string& type, const std::string& data) {
+      return big_endian(static_cast<std::uint32_t>(data.size())) + type + data +
+             big_endian(crc32(type + data));
+    };
+    return std::string("\x89PNG\r\n\x1a\n", 8) +
+           chunk("IHDR", big_endian(side) + big_endian(side) + std::string("\x08\x02\0\0\0", 5)) +
+           chunk("IDAT", "") + chunk("IEND", "");
+  };
+  nlohmann::json heavy = textured(digest);
+  heavy["scene"]["objects"] = nlohmann::json::array();
+  for (std::uint32_t i = 0; i < 5; ++i) {
+    const std::string png = header_only(8192 - i);  // five distinct files
+    const std::string png_digest = bytes_sha256(png);
+    ASSERT_EQ(http.request("PUT", asset_target(png_digest), png, "application/octet-stream").status,
+              201);
+    nlohmann::json sphere = textured(png_digest)["scene"]["objects"][0];
+    sphere["center"] = {static_cast<int>(i), 0, 0};
+    heavy["scene"]["objects"].push_back(sphere);
+  }
+  const HttpResult too_many = http.request("POST", "/v1/jobs", heavy.dump());
+  EXPECT_EQ(too_many.status, 400) << too_many.body;
+  EXPECT_TRUE(contains(too_many.body, "pixels together")) << too_many.body;
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
 }
 
@@ -215,6 +252,34 @@ TEST(FarmAssets, AFileUploadsStreamedFromDiskAPieceAtATime) {
   EXPECT_EQ(file_sha256(farm.dir() / "data" / "assets" / digest), digest);
   // Again: held already.
   EXPECT_FALSE(client.put_asset_file(digest, file));
+}
+
+TEST(FarmAssets, OnATerminalSubmitDrawsAnUploadsProgressBar) {
+  if (!fs::exists("/usr/bin/script"))
+    GTEST_SKIP() << "needs script(1) (Debian's bsdutils) to give the CLI a terminal";
+  Farm farm("farm-asset-bar", 0);
+  const fs::path project = farm.dir() / "project";
+  fs::create_directories(project / "models");
+  // An OBJ of one triangle after 8 MiB of comment: many pieces to draw.
+  write_text(project / "models" / "big.obj",
+             "# " + std::string(8u << 20, 'x') + "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  write_text(project / "scene.json",
+             R"({"image": {"width": 8, "height": 8},
+                 "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+                 "objects": [{"type": "mesh", "file": "models/big.obj"}]})");
+  const std::string command = std::string(TESSERA_CLI_BIN) + " --server " + farm.url() +
+                              " submit " + (project / "scene.json").string();
+  const fs::path log = farm.dir() / "terminal.log";
+  {
+    Process terminal("/usr/bin/script", {"-qec", command, "/dev/null"}, log);
+    const auto status = terminal.wait_for(std::chrono::seconds(60));
+    ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << read_text(log);
+  }
+  const std::string shown = read_text(log);
+  // Redrawn in place as the pieces go out, ending full.
+  EXPECT_TRUE(contains(shown, "\ruploading models/big.obj [")) << shown;
+  EXPECT_TRUE(contains(shown, "[##############################] 100% 8.0 MiB / 8.0 MiB")) << shown;
+  EXPECT_TRUE(contains(shown, "%") && contains(shown, "[###")) << shown;
 }
 
 TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {

@@ -269,6 +269,66 @@ TEST_F(TextureTest, TexturedPixelsHaveTheSameBitsForAnyTilingThreadsAndPackets) 
     }
 }
 
+// A PNG whose header claims `width` x `height` 8-bit RGB pixels, with none behind it: only a
+// reader that believes the header before it spends anything would be hurt by it.
+std::string png_header_only(std::uint32_t width, std::uint32_t height) {
+  const auto crc32 = [](std::string_view bytes) {
+    std::uint32_t crc = 0xffffffffu;
+    for (const char c : bytes) {
+      crc ^= static_cast<unsigned char>(c);
+      for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+  };
+  const auto big_endian = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  const auto chunk = [&](const std::string& type, const std::string& data) {
+    return big_endian(static_cast<std::uint32_t>(data.size())) + type + data +
+           big_endian(crc32(type + data));
+  };
+  const std::string ihdr =
+      big_endian(width) + big_endian(height) + std::string("\x08\x02\0\0\0", 5);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", "") +
+         chunk("IEND", "");
+}
+
+TEST_F(TextureTest, TexturesOverThePixelLimitsAreRefusedBeforeAnyIsDecoded) {
+  json scene = facing_plane(0, 0, 5, 2, 40);
+  const auto error = [&](const json& objects) {
+    json s = scene;
+    s["objects"] = objects;
+    try {
+      renderer(s);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const auto sphere_with = [](const std::string& texture, double x) {
+    return json{{"type", "sphere"},
+                {"center", {x, 0, 0}},
+                {"radius", 0.5},
+                {"material", {{"diffuse", {{"texture", texture}}}}}};
+  };
+  { std::ofstream(dir_ / "tall.png", std::ios::binary) << png_header_only(8192, 8193); }
+  EXPECT_THAT(error(json::array({sphere_with("tall.png", 0)})),
+              HasSubstr("texture tall.png: has 8192 x 8193 pixels, more than the 67108864"));
+  // Five of the largest a texture may be: more than a scene's textures may be together.
+  json five = json::array();
+  for (int i = 0; i < 5; ++i) {
+    const std::string name = "big" + std::to_string(i) + ".png";
+    std::ofstream(dir_ / name, std::ios::binary) << png_header_only(8192, 8192);
+    five.push_back(sphere_with(name, i));
+  }
+  EXPECT_THAT(error(five), HasSubstr("the scene's textures have 335544320 pixels together"));
+  // The same file named twice counts once, as it is decoded once.
+  json six = five;
+  six.push_back(sphere_with("big0.png", 6));
+  EXPECT_THAT(error(six), HasSubstr("the scene's textures have 335544320 pixels together"));
+}
+
 TEST_F(TextureTest, BadTexturesAreRefusedWithWhereAndWhy) {
   json scene = facing_plane(0, 0, 1, 1, 10);
   const auto error = [&](const json& material) {
