@@ -525,7 +525,9 @@ HttpResult HttpClient::send(Message& message, std::string_view method, std::stri
     ~Return() { pool.give_back(std::move(c), taken_in); }
   } give_back{*pool_, connection, taken_in};
   Connection& c = *connection;
-  message.set(http::field::host, c.host_header);
+  // The caller's own Host, where it gave one (prepare()), stands.
+  if (message.find(http::field::host) == message.end())
+    message.set(http::field::host, c.host_header);
 
   for (int attempt = 0;; ++attempt) {
     if (pool_->interrupted) throw interrupted();
