@@ -9,11 +9,16 @@
 
 #include <stdlib.h>
 
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <unordered_map>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
@@ -136,9 +141,10 @@ class OiioTextureSampler : public TextureSampler {
       system_ = OIIO::TextureSystem::create(false);
       system_->attribute("automip", 0);
       system_->attribute("autotile", 0);
+      OIIO::TextureSystem::Perthread* setup = thread_info();
       for (std::size_t i = 0; i < files.size(); ++i) {
         OIIO::TextureSystem::TextureHandle* handle =
-            system_->get_texture_handle(OIIO::ustring(files[i]));
+            system_->get_texture_handle(OIIO::ustring(files[i]), setup);
         if (handle == nullptr) fail(images[i], system_->geterror());
         handles_.push_back(handle);
       }
@@ -158,8 +164,8 @@ class OiioTextureSampler : public TextureSampler {
     // Bilinear within a level, so that a magnified texture shows its texels' bilinear
     // blend (the default, bicubic when magnified, would not).
     options.interpmode = OIIO::TextureOpt::InterpBilinear;
-    if (!system_->texture(handles_[index], system_->get_perthread_info(), options, at.s, at.t,
-                          at.dsdx, at.dtdx, at.dsdy, at.dtdy, 3, rgb))
+    if (!system_->texture(handles_[index], system_->get_perthread_info(thread_info()), options,
+                          at.s, at.t, at.dsdx, at.dtdx, at.dsdy, at.dtdy, 3, rgb))
       rgb[0] = rgb[1] = rgb[2] = 0.0f;  // its file went away under the render: black
   }
 
@@ -190,8 +196,45 @@ class OiioTextureSampler : public TextureSampler {
       fail(image, "could not be made into a mip-map: " + OIIO::geterror());
   }
 
+  // This thread's record of its lookups in this sampler's system. OpenImageIO would keep
+  // one in thread-local storage of its own, which it tears down as each thread ends: for
+  // TBB's threads, which outlive every scene, that was after the system was destroyed, into
+  // freed memory (an assertion or a crash at exit). So each thread gets one made here,
+  // found again through a thread-local cache of the last few samplers it used (by a number
+  // no other sampler has, never by address), and all are destroyed with the system.
+  OIIO::TextureSystem::Perthread* thread_info() const {
+    struct Entry {
+      std::uint64_t sampler = 0;
+      OIIO::TextureSystem::Perthread* info = nullptr;
+    };
+    constexpr std::size_t kCached = 4;
+    thread_local std::array<Entry, kCached> cache{};
+    thread_local std::size_t next = 0;
+    for (const Entry& entry : cache)
+      if (entry.sampler == id_) return entry.info;
+    OIIO::TextureSystem::Perthread* info = nullptr;
+    {
+      const std::lock_guard lock(mutex_);
+      auto& mine = infos_[std::this_thread::get_id()];
+      if (mine == nullptr) mine = system_->create_thread_info();
+      info = mine;
+    }
+    cache[next] = {id_, info};
+    next = (next + 1) % kCached;
+    return info;
+  }
+
+  static std::uint64_t new_id() {
+    static std::atomic<std::uint64_t> last{0};
+    return ++last;
+  }
+
   void release() {
-    if (system_ != nullptr) OIIO::TextureSystem::destroy(system_, true);
+    if (system_ != nullptr) {
+      for (const auto& [thread, info] : infos_) system_->destroy_thread_info(info);
+      infos_.clear();
+      OIIO::TextureSystem::destroy(system_, true);
+    }
     system_ = nullptr;
     std::error_code error;
     if (!folder_.empty()) std::filesystem::remove_all(folder_, error);
@@ -200,6 +243,9 @@ class OiioTextureSampler : public TextureSampler {
   std::filesystem::path folder_;
   OIIO::TextureSystem* system_ = nullptr;
   std::vector<OIIO::TextureSystem::TextureHandle*> handles_;
+  const std::uint64_t id_ = new_id();
+  mutable std::mutex mutex_;
+  mutable std::unordered_map<std::thread::id, OIIO::TextureSystem::Perthread*> infos_;
 };
 
 }  // namespace
