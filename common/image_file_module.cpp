@@ -51,7 +51,7 @@ void encode_on_calling_thread() {
 }
 
 constexpr ImageFileModule kModule{&write, &read, &encode_on_calling_thread, &open_textures,
-                                  &check_texture};
+                                  &check_textures};
 
 }  // namespace
 }  // namespace tessera

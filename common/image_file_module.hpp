@@ -78,14 +78,14 @@ struct ImageFileModule {
   // OpenImageIO and OpenEXR start no threads of their own from now on.
   void (*encode_on_calling_thread)();
   // Decodes each image (8- and 16-bit images from sRGB, unless the file says it is linear)
-  // and builds its mip-map, after reading every header first: throws std::runtime_error
-  // naming the image that fails, or saying the images together have more than
-  // kMaxSceneTexturePixels, before decoding any.
+  // and builds its mip-map, after check_textures(): nothing is decoded for images over a
+  // limit. Throws std::runtime_error naming the image that fails.
   std::unique_ptr<TextureSampler> (*open_textures)(const std::vector<TextureImage>& images);
-  // Reads an image's header only, and returns its pixel count: throws std::runtime_error
-  // naming the image when it is not one that open_textures() can read, or has more than
-  // kMaxTexturePixels.
-  std::uint64_t (*check_texture)(const TextureImage& image);
+  // Reads the images' headers only (a scene's, each once: texture_images.hpp): throws
+  // std::runtime_error naming an image that is not one open_textures() can read, or has
+  // more than kMaxTexturePixels, or saying the images together have more than
+  // kMaxSceneTexturePixels.
+  void (*check_textures)(const std::vector<TextureImage>& images);
 };
 
 }  // namespace tessera

@@ -127,9 +127,7 @@ class OiioTextureSampler : public TextureSampler {
  public:
   explicit OiioTextureSampler(const std::vector<TextureImage>& images) {
     // Every header first, so that nothing is decoded for a scene that asks too much.
-    std::uint64_t pixels = 0;
-    for (const TextureImage& image : images) pixels += check_texture(image);
-    if (pixels > kMaxSceneTexturePixels) throw std::runtime_error(too_many_texture_pixels(pixels));
+    check_textures(images);
     folder_ = make_folder();
     try {
       std::vector<std::string> files;
@@ -254,9 +252,17 @@ std::unique_ptr<TextureSampler> open_textures(const std::vector<TextureImage>& i
   return std::make_unique<OiioTextureSampler>(images);
 }
 
-std::uint64_t check_texture(const TextureImage& image) {
-  const OIIO::ImageSpec& spec = open_image(image).input->spec();
-  return static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+void check_textures(const std::vector<TextureImage>& images) {
+  std::uint64_t pixels = 0;
+  for (const TextureImage& image : images) {
+    const OpenedImage opened = open_image(image);  // the spec lives as long as its reader
+    const OIIO::ImageSpec& spec = opened.input->spec();
+    pixels += static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+  }
+  if (pixels > kMaxSceneTexturePixels)
+    throw std::runtime_error("the scene's textures have " + std::to_string(pixels) +
+                             " pixels together, more than the " +
+                             std::to_string(kMaxSceneTexturePixels) + " a scene's may have");
 }
 
 }  // namespace tessera

@@ -1,7 +1,6 @@
 // Inside the image-file module only (image_file_module.hpp): textures through OpenImageIO.
 #pragma once
 
-#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -10,6 +9,6 @@
 namespace tessera {
 
 std::unique_ptr<TextureSampler> open_textures(const std::vector<TextureImage>& images);
-std::uint64_t check_texture(const TextureImage& image);
+void check_textures(const std::vector<TextureImage>& images);
 
 }  // namespace tessera

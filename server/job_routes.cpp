@@ -15,6 +15,7 @@
 #include "common/scene_limits_scan.hpp"
 #include "common/scene_parser.hpp"
 #include "common/scene_stream.hpp"
+#include "common/texture_images.hpp"
 #include "server/access.hpp"
 #include "server/api_json.hpp"
 #include "server/api_routes.hpp"
@@ -140,29 +141,16 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   });
 }
 
-// Each texture's header, read now so that an image no worker could decode is refused at
-// submit rather than failing every tile.
+// Each texture's header, read now so that an image no worker could decode, or a scene over
+// the textures' limits, is refused at submit rather than failing every tile.
 void check_textures(const Scene& scene) {
-  // Each image once, as the workers read them (SceneTextures).
-  std::set<std::string> seen;
-  std::uint64_t pixels = 0;
-  for (const Material& material : scene.materials)
-    for (const auto& texture : material.textures) {
-      if (!texture) continue;
-      const TextureImage& image = texture->image;
-      const std::string key =
-          image.bytes
-              ? "bytes at " + std::to_string(reinterpret_cast<std::uintptr_t>(image.bytes.get()))
-              : image.path;
-      if (!seen.insert(key).second) continue;
-      try {
-        pixels += image_files().check_texture(image);
-      } catch (const std::runtime_error& e) {
-        throw SceneError("/materials", e.what());
-      }
-    }
-  if (pixels > kMaxSceneTexturePixels)
-    throw SceneError("/materials", too_many_texture_pixels(pixels));
+  const std::vector<TextureImage> images = texture_images(scene);
+  if (images.empty()) return;
+  try {
+    image_files().check_textures(images);
+  } catch (const std::runtime_error& e) {
+    throw SceneError("/materials", e.what());
+  }
 }
 
 void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<SubmissionMemory> memory,

@@ -4,23 +4,11 @@
 #include <stdexcept>
 
 #include "common/image_file_loader.hpp"
+#include "common/texture_images.hpp"
 
 namespace tessera {
-namespace {
 
-bool same_image(const TextureImage& a, const TextureImage& b) {
-  return a.bytes ? a.bytes == b.bytes : !b.bytes && a.path == b.path;
-}
-
-}  // namespace
-
-SceneTextures::SceneTextures(const Scene& scene) {
-  for (const Material& material : scene.materials)
-    for (const auto& texture : material.textures)
-      if (texture && std::none_of(images_.begin(), images_.end(), [&](const TextureImage& known) {
-            return same_image(known, texture->image);
-          }))
-        images_.push_back(texture->image);
+SceneTextures::SceneTextures(const Scene& scene) : images_(texture_images(scene)) {
   if (!images_.empty()) sampler_ = image_files().open_textures(images_);
 }
 
