@@ -89,20 +89,14 @@ Shape parse_triangle(const ObjectReader& object) {
   return triangle;
 }
 
-Shape parse_cylinder(const ObjectReader& object) {
-  Cylinder cylinder;
-  cylinder.center = object.require("center").vec3();
-  cylinder.radius = object.require("radius").number(Range::above(0.0));
-  cylinder.height = object.require("height").number(Range::above(0.0));
-  return cylinder;
-}
-
-Shape parse_cone(const ObjectReader& object) {
-  Cone cone;
-  cone.center = object.require("center").vec3();
-  cone.radius = object.require("radius").number(Range::above(0.0));
-  cone.height = object.require("height").number(Range::above(0.0));
-  return cone;
+// A cylinder or a cone: the same three keys, under the same rules.
+template <typename Axial>
+Shape parse_axial(const ObjectReader& object) {
+  Axial shape;
+  shape.center = object.require("center").vec3();
+  shape.radius = object.require("radius").number(Range::above(0.0));
+  shape.height = object.require("height").number(Range::above(0.0));
+  return shape;
 }
 
 // The slow path, which names what is wrong: `in_range` bounds the indices.
@@ -252,14 +246,16 @@ constexpr std::string_view plane_keys[] = {"point", "normal", "uv_scale"};
 constexpr std::string_view box_keys[] = {"min", "max"};
 constexpr std::string_view triangle_keys[] = {"vertices", "normals", "uvs"};
 constexpr std::string_view mesh_keys[] = {"positions", "triangles", "normals", "uvs", "thin"};
-constexpr std::string_view cylinder_keys[] = {"center", "radius", "height"};
-constexpr std::string_view cone_keys[] = {"center", "radius", "height"};
+constexpr std::string_view axial_keys[] = {"center", "radius", "height"};  // cylinder, cone
 
 constexpr ShapeType types[] = {
-    {"sphere", sphere_keys, parse_sphere}, {"plane", plane_keys, parse_plane},
-    {"box", box_keys, parse_box},          {"triangle", triangle_keys, parse_triangle},
-    {"mesh", mesh_keys, parse_mesh},       {"cylinder", cylinder_keys, parse_cylinder},
-    {"cone", cone_keys, parse_cone},
+    {"sphere", sphere_keys, parse_sphere},
+    {"plane", plane_keys, parse_plane},
+    {"box", box_keys, parse_box},
+    {"triangle", triangle_keys, parse_triangle},
+    {"mesh", mesh_keys, parse_mesh},
+    {"cylinder", axial_keys, parse_axial<Cylinder>},
+    {"cone", axial_keys, parse_axial<Cone>},
 };
 
 struct TriangleCount {

@@ -140,49 +140,41 @@ constexpr double kEndless = std::numeric_limits<double>::infinity();
   return first_end(t_entry, entry_part, t_exit, exit_part, t_min, t_max, t, part);
 }
 
-// The nearest hit on each valid lane with tnear < t < tfar, and the part it is on.
-void distances(const PreparedCylinder& cylinder, const Lanes& lanes, double (&t)[kPacketSize],
-               unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
+// The nearest hit on each valid lane with tnear < t < tfar, and the part it is on, of a
+// cylinder or a cone: `Root` (cylinder_root, cone_root) on the lane's ray in object space,
+// relative to `anchor`, with the shape's two numbers `a` and `b`.
+template <auto Root>
+void axial_distances(const Mat4& world_to_object, const Vec3& anchor, double a, double b,
+                     const Lanes& lanes, double (&t)[kPacketSize],
+                     unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
   const std::size_t count = lanes.count;
-  const glm::dmat4 to_object = cylinder.world_to_object;
+  const glm::dmat4 to_object = world_to_object;
   const glm::dmat3 linear(to_object);
-  const Vec3 center = cylinder.center;
-  const double r2 = cylinder.radius * cylinder.radius;
-  const double half = cylinder.half_height;
   for (std::size_t i = 0; i < count; ++i) {
     const Vec3 f =
-        Vec3(to_object * glm::dvec4(lanes.org_x[i], lanes.org_y[i], lanes.org_z[i], 1.0)) - center;
+        Vec3(to_object * glm::dvec4(lanes.org_x[i], lanes.org_y[i], lanes.org_z[i], 1.0)) - anchor;
     const Vec3 d = linear * Vec3(lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]);
     double root;
     unsigned part;
-    const bool meets = cylinder_root(f.x, f.y, f.z, d.x, d.y, d.z, r2, half, lanes.tnear[i],
-                                     lanes.tfar[i], root, part);
+    const bool meets =
+        Root(f.x, f.y, f.z, d.x, d.y, d.z, a, b, lanes.tnear[i], lanes.tfar[i], root, part);
     found[i] = (lanes.valid[i] == -1) & meets;
     t[i] = root;
     primitive[i] = part;
   }
 }
 
+void distances(const PreparedCylinder& cylinder, const Lanes& lanes, double (&t)[kPacketSize],
+               unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
+  axial_distances<cylinder_root>(cylinder.world_to_object, cylinder.center,
+                                 cylinder.radius * cylinder.radius, cylinder.half_height, lanes, t,
+                                 primitive, found);
+}
+
 void distances(const PreparedCone& cone, const Lanes& lanes, double (&t)[kPacketSize],
                unsigned (&primitive)[kPacketSize], bool (&found)[kPacketSize]) {
-  const std::size_t count = lanes.count;
-  const glm::dmat4 to_object = cone.world_to_object;
-  const glm::dmat3 linear(to_object);
-  const Vec3 apex = cone.apex;
-  const double slope2 = cone.slope2;
-  const double height = cone.height;
-  for (std::size_t i = 0; i < count; ++i) {
-    const Vec3 f =
-        Vec3(to_object * glm::dvec4(lanes.org_x[i], lanes.org_y[i], lanes.org_z[i], 1.0)) - apex;
-    const Vec3 d = linear * Vec3(lanes.dir_x[i], lanes.dir_y[i], lanes.dir_z[i]);
-    double root;
-    unsigned part;
-    const bool meets = cone_root(f.x, f.y, f.z, d.x, d.y, d.z, slope2, height, lanes.tnear[i],
-                                 lanes.tfar[i], root, part);
-    found[i] = (lanes.valid[i] == -1) & meets;
-    t[i] = root;
-    primitive[i] = part;
-  }
+  axial_distances<cone_root>(cone.world_to_object, cone.apex, cone.slope2, cone.height, lanes, t,
+                             primitive, found);
 }
 
 }  // namespace
