@@ -17,6 +17,7 @@
 #include "common/net/file_digest.hpp"
 #include "examples/gltf_bytes.hpp"
 #include "tests/farm/farm_fixture.hpp"
+#include "tests/png_header_only.hpp"
 
 namespace tessera::test {
 namespace {
@@ -191,31 +192,10 @@ TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
       << absent.body;
   // Textures whose headers claim more pixels together than a scene's may have: refused at
   // submit from their headers, before any worker could spend memory decoding them.
-  const auto header_only = [](std::uint32_t side) {
-    const auto big_endian = [](std::uint32_t v) {
-      return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
-                         static_cast<char>(v >> 8), static_cast<char>(v)};
-    };
-    const auto crc32 = [](std::string_view bytes) {
-      std::uint32_t crc = 0xffffffffu;
-      for (const char c : bytes) {
-        crc ^= static_cast<unsigned char>(c);
-        for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-      }
-      return ~crc;
-    };
-    const auto chunk = [&](const std::string& type, const std::string& data) {
-      return big_endian(static_cast<std::uint32_t>(data.size())) + type + data +
-             big_endian(crc32(type + data));
-    };
-    return std::string("\x89PNG\r\n\x1a\n", 8) +
-           chunk("IHDR", big_endian(side) + big_endian(side) + std::string("\x08\x02\0\0\0", 5)) +
-           chunk("IDAT", "") + chunk("IEND", "");
-  };
   nlohmann::json heavy = textured(digest);
   heavy["scene"]["objects"] = nlohmann::json::array();
   for (std::uint32_t i = 0; i < 5; ++i) {
-    const std::string png = header_only(8192 - i);  // five distinct files
+    const std::string png = png_header_only(8192 - i, 8192 - i);  // five distinct files
     const std::string png_digest = bytes_sha256(png);
     ASSERT_EQ(http.request("PUT", asset_target(png_digest), png, "application/octet-stream").status,
               201);
