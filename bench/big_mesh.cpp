@@ -23,8 +23,11 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <embree3/rtcore.h>
 
+#include "bench/coordinator_load/server_process.hpp"
 #include "bench/grid_mesh.hpp"
 #include "common/huge_page_malloc.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
@@ -40,19 +43,9 @@ double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// A field of /proc/self/status in bytes ("VmRSS", "VmHWM").
+// A "Vm...:" field of this process's /proc status, in bytes.
 std::uint64_t status_bytes(const char* field) {
-  std::ifstream status("/proc/self/status");
-  std::string key;
-  std::uint64_t kib = 0;
-  while (status >> key) {
-    if (key == std::string(field) + ":") {
-      status >> kib;
-      return kib * 1024;
-    }
-    status.ignore(1 << 12, '\n');
-  }
-  return 0;
+  return static_cast<std::uint64_t>(tessera::load::process_status_kib(::getpid(), field)) * 1024;
 }
 
 tessera::Model read(const fs::path& file) {
