@@ -11,6 +11,7 @@
 namespace tessera {
 namespace {
 
+using geometry_detail::across_axis;
 using geometry_detail::plane_hit;
 using geometry_detail::world_sphere_hit;
 
@@ -83,15 +84,6 @@ Vec3 object_point(const Ray& ray, const Mat4& world_to_object, const Vec3& ancho
   const Vec3 o = Vec3(world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
   const Vec3 d = glm::dmat3(world_to_object) * Vec3(ray.direction);
   return o + t * d - anchor;
-}
-
-// Where the point `p` (relative to the anchor, in object space) lies across the axis: its
-// distance from it, and the unit direction away from it (zero on the axis itself).
-void across_axis(const Vec3& p, double& distance, double& ux, double& uz) {
-  distance = std::sqrt(p.x * p.x + p.z * p.z);
-  const bool off_axis = distance > 0.0;
-  ux = off_axis ? p.x / distance : 0.0;
-  uz = off_axis ? p.z / distance : 0.0;
 }
 
 // A point on a cap at height y, of radius `radius`: o + t·d snapped onto its plane, and

@@ -380,6 +380,17 @@ namespace geometry_detail {
   point[2] = cz + radius * normal[2];
 }
 
+// Where the point `p` (relative to a cylinder's or a cone's anchor, in object space) lies
+// across its axis, y: its distance from it, and the unit direction away from it (zero on
+// the axis itself). Hits snap to the surface by it; texture coordinates take the sine and
+// cosine of a longitude from it (surface_uv.cpp).
+inline void across_axis(const Vec3& p, double& distance, double& ux, double& uz) {
+  distance = std::sqrt(p.x * p.x + p.z * p.z);
+  const bool off_axis = distance > 0.0;
+  ux = off_axis ? p.x / distance : 0.0;
+  uz = off_axis ? p.z / distance : 0.0;
+}
+
 // A hit on a plane through q with unit normal n: o + t·d projected onto the plane, which
 // removes the error that o + t·d accumulates. Scalars and glm's order, as above.
 [[gnu::always_inline]] inline void plane_hit(double ox, double oy, double oz, double dx, double dy,

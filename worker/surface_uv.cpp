@@ -39,15 +39,15 @@ Vec3 along_longitude(const Vec3& p) { return kTwoPi * Vec3(p.z, 0.0, -p.x); }
 
 SurfaceUv on_sphere(const Sphere& sphere, const Vec3& p) {
   const Vec3 q = (p - sphere.center) / sphere.radius;
-  const double across = std::sqrt(q.x * q.x + q.z * q.z);
+  // sin φ and cos φ of the longitude are ux and uz.
+  double across, sin_phi, cos_phi;
+  geometry_detail::across_axis(q, across, sin_phi, cos_phi);
   const double latitude = portable_atan2(q.y, across);  // -π/2 at the south pole
   // At longitude φ = 2π(u - 0.5) and latitude λ = π(v - 0.5),
   // q = (cos λ sin φ, sin λ, cos λ cos φ); the sines and cosines are ratios of q's.
   const double length = std::sqrt(across * across + q.y * q.y);
   const double sin_lat = q.y / length;
   const double cos_lat = across / length;
-  const double sin_phi = across > 0.0 ? q.x / across : 0.0;
-  const double cos_phi = across > 0.0 ? q.z / across : 1.0;
   const Vec3 dpdv =
       sphere.radius * std::numbers::pi * Vec3(-sin_lat * sin_phi, cos_lat, -sin_lat * cos_phi);
   return {
@@ -107,9 +107,8 @@ SurfaceUv on_cylinder(const Cylinder& cylinder, unsigned part, const Vec3& p) {
 SurfaceUv on_cone(const Cone& cone, unsigned part, const Vec3& p) {
   const Vec3 q = p - cone.center;  // the apex is at height/2, the base at -height/2
   if (part != kSide) return on_cap(q, cone.radius, false);
-  const double across = std::sqrt(q.x * q.x + q.z * q.z);
-  const double sin_phi = across > 0.0 ? q.x / across : 0.0;
-  const double cos_phi = across > 0.0 ? q.z / across : 1.0;
+  double across, sin_phi, cos_phi;
+  geometry_detail::across_axis(q, across, sin_phi, cos_phi);
   return {{longitude(q), q.y / cone.height + 0.5},
           along_longitude(q),
           Vec3(-cone.radius * sin_phi, cone.height, -cone.radius * cos_phi)};
