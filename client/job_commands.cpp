@@ -10,13 +10,18 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <thread>
 
+#include "client/human_time.hpp"
 #include "client/scene_assets.hpp"
 #include "client/scene_input.hpp"
+#include "client/short_ids.hpp"
 #include "common/image_format.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
 #include "common/printable.hpp"
+#include "common/protocol/events.hpp"
+#include "common/protocol/paths.hpp"
 #include "common/scene_parser.hpp"
 #include "common/secret.hpp"
 
@@ -40,6 +45,7 @@ struct Options {
   std::string state;
   int limit = 20;
   bool partial = false;
+  std::string worker;
 };
 
 std::string server_url(const Options& options) {
@@ -98,6 +104,40 @@ void print_status(const protocol::JobStatus& job) {
   print_health(job.health);
 }
 
+// One row per job under a header, the id cut to what tells it apart (any unique prefix
+// works wherever a job id is asked for).
+void print_job_table(const std::vector<protocol::JobStatus>& jobs) {
+  const std::int64_t now = now_ms();
+  std::printf("%-10s  %-20s  %-9s  %4s  %-13s  %4s  %-11s  %s\n", "ID", "NAME", "STATE", "DONE",
+              "TILES", "PRIO", "SIZE", "SUBMITTED");
+  for (const protocol::JobStatus& job : jobs) {
+    const std::string tiles =
+        std::to_string(job.tiles.done) + "/" + std::to_string(job.tiles.total);
+    const std::string size = std::to_string(job.width) + "x" + std::to_string(job.height);
+    std::printf("%-10s  %-20s  %-9s  %3d%%  %-13s  %4d  %-11s  %s\n",
+                printable(short_id(job.id)).c_str(), printable(job.name).c_str(),
+                to_string(job.state), static_cast<int>(job.progress * 100), tiles.c_str(),
+                job.priority, size.c_str(), time_ago(job.created_at, now).c_str());
+  }
+}
+
+void print_worker_table(const std::vector<protocol::Worker>& workers) {
+  const std::int64_t now = now_ms();
+  std::printf("%-14s  %-16s  %-15s  %-9s  %7s  %6s  %-10s  %s\n", "ID", "NAME", "HOST", "STATE",
+              "THREADS", "TILES", "JOB", "LAST SEEN");
+  for (const protocol::Worker& w : workers) {
+    std::string state(protocol::name_in(protocol::kWorkerStateNames, w.state));
+    if (w.draining) state += "*";  // draining: the footnote says so
+    std::printf("%-14s  %-16s  %-15s  %-9s  %7d  %6llu  %-10s  %s\n", printable(w.id).c_str(),
+                printable(w.name).c_str(), printable(w.host).c_str(), state.c_str(), w.threads,
+                static_cast<unsigned long long>(w.tiles_rendered),
+                printable(short_id(w.current_job.value_or("-"))).c_str(),
+                time_ago(w.last_seen, now).c_str());
+  }
+  if (std::any_of(workers.begin(), workers.end(), [](const auto& w) { return w.draining; }))
+    std::printf("* draining: takes no more tiles once its lease is done\n");
+}
+
 std::string progress_line(const protocol::JobStatus& job, bool bar) {
   const std::string eta = job.eta_s ? format_duration(*job.eta_s) : "--:--";
   char text[256];
@@ -119,29 +159,92 @@ void print_json(const nlohmann::json& body) {
   std::printf("%s\n", body.dump(2, ' ', true).c_str());
 }
 
-// Follows a job until it finishes: a redrawn bar on a terminal, plain lines otherwise (at
-// most one a second). Each poll waits on the server for the job to finish, so the end is
-// seen at once, and returns anyway after a moment with the progress so far.
-protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
-  using clock = std::chrono::steady_clock;
-  const bool tty = ::isatty(STDOUT_FILENO);
-  std::string last;
-  clock::time_point last_printed{};
-  const double wait_s = tty ? 0.1 : 0.5;
-  while (true) {
-    const protocol::JobStatus job = api.job(id, wait_s);
-    const std::string line = progress_line(job, tty);
+// A job's progress as it changes: a redrawn bar on a terminal, plain lines otherwise (at
+// most one a second, and the last).
+class ProgressPrinter {
+ public:
+  void show(const protocol::JobStatus& job) {
+    using clock = std::chrono::steady_clock;
+    const std::string line = progress_line(job, tty_);
     const bool done = is_finished(job.state);
-    if (tty) {
+    if (tty_) {
       std::printf("\r%s\033[K%s", line.c_str(), done ? "\n" : "");
-    } else if (line != last && (done || clock::now() - last_printed >= std::chrono::seconds(1))) {
+    } else if (line != last_ && (done || clock::now() - printed_ >= std::chrono::seconds(1))) {
       std::printf("%s\n", line.c_str());
-      last = line;
-      last_printed = clock::now();
+      last_ = line;
+      printed_ = clock::now();
     }
     std::fflush(stdout);
-    if (done) return job;
   }
+
+ private:
+  const bool tty_ = ::isatty(STDOUT_FILENO);
+  std::string last_;
+  std::chrono::steady_clock::time_point printed_{};
+};
+
+// Follows a job by long polls, each waiting on the server for the job to finish: for a
+// coordinator without events (an older build).
+protocol::JobStatus poll_until_finished(CoordinatorClient& api, const std::string& id,
+                                        ProgressPrinter& printer) {
+  while (true) {
+    const protocol::JobStatus job = api.job(id, 0.5);
+    printer.show(job);
+    if (is_finished(job.state)) return job;
+  }
+}
+
+// Follows a job until it finishes, by the farm's events (GET /v1/events): its status each
+// time it changes, four times a second at most, and its end at once. The job's status is
+// read once the stream is open, and again after a "resync"; a stream that breaks is
+// resumed after the last event seen.
+protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
+  ProgressPrinter printer;
+  protocol::JobStatus job;
+  bool finished = false;
+  std::optional<std::string> last_event;
+  const auto update = [&](protocol::JobStatus now) {
+    job = std::move(now);
+    printer.show(job);
+    finished = is_finished(job.state);
+  };
+  for (int breaks = 0; !finished;) {
+    bool opened = false;
+    try {
+      api.events(
+          std::string(protocol::route::events), last_event,
+          [&] {
+            opened = true;
+            update(api.job(id));
+            return !finished;
+          },
+          [&](const ServerEvent& event) {
+            if (!event.id.empty()) last_event = event.id;
+            if (finished) return false;
+            if (event.type == protocol::event::resync) {
+              update(api.job(id));
+            } else if (event.type == protocol::event::job) {
+              const auto data = nlohmann::json::parse(event.data, nullptr, false);
+              if (!data.is_object() || data.value("id", "") != id) return true;
+              update(protocol::JobStatus::read(protocol::FieldReader(data)));
+            } else if (event.type == protocol::event::job_removed &&
+                       event.data.find("\"" + id + "\"") != std::string::npos) {
+              fail(kExitJobFailed, "job " + id + " was removed");
+            }
+            return !finished;
+          });
+      // A stream that ended before it opened came from no coordinator that has events.
+      if (!opened) return poll_until_finished(api, id, printer);
+    } catch (const ApiError& e) {
+      if (e.status() != 404) throw;
+      return poll_until_finished(api, id, printer);  // a coordinator without events
+    } catch (const HttpError&) {
+      // The coordinator restarted, or the network broke: resumed, a few times.
+      if (++breaks > 5) throw;
+      std::this_thread::sleep_for(std::chrono::seconds(breaks));
+    }
+  }
+  return job;
 }
 
 int job_exit_code(const protocol::JobStatus& job) {
@@ -331,19 +434,20 @@ void add_submit_command(CLI::App& app, const SharedOptions& options) {
 void add_job_queries(CLI::App& app, const SharedOptions& options) {
   CLI::App* status_cmd = on(app, options, "status", "Show a job's status",
                             [](const Options& o, CoordinatorClient& api) {
-                              const protocol::JobStatus job = api.job(o.job);
+                              const protocol::JobStatus job = api.job(resolve_job_id(api, o.job));
                               if (o.json_output)
                                 print_json(protocol::to_json(job));
                               else
                                 print_status(job);
                               return kExitOk;
                             });
-  status_cmd->add_option("job", options->job, "Job id")->required();
+  status_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
 
-  CLI::App* watch_cmd =
-      on(app, options, "watch", "Follow a job's progress until it finishes",
-         [](const Options& o, CoordinatorClient& api) { return job_exit_code(watch(api, o.job)); });
-  watch_cmd->add_option("job", options->job, "Job id")->required();
+  CLI::App* watch_cmd = on(app, options, "watch", "Follow a job's progress until it finishes",
+                           [](const Options& o, CoordinatorClient& api) {
+                             return job_exit_code(watch(api, resolve_job_id(api, o.job)));
+                           });
+  watch_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
 
   CLI::App* list_cmd =
       on(app, options, "list", "List jobs, newest first",
@@ -358,7 +462,7 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
            if (o.json_output) {
              print_json(protocol::to_json(reply));
            } else {
-             for (const protocol::JobStatus& job : reply.jobs) print_status(job);
+             print_job_table(reply.jobs);
            }
            return kExitOk;
          });
@@ -367,10 +471,10 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
 
   CLI::App* get_cmd = on(app, options, "get", "Download a job's image",
                          [](const Options& o, CoordinatorClient& api) {
-                           save_image(api, o.job, o.output, o.partial);
+                           save_image(api, resolve_job_id(api, o.job), o.output, o.partial);
                            return kExitOk;
                          });
-  get_cmd->add_option("job", options->job, "Job id")->required();
+  get_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
   get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
   get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
 }
@@ -378,22 +482,86 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
 void add_job_changes(CLI::App& app, const SharedOptions& options) {
   CLI::App* cancel_cmd =
       on(app, options, "cancel", "Cancel a job", [](const Options& o, CoordinatorClient& api) {
-        const protocol::JobStatus job = api.cancel(o.job);
+        const protocol::JobStatus job = api.cancel(resolve_job_id(api, o.job));
         if (o.json_output)
           print_json(protocol::to_json(job));
         else
           print_status(job);
         return kExitOk;
       });
-  cancel_cmd->add_option("job", options->job, "Job id")->required();
+  cancel_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
 
   CLI::App* rm_cmd = on(app, options, "rm", "Remove a finished job and its files",
                         [](const Options& o, CoordinatorClient& api) {
-                          api.remove(o.job);
-                          if (!o.json_output) std::printf("removed %s\n", printable(o.job).c_str());
+                          const std::string id = resolve_job_id(api, o.job);
+                          api.remove(id);
+                          if (!o.json_output) std::printf("removed %s\n", printable(id).c_str());
                           return kExitOk;
                         });
-  rm_cmd->add_option("job", options->job, "Job id")->required();
+  rm_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
+}
+
+// Priority, pause, resume, retry: each answers with the job's status.
+void add_job_controls(CLI::App& app, const SharedOptions& options) {
+  const auto shown = [](const Options& o, const protocol::JobStatus& job) {
+    if (o.json_output)
+      print_json(protocol::to_json(job));
+    else
+      print_status(job);
+    return kExitOk;
+  };
+  CLI::App* priority_cmd =
+      on(app, options, "priority", "Change a job's priority",
+         [shown](const Options& o, CoordinatorClient& api) {
+           return shown(o, api.change(resolve_job_id(api, o.job), {o.priority}));
+         });
+  priority_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
+  priority_cmd->add_option("priority", options->priority, "0..100, higher first")
+      ->required()
+      ->check(CLI::Range(0, 100));
+  using Control = protocol::JobStatus (CoordinatorClient::*)(std::string_view);
+  const auto control = [&](const char* name, const char* help, Control call) {
+    CLI::App* sub =
+        on(app, options, name, help, [shown, call](const Options& o, CoordinatorClient& api) {
+          return shown(o, (api.*call)(resolve_job_id(api, o.job)));
+        });
+    sub->add_option("job", options->job, "Job id (or a unique prefix)")->required();
+  };
+  control("pause", "Pause a job: its leases run out and no new tiles go out",
+          &CoordinatorClient::pause);
+  control("resume", "Resume a paused job", &CoordinatorClient::resume);
+  control("retry", "Render a failed job's failed tiles again", &CoordinatorClient::retry);
+}
+
+// Drain, undrain and remove a worker, named by a unique prefix of its id or by its name.
+void add_worker_controls(CLI::App& app, const SharedOptions& options) {
+  const auto drain = [&](const char* name, const char* help, bool draining) {
+    CLI::App* sub =
+        on(app, options, name, help, [draining](const Options& o, CoordinatorClient& api) {
+          const protocol::Worker worker = api.drain(resolve_worker_id(api, o.worker), draining);
+          if (o.json_output)
+            print_json(protocol::to_json(worker));
+          else
+            print_worker_table({worker});
+          return kExitOk;
+        });
+    sub->add_option("worker", options->worker, "Worker id (or a unique prefix), or its name")
+        ->required();
+  };
+  drain("drain", "Let a worker finish its lease and take no more tiles", true);
+  drain("undrain", "Let a drained worker take tiles again", false);
+  CLI::App* remove_cmd =
+      on(app, options, "remove-worker",
+         "Take a worker off the farm; its tiles go back to the queue (a live worker process "
+         "registers again: drain it or stop it first)",
+         [](const Options& o, CoordinatorClient& api) {
+           const std::string id = resolve_worker_id(api, o.worker);
+           api.remove_worker(id);
+           if (!o.json_output) std::printf("removed %s\n", printable(id).c_str());
+           return kExitOk;
+         });
+  remove_cmd->add_option("worker", options->worker, "Worker id (or a unique prefix), or its name")
+      ->required();
 }
 
 void add_workers_command(CLI::App& app, const SharedOptions& options) {
@@ -403,12 +571,7 @@ void add_workers_command(CLI::App& app, const SharedOptions& options) {
       print_json(protocol::to_json(reply));
       return kExitOk;
     }
-    for (const protocol::Worker& w : reply.workers)
-      std::printf("%s  %-16s  %-10s  %-9s  %2d threads  %6llu tiles  %s\n", printable(w.id).c_str(),
-                  printable(w.name).c_str(), printable(w.host).c_str(),
-                  protocol::name_in(protocol::kWorkerStateNames, w.state).data(), w.threads,
-                  static_cast<unsigned long long>(w.tiles_rendered),
-                  printable(w.current_job.value_or("")).c_str());
+    print_worker_table(reply.workers);
     return kExitOk;
   });
 }
@@ -445,7 +608,9 @@ void add_job_commands(CLI::App& app) {
   add_submit_command(app, options);
   add_job_queries(app, options);
   add_job_changes(app, options);
+  add_job_controls(app, options);
   add_workers_command(app, options);
+  add_worker_controls(app, options);
   add_health_command(app, options);
 }
 

@@ -12,7 +12,8 @@ enum ExitCode : int {
   kExitUnreachable = 3,
 };
 
-// Registers submit, status, watch, list, get, cancel, rm and workers.
+// Registers submit, status, watch, list, get, cancel, rm, priority, pause, resume, retry,
+// workers, drain, undrain, remove-worker and health.
 void add_job_commands(CLI::App& app);
 
 }  // namespace tessera

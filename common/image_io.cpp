@@ -105,6 +105,11 @@ std::uint8_t srgb8_by_table(float linear) {
   return table(linear);
 }
 
+std::uint8_t code8(float linear, OutputTransfer transfer) {
+  if (transfer == OutputTransfer::srgb) return srgb8_by_table(linear);
+  return quantise<std::uint8_t>(linear, transfer);
+}
+
 std::uint8_t srgb8_by_formula(float linear) {
   return quantise<std::uint8_t>(linear, OutputTransfer::srgb);
 }

@@ -79,5 +79,8 @@ float linear_to_srgb(float linear);
 // the formula the table is built from (the test checks that they agree everywhere).
 std::uint8_t srgb8_by_table(float linear);
 std::uint8_t srgb8_by_formula(float linear);
+// A linear value as the 8-bit code of an image written with `transfer` (what a PNG of the
+// job holds).
+std::uint8_t code8(float linear, OutputTransfer transfer);
 
 }  // namespace tessera

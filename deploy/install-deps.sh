@@ -17,6 +17,8 @@ packages=(
   clang-format  # tests/format_check.sh: every C++ file as .clang-format writes it
   ca-certificates  # the system's CAs, which https:// servers are checked against by default
   openssl  # the TLS test makes its CA and certificates with it (tests/farm/farm_tls_test.cpp)
+  chromium  # the web dashboard's browser test drives it with playwright-core (tests/browser/)
+  prometheus  # a real Prometheus scrapes the coordinator (tests/farm/farm_metrics_test.cpp)
 )
 
 if [ "$(id -u)" -ne 0 ]; then
@@ -39,5 +41,5 @@ apt-get install -y -q --no-install-recommends "${packages[@]}"
 if [ -f "$tools/package-lock.json" ]; then
   # A failed install leaves the linter's test skipped, saying so; it does not stop the build.
   (cd "$tools" && npm ci --no-audit --no-fund --loglevel=error) ||
-    echo "install-deps.sh: npm ci in $tools failed; tests/openapi_lint.sh will be skipped" >&2
+    echo "install-deps.sh: npm ci in $tools failed; tests/openapi_lint.sh and tests/browser/ will be skipped" >&2
 fi

@@ -38,11 +38,13 @@ std::optional<std::string_view> bearer_token(std::string_view authorization) {
 
 AccessPolicy::AccessPolicy(const AccessTokens& tokens)
     : client_digest_(tokens.client.empty() ? "" : sha256_hex(tokens.client)),
-      worker_digest_(tokens.worker.empty() ? "" : sha256_hex(tokens.worker)) {}
+      worker_digest_(tokens.worker.empty() ? "" : sha256_hex(tokens.worker)),
+      metrics_digest_(tokens.metrics.empty() ? "" : sha256_hex(tokens.metrics)) {}
 
 bool AccessPolicy::protects(std::string_view role) const {
   if (role == role_client) return !client_digest_.empty();
   if (role == role_worker) return !worker_digest_.empty();
+  if (role == role_metrics) return !metrics_digest_.empty();
   return false;
 }
 
@@ -54,6 +56,10 @@ std::optional<HttpResponse> AccessPolicy::check(std::string_view role,
     return unauthorized("missing_token", std::string("this route needs the ") + std::string(role) +
                                              " token: send Authorization: Bearer TOKEN");
   const std::string digest = sha256_hex(*token);
+  if (role == role_metrics) {
+    if (same_digest(digest, metrics_digest_)) return std::nullopt;
+    return unauthorized("invalid_token", "the token is not this server's metrics token");
+  }
   const std::string& wanted = role == role_client ? client_digest_ : worker_digest_;
   const std::string& other = role == role_client ? worker_digest_ : client_digest_;
   if (same_digest(digest, wanted)) return std::nullopt;

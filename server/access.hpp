@@ -14,10 +14,14 @@ namespace tessera {
 
 inline constexpr const char* role_client = "client";  // jobs, images, the worker list
 inline constexpr const char* role_worker = "worker";  // registration, claims, leases, scenes
+// GET /metrics: its own token (--metrics-token), so that a scraper holds no power over jobs;
+// without one the route itself answers loopback peers only.
+inline constexpr const char* role_metrics = "metrics";
 
 struct AccessTokens {
-  std::string client;  // "" : client routes are open
-  std::string worker;  // "" : worker routes are open
+  std::string client;   // "" : client routes are open
+  std::string worker;   // "" : worker routes are open
+  std::string metrics;  // "" : /metrics is open to loopback peers only
 };
 
 class AccessPolicy {
@@ -33,6 +37,7 @@ class AccessPolicy {
  private:
   std::string client_digest_;  // "" when not set
   std::string worker_digest_;
+  std::string metrics_digest_;
 };
 
 // The token of "Bearer TOKEN" (the scheme in any case); nothing for any other form.

@@ -106,6 +106,9 @@ protocol::Worker worker_of(const WorkerInfo& worker) {
   if (worker.current_tile >= 0) w.current_tile = worker.current_tile;
   w.tiles_rendered = worker.tiles_rendered;
   w.last_seen = format_timestamp(worker.last_seen_ms);
+  w.draining = worker.draining;
+  w.tiles_per_min = worker.tiles_per_min;
+  w.rays_per_s = worker.rays_per_s;
   return w;
 }
 

@@ -9,6 +9,10 @@ void add_api_routes(Router& router, ApiContext& context, const Readiness* readin
   add_scene_routes(router, context);
   add_lease_routes(router, context);
   add_asset_routes(router, context);
+  add_control_routes(router, context);
+  add_metrics_route(router, context);
+  add_event_routes(router, context);
+  add_web_routes(router, context);
 }
 
 }  // namespace tessera

@@ -17,6 +17,8 @@
 namespace tessera {
 
 class AssetStore;
+class EventHub;
+class HttpMetrics;
 
 struct ApiContext {
   Scheduler& scheduler;
@@ -42,6 +44,12 @@ struct ApiContext {
   // Mesh files and the files they name, by digest; none: no asset routes, and a scene
   // that names an asset is refused.
   AssetStore* assets = nullptr;
+  // GET /metrics: the HTTP layer's counts (none: not served), and whether the route is
+  // open to loopback peers only (no --metrics-token).
+  const HttpMetrics* http_metrics = nullptr;
+  bool metrics_loopback_only = true;
+  std::filesystem::path data_dir;  // whose files /metrics sizes
+  EventHub* events = nullptr;      // server-sent events; none: not served
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.
@@ -49,7 +57,15 @@ void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
 void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers...
 void add_scene_routes(Router& router, ApiContext& context);   // /v1/scenes/{digest}
 void add_lease_routes(Router& router, ApiContext& context);   // /v1/leases/{id}/...
-void add_asset_routes(Router& router, ApiContext& context);   // /v1/assets, /v1/scene-assets
+void add_asset_routes(Router& router, ApiContext& context);
+// Priority, pause, resume, retry; drain and remove workers (control_routes.cpp).
+void add_control_routes(Router& router, ApiContext& context);
+// GET /metrics, in Prometheus's text format (metrics_route.cpp).
+void add_metrics_route(Router& router, ApiContext& context);
+// Server-sent events and a job's tiles (event_routes.cpp).
+void add_event_routes(Router& router, ApiContext& context);  // /v1/assets, /v1/scene-assets
+// The web dashboard: its page at /, /jobs/{id} and /workers, and /ui/... (web_routes.cpp).
+void add_web_routes(Router& router, ApiContext& context);
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
 // that knows start-up is over (server_main) can say so.
 void add_health_routes(Router& router, const Readiness* readiness = nullptr);

@@ -33,6 +33,7 @@ class io_context;
 
 namespace tessera {
 
+class HttpMetrics;
 class Listener;
 class Router;
 struct ServerShared;
@@ -65,6 +66,9 @@ struct HttpServerOptions {
   std::function<std::optional<HttpResponse>(std::string_view role, std::string_view authorization)>
       authorize;
   OriginPolicy origins;  // which pages may call, under which Host names
+  // Counts every answer, by route, method and status (GET /metrics); none when null. Must
+  // outlive the server.
+  HttpMetrics* metrics = nullptr;
   // PEM files: with both set the server speaks TLS only (HTTPS), without, plain HTTP.
   std::string tls_cert_file;
   std::string tls_key_file;

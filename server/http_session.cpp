@@ -15,11 +15,13 @@
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
 
 #include "server/http_errors.hpp"
+#include "server/http_metrics.hpp"
 #include "server/listener.hpp"
 #include "server/pending_response.hpp"
 #include "server/request_framing.hpp"
@@ -124,7 +126,7 @@ class BasicHttpSession : public HttpSession {
   }
 
  private:
-  enum class Phase { idle, header, body, handler, writing, closing, closed };
+  enum class Phase { idle, header, body, handler, writing, streaming, closing, closed };
 
   bool stopping() const { return shared_->stopping.load(); }
   std::shared_ptr<BasicHttpSession> self() {
@@ -248,6 +250,8 @@ class BasicHttpSession : public HttpSession {
 
   void on_read_header() {
     auto& request = parser_->get();
+    request_started_ = std::chrono::steady_clock::now();
+    method_ = std::string(request.method_string());
     head_only_ = request.method() == http::verb::head;
     const RequestHead head = head_of(request);
     if (auto problem = framing_problem(head, shared_->options.max_target_bytes))
@@ -415,6 +419,20 @@ class BasicHttpSession : public HttpSession {
                     response.status);
       response = error_response(500, "internal_error", "the handler answered an invalid status");
     }
+    if (shared_->options.metrics) {
+      // Refused before its header was read: no route, no method, no time.
+      const bool headed = request_started_ != std::chrono::steady_clock::time_point{};
+      const double seconds =
+          headed
+              ? std::chrono::duration<double>(std::chrono::steady_clock::now() - request_started_)
+                    .count()
+              : 0.0;
+      shared_->options.metrics->record(headed && route_.handler ? route_.pattern : "", method_,
+                                       response.status, seconds);
+    }
+    request_started_ = {};
+    method_.clear();
+    if (response.stream) return start_stream(std::move(response));
     answer_.emplace(response_message(std::move(response), head_only_, close_after,
                                      route_.pattern.empty() ? path_ : route_.pattern));
     std::visit([&](auto& message) { write(message, close_after); }, *answer_);
@@ -439,8 +457,92 @@ class BasicHttpSession : public HttpSession {
   }
 
   void on_shut_down() {
+    if (phase_ == Phase::streaming) return end_stream();
     if (phase_ == Phase::idle) close();
     // Otherwise the current request finishes, and stopping() ends the connection after it.
+  }
+
+  // A streamed body (server-sent events): the header, then what the stream has whenever it
+  // has something, a keep-alive when it had nothing for a while, until the peer goes, the
+  // stream ends or the server stops. A peer that stops reading is closed once a write has
+  // waited longer than write_timeout.
+  void start_stream(HttpResponse response) {
+    phase_ = Phase::streaming;
+    body_stream_ = std::move(response.stream);
+    keepalive_timer_ = std::make_unique<net::steady_timer>(stream_.get_executor());
+    lowest().expires_never();
+    // What the kernel holds for a peer that stops reading is bounded too, not only the
+    // stream's queue: the system's autotuning would let a thousand stalled subscribers
+    // hold 4 MiB each.
+    error_code ignored;
+    lowest().socket().set_option(net::socket_base::send_buffer_size(kStreamSendBuffer), ignored);
+    watch_peer();
+    write_stream(stream_header(response));
+  }
+
+  void write_stream(std::string text) {
+    stream_writing_ = true;
+    stream_out_ = std::move(text);
+    stream_write_started_ = std::chrono::steady_clock::now();
+    arm_keepalive();  // which also catches a write that waits too long
+    net::async_write(stream_, net::buffer(stream_out_),
+                     [self = self()](error_code ec, std::size_t) {
+                       self->stream_writing_ = false;
+                       if (ec) return self->end_stream();
+                       self->pump_stream();
+                     });
+  }
+
+  void pump_stream() {
+    if (phase_ != Phase::streaming || stream_writing_) return;
+    if (stopping()) return end_stream();
+    bool ended = false;
+    std::string text = body_stream_->take(ended);
+    if (!text.empty()) return write_stream(std::move(text));
+    if (ended) return end_stream();
+    arm_keepalive();
+    body_stream_->wait([weak = weak_from_this()] {
+      if (auto session = std::static_pointer_cast<BasicHttpSession>(weak.lock()))
+        net::post(session->stream_.get_executor(), [session] { session->pump_stream(); });
+    });
+  }
+
+  void on_keepalive() {
+    if (phase_ != Phase::streaming) return;
+    if (!stream_writing_) return write_stream(body_stream_->keepalive());
+    // A write still waiting on a peer that does not read.
+    if (std::chrono::steady_clock::now() - stream_write_started_ > shared_->options.write_timeout)
+      return end_stream();
+    arm_keepalive();
+  }
+
+  // The timer of on_keepalive(), from now; an earlier one is forgotten.
+  void arm_keepalive() {
+    const std::uint64_t generation = ++keepalive_generation_;
+    keepalive_timer_->expires_after(std::min<std::chrono::steady_clock::duration>(
+        body_stream_->keepalive_interval(), shared_->options.write_timeout));
+    keepalive_timer_->async_wait([self = self(), generation](error_code ec) {
+      if (!ec && generation == self->keepalive_generation_) self->on_keepalive();
+    });
+  }
+
+  // A stream's peer sends nothing; a read that ends says it went.
+  void watch_peer() {
+    stream_.async_read_some(buffer_.prepare(512),
+                            [self = self()](error_code ec, std::size_t bytes) {
+                              if (ec) return self->end_stream();
+                              self->buffer_.commit(bytes);
+                              self->buffer_.consume(self->buffer_.size());
+                              self->watch_peer();
+                            });
+  }
+
+  void end_stream() {
+    if (phase_ != Phase::streaming) return;
+    body_stream_->cancel();
+    ++keepalive_generation_;
+    keepalive_timer_->cancel();
+    close();
   }
 
   // Half-closes, then discards what the client still sends until it closes too: closing
@@ -480,7 +582,15 @@ class BasicHttpSession : public HttpSession {
   std::optional<WireMessage> answer_;              // alive while being written
   std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
   std::unique_ptr<std::string> refusal_;           // to a client of the other protocol
+  // A streamed body's (start_stream()).
+  std::shared_ptr<BodyStream> body_stream_;
+  std::unique_ptr<net::steady_timer> keepalive_timer_;
+  std::uint64_t keepalive_generation_ = 0;
+  std::string stream_out_;  // alive while being written
+  bool stream_writing_ = false;
+  std::chrono::steady_clock::time_point stream_write_started_;
   static constexpr std::size_t kStreamPiece = 1 << 20;
+  static constexpr int kStreamSendBuffer = 128 * 1024;  // the kernel doubles it
   std::shared_ptr<BodySink> sink_;  // the streamed body's, for a route that has one
   std::size_t budget_held_ = 0;     // of shared_->body_budget, for the body being read or served
   std::string remote_address_;
@@ -492,6 +602,8 @@ class BasicHttpSession : public HttpSession {
   std::chrono::steady_clock::time_point body_deadline_;
   // The request being served.
   std::string path_;
+  std::string method_;                                     // of the request being answered
+  std::chrono::steady_clock::time_point request_started_;  // when its header was read
   std::map<std::string, std::string> query_;
   RouteMatch route_;
 };

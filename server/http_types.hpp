@@ -2,6 +2,7 @@
 // files compile quickly and can be unit-tested without a socket.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
@@ -37,6 +38,23 @@ struct HttpRequest {
   std::shared_ptr<BodySink> body_sink;
 };
 
+// A body sent as it comes, for as long as the peer stays (server-sent events). The session
+// writes the response's header, then whatever take() has each time, and keepalive() when
+// nothing came for keepalive_interval(); the connection closes at the end.
+class BodyStream {
+ public:
+  virtual ~BodyStream() = default;
+  // Calls `ready` once, from any thread, when take() has something or the stream has
+  // ended (at once when it has already). A later wait() replaces an earlier `ready`.
+  virtual void wait(std::function<void()> ready) = 0;
+  // What to send now, "" when nothing; `ended` is set once the stream is over.
+  virtual std::string take(bool& ended) = 0;
+  // The peer went, or the server stops: nothing more is taken, `ready` is dropped.
+  virtual void cancel() = 0;
+  virtual std::string keepalive() const = 0;
+  virtual std::chrono::milliseconds keepalive_interval() const = 0;
+};
+
 struct HttpResponse {
   using Headers = std::vector<std::pair<std::string, std::string>>;
   HttpResponse() = default;
@@ -54,6 +72,8 @@ struct HttpResponse {
   // (a big image), and `body` is ignored. A temporary file is removed once it is opened.
   std::string file;
   bool file_is_temporary = false;
+  // When set, the body is this stream's (server-sent events), and `body` is ignored.
+  std::shared_ptr<BodyStream> stream;
 };
 
 // "Content-Type" -> "content-type": header names are kept so, being case-insensitive.

@@ -74,6 +74,12 @@ void ImageAssembly::ended(const std::string& job_id) {
   it->second.canvas.reset();
 }
 
+void ImageAssembly::resumed(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  const auto it = jobs_.find(job_id);
+  if (it != jobs_.end()) it->second.ended = false;
+}
+
 void ImageAssembly::removed(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   jobs_.erase(job_id);

@@ -61,6 +61,8 @@ class ImageAssembly {
   void completed(const std::string& job_id);
   // The job failed or was canceled: its image comes from the store from now on.
   void ended(const std::string& job_id);
+  // The ended job renders again (a failed job retried): its tiles go to a canvas again.
+  void resumed(const std::string& job_id);
   // The job's removal is durable: its image file goes too.
   void removed(const std::string& job_id);
 

@@ -214,9 +214,31 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
       return error_response(400, "invalid_request", "limit must be an integer from 1 to 1000");
     }
   }
+  std::size_t offset = 0;
+  if (auto it = request.query.find(std::string(protocol::query::offset));
+      it != request.query.end()) {
+    try {
+      std::size_t used = 0;
+      const long long value = std::stoll(it->second, &used);
+      if (used != it->second.size() || value < 0 || value > 1'000'000'000)
+        throw std::out_of_range("");
+      offset = static_cast<std::size_t>(value);
+    } catch (const std::exception&) {
+      return error_response(400, "invalid_request",
+                            "offset must be an integer from 0 to 1000000000");
+    }
+  }
   protocol::JobList list;
   const std::int64_t now = context.clock.now_ms();
-  for (const JobStatus& job : context.scheduler.jobs(state, limit))
+  // The jobs whose id begins so: how a client finds the job a short id names.
+  if (auto it = request.query.find(std::string(protocol::query::id_prefix));
+      it != request.query.end()) {
+    for (const std::string& id : context.scheduler.job_ids_with_prefix(it->second, limit))
+      if (const auto job = context.scheduler.job(id); job && (!state || job->state == *state))
+        list.jobs.push_back(status_of(*job, now));
+    return body_response(200, list);
+  }
+  for (const JobStatus& job : context.scheduler.jobs(state, limit, offset))
     list.jobs.push_back(status_of(job, now));
   return body_response(200, list);
 }

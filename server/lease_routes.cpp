@@ -114,8 +114,16 @@ Checked check_upload(ApiContext& context, HttpRequest& request) {
       indexes.push_back(index > static_cast<std::uint64_t>(std::numeric_limits<int>::max())
                             ? -1
                             : static_cast<int>(index));
-    const auto results = slice_upload(pixels, indexes, *sizes, rays);
+    auto results = slice_upload(pixels, indexes, *sizes, rays);
     if (!results) return Pending<ResultOutcome>{ResultOutcome::wrong_size};
+    if (const std::string* text = header(protocol::kRenderMicrosecondsHeader)) {
+      const auto times = protocol::parse_number_list(*text);
+      if (!times || times->size() != results->size())
+        return error_response(400, "invalid_request",
+                              "X-Tessera-Render-Us must give one whole number of microseconds "
+                              "per tile in X-Tessera-Tiles");
+      for (std::size_t i = 0; i < results->size(); ++i) (*results)[i].render_us = (*times)[i];
+    }
     for (const TileResult& tile : *results)
       if (const auto bad = first_impossible(tile.pixels))
         return impossible_pixels("tile " + std::to_string(tile.tile_index), *bad,

@@ -117,8 +117,10 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
     }
     Callbacks notify;
     JobStatus status;
+    FarmObserver* observer = nullptr;
     {
       std::lock_guard lock(mutex_);
+      observer = observer_;
       const std::string id = job->status.id;
       JobEntry& entry =
           *jobs_.emplace(id, std::make_unique<JobEntry>(std::move(*job))).first->second;
@@ -129,6 +131,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
     }
     spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", status.id, status.name,
                  status.width, status.height, status.tiles_total, status.priority);
+    if (observer) observer->jobs_changed({status});
     for (const auto& callback : notify) callback();
     then(status, "");
   });
@@ -141,7 +144,8 @@ std::optional<JobStatus> Scheduler::job(const std::string& id) const {
   return job->status;
 }
 
-std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_t limit) const {
+std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_t limit,
+                                       std::size_t offset) const {
   std::lock_guard lock(mutex_);
   std::vector<const JobStatus*> matching;
   for (const auto& [id, job] : jobs_)
@@ -150,12 +154,12 @@ std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_
     if (a->created_at_ms != b->created_at_ms) return a->created_at_ms > b->created_at_ms;
     return a->id > b->id;
   };
-  const std::size_t count = std::min(limit, matching.size());
-  std::partial_sort(matching.begin(), matching.begin() + static_cast<std::ptrdiff_t>(count),
+  // Sorted only as far as the page reaches: a page of a long list costs no full sort.
+  const std::size_t end = std::min(offset + limit, matching.size());
+  std::partial_sort(matching.begin(), matching.begin() + static_cast<std::ptrdiff_t>(end),
                     matching.end(), newest_first);
   std::vector<JobStatus> result;
-  result.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) result.push_back(*matching[i]);
+  for (std::size_t i = std::min(offset, end); i < end; ++i) result.push_back(*matching[i]);
   return result;
 }
 
@@ -185,8 +189,10 @@ Pending<RemoveOutcome> Scheduler::remove(const std::string& id) {
   const StoreTicket ticket = queue_write([id](Store& store) { store.delete_job(id); });
   // After the job's rows: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served.
-  store_thread_.after(ticket, [this, id](const std::string& error) {
-    if (error.empty()) images_.removed(id);
+  store_thread_.after(ticket, [this, id, observer = observer_](const std::string& error) {
+    if (!error.empty()) return;
+    images_.removed(id);
+    if (observer) observer->job_removed(id);
   });
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);

@@ -56,10 +56,26 @@ class Scheduler {
   void submit(const std::string& name, int priority, const Scene& scene, std::string scene_json,
               Submitted then);
   std::optional<JobStatus> job(const std::string& id) const;
-  // Newest first; `state` filters when set; at most `limit`.
-  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit) const;
+  // Newest first; `state` filters when set; at most `limit`, after the first `offset`.
+  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
+                              std::size_t offset = 0) const;
   Pending<CancelOutcome> cancel(const std::string& id);
   Pending<RemoveOutcome> remove(const std::string& id);
+  // Farm controls (scheduler_controls.cpp). A new priority takes effect at the next claim
+  // or extension; a job that is not finished may change it.
+  Pending<ControlOutcome> set_priority(const std::string& id, int priority);
+  // A queued or running job hands out no more tiles: the leases out now run out (their
+  // tiles are delivered or go back to the queue), and nothing is withdrawn. Pausing a
+  // paused job does nothing.
+  Pending<ControlOutcome> pause(const std::string& id);
+  // A paused job hands out tiles again: running when it had begun, queued otherwise.
+  // Resuming a job that is not paused does nothing, unless it has finished (refused).
+  Pending<ControlOutcome> resume(const std::string& id);
+  // A failed job renders its tiles that are not done again: their failures are forgotten
+  // and the job is running (or queued) once more, with the tiles it had kept.
+  Pending<ControlOutcome> retry(const std::string& id);
+  // The ids of the jobs that begin with `prefix`, at most `limit`, in id order.
+  std::vector<std::string> job_ids_with_prefix(const std::string& prefix, std::size_t limit) const;
   // The scene stored under `digest`, read on the store thread and handed to `then` there.
   void scene_json(const std::string& digest,
                   std::function<void(std::optional<std::string>)> then) const;
@@ -143,6 +159,15 @@ class Scheduler {
   Written touch_worker(const std::string& worker_id);
   Written worker_left(const std::string& worker_id);
   std::vector<WorkerInfo> workers() const;
+  // For GET /metrics (scheduler_controls.cpp).
+  const FarmCounters& counters() const { return counters_; }
+  FarmGauges gauges() const;
+  // A draining worker keeps its lease until it is done (or runs out) and then gets no
+  // more tiles, until it is drained no longer (`draining` false).
+  Pending<ControlOutcome> drain_worker(const std::string& worker_id, bool draining);
+  // The worker leaves the list and the store; the tiles it owed go back to the queue. A
+  // worker process still running registers again at its next call, as a new worker.
+  Pending<ControlOutcome> remove_worker(const std::string& worker_id);
 
   // --- time -----------------------------------------------------------------
   // Returns expired leases' tiles to the queue, and fails jobs stalled past
@@ -153,6 +178,11 @@ class Scheduler {
   // Called whenever a job has finished (completed, failed or canceled), once that is
   // durable, on the store thread: it is meant to post a wake-up elsewhere.
   void on_job_finished(std::function<void()> callback);
+  // Tells `observer` of every change from now on (null: nobody); set before serving.
+  void observe(FarmObserver* observer);
+  // Every tile of the job as the observer tells them (without pixels), in index order;
+  // nothing when there is no such job.
+  std::optional<std::vector<FarmObserver::TileChange>> tiles(const std::string& job_id) const;
   // Before what the callbacks use goes away (the server's long polls): drops them, then
   // waits for the work still in flight to be done.
   void stop_notifying();
@@ -295,6 +325,22 @@ class Scheduler {
   std::unordered_map<std::string, std::string> secret_owners_;
   Callbacks callbacks_;
   Callbacks finished_callbacks_;
+  FarmCounters counters_;
+  FarmObserver* observer_ = nullptr;
+  // The records a staged change touches, taken before it is applied (scheduler_observe.cpp),
+  // and then told to the observer as they are after it, once it is durable.
+  struct Observed {
+    std::vector<JobEntry*> jobs;
+    std::vector<std::pair<JobEntry*, int>> tiles;
+    std::vector<std::pair<WorkerEntry*, std::string>> workers;  // with the state before
+  };
+  Observed observed_before(const StagedChange& change) const;
+  // A farm control of the job `id` (scheduler_controls.cpp): `change_job(job, change)`
+  // stages what it changes, or returns why it refuses; what it stages is committed.
+  template <typename Change>
+  Pending<ControlOutcome> control_job(const std::string& id, Change change_job);
+  void tell_observer(const Observed& observed, StoreTicket ticket);
+  FarmObserver::TileChange tile_change(const JobEntry& job, int index) const;
   StoreTicket last_write_ = 0;
   std::atomic<std::uint64_t> refusals_{
       0};  // see refusals()  // the ticket of the last write queued by queue_write()

@@ -24,8 +24,10 @@ StoreTicket Scheduler::commit(StagedChange& change, const std::string& what) {
   bool finishes = false;
   for (const auto& [job, status] : change.jobs)
     finishes = finishes || (is_finished(status.state) && !is_finished(job->status.state));
+  const Observed observed = observed_before(change);
   apply(change);
   const StoreTicket ticket = queue_write(std::move(work));
+  tell_observer(observed, ticket);
   store_thread_.after(ticket, [this, touched = std::move(touched), what](const std::string& error) {
     if (error.empty()) return;
     // The store refused (a full disk, say). Every job the change was for fails and says
@@ -198,7 +200,7 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   updated.tiles_rendering = s.tiles_rendering;
   updated.health = s.health;  // changed in place only, never staged
   job.status = std::move(updated);
-  if (!is_finished(job.status.state))
+  if (hands_out_tiles(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
   // A canceled or failed job's partial image is read from the store from now on.
   if ((job.status.state == JobState::failed || job.status.state == JobState::canceled) &&
@@ -288,7 +290,7 @@ void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {
   job.status.tiles_done = 0;
   job.status.tiles_rendering = 0;
   for (int index = 0; index < job.status.tiles_total; ++index) track_tile(job, index, +1);
-  if (!is_finished(job.status.state))
+  if (hands_out_tiles(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
 }
 

@@ -90,8 +90,9 @@ std::shared_ptr<const Frame> frame_of(const JobEntry& job) {
 }
 
 WorkerRow worker_row(const WorkerEntry& w) {
-  return {w.info.id,    w.info.name,           w.info.host,         w.info.threads,
-          w.info.state, w.info.tiles_rendered, w.info.last_seen_ms, w.secret_sha256};
+  return {w.info.id,           w.info.name,     w.info.host,
+          w.info.threads,      w.info.state,    w.info.tiles_rendered,
+          w.info.last_seen_ms, w.secret_sha256, w.info.draining};
 }
 
 }  // namespace tessera

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -10,6 +11,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -49,6 +51,7 @@ struct TileSlot {
   std::string result_lease_id;  // the lease whose pixels are stored
   std::string last_error;       // why it failed last
   int handouts = 0;  // times it went out under a lease; in memory only (see count_handouts)
+  std::uint64_t render_us = 0;  // of a done tile, as its worker timed it; in memory only
 };
 
 struct JobEntry {
@@ -69,6 +72,9 @@ struct WorkerEntry {
   std::string lease_id;                // the live lease it holds; "" when none
   std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store
   std::string secret_sha256;           // of the secret its registration gave it
+  // Its accepted uploads of the last minute, a second per entry: (when, tiles, rays); in
+  // memory only.
+  std::deque<std::tuple<std::int64_t, int, std::uint64_t>> recent;
 };
 
 // New values for records, gathered by one operation. Scheduler::commit writes them in one

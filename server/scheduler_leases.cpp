@@ -82,7 +82,8 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
         result = lease_of(lease_id);
       }
     } else {
-      JobEntry* chosen = next_job_for(*worker);
+      // A draining worker is given nothing new.
+      JobEntry* chosen = worker->info.draining ? nullptr : next_job_for(*worker);
       if (!chosen && worker->info.state == worker_idle) {
         note_seen(*worker, now);
       } else {
@@ -172,7 +173,7 @@ Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int
       // job of higher priority gets the worker at the end of this lease, as it would
       // after any batch.
       const int room = config_.max_lease_tiles - static_cast<int>(live.size());
-      if (worker && room > 0 && next_job_for(*worker) == &job)
+      if (worker && !worker->info.draining && room > 0 && next_job_for(*worker) == &job)
         added = stage_batch(change, job, lease_id, worker_id,
                             std::min(batch_size(job, max_tiles), room), expires, true);
       commit(change);
@@ -307,6 +308,7 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
     }
   }
   if (!expired) return;
+  counters_.lease_expiries += 1;
   // Any of the tiles still owed may be the one the worker crashed or hung on. Each is
   // charged, and goes out alone next time (see claim()), where a further failure is its own.
   const std::string who =
@@ -317,7 +319,10 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
 
 void Scheduler::count_handout(JobEntry& job, TileSlot& tile) {
   tile.handouts += 1;
-  if (tile.handouts > 1) job.status.health.repeated_handouts += 1;
+  if (tile.handouts > 1) {
+    job.status.health.repeated_handouts += 1;
+    counters_.tile_retries += 1;
+  }
 }
 
 Lease Scheduler::lease_of(const std::string& lease_id) const {

@@ -84,6 +84,7 @@ void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
     worker->info.state = std::move(row.state);
     worker->info.tiles_rendered = row.tiles_rendered;
     worker->info.last_seen_ms = row.last_seen_ms;
+    worker->info.draining = row.draining;
     worker->persisted_seen_ms = row.last_seen_ms;
     worker->secret_sha256 = std::move(row.secret_sha256);
     if (!worker->secret_sha256.empty()) secret_owners_[worker->secret_sha256] = row.id;

@@ -3,7 +3,9 @@
 // that may be given once its change is durable.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -11,9 +13,11 @@
 #include <vector>
 
 #include "common/image.hpp"
+#include "common/protocol/events.hpp"
 #include "common/protocol/job_state.hpp"
 #include "common/protocol/limits.hpp"
 #include "common/scene.hpp"
+#include "server/histogram.hpp"
 #include "server/store_thread.hpp"
 
 namespace tessera {
@@ -85,6 +89,10 @@ struct WorkerInfo {
   int current_tile = -1;
   std::uint64_t tiles_rendered = 0;
   std::int64_t last_seen_ms = 0;
+  bool draining = false;  // finishes the lease it holds and is given no more
+  // Over the last minute (Scheduler::workers()).
+  double tiles_per_min = 0;
+  double rays_per_s = 0;
 };
 
 struct LeaseTile {
@@ -110,6 +118,7 @@ struct TileResult {
   int tile_index = 0;
   std::span<const float> pixels;  // float32 RGB, rows from the top
   std::uint64_t rays = 0;
+  std::uint64_t render_us = 0;  // as its worker timed it; 0: not said
 };
 
 // An upload's body cut into its tiles, in order: pixel_counts[i] pixels of tiles[i], which
@@ -140,7 +149,65 @@ struct Pending {
 };
 using Written = Pending<std::monostate>;
 
+// What the farm has done since the coordinator started, for GET /metrics: counted as it
+// happens, read without the scheduler's lock.
+struct FarmCounters {
+  std::atomic<std::uint64_t> tiles_rendered{0};  // results accepted, a tile each
+  std::atomic<std::uint64_t> rays{0};            // of those tiles
+  std::atomic<std::uint64_t> lease_expiries{0};  // leases that ran out without a heartbeat
+  std::atomic<std::uint64_t> tile_retries{0};    // tiles that went out again after going out
+  // Each tile's render time on its worker, from 1 ms to 10 min.
+  Histogram tile_render_seconds{
+      {0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 120, 300, 600}};
+};
+
+// The farm as it is now, for GET /metrics.
+struct FarmGauges {
+  std::map<JobState, int> jobs;  // every state, those with no job at 0
+  // Tiles waiting for a worker, by their job's priority: of jobs that hand out tiles (not
+  // paused ones). The queue depth that autoscaling follows.
+  std::map<int, std::uint64_t> pending_by_priority;
+  // idle, rendering, gone and left by their state; those of them that are draining also
+  // under "draining".
+  std::map<std::string, int> workers;
+};
+
+// What the scheduler reports of its changes, for the coordinator's event streams: each
+// call comes on the store thread once its change is durable, in the order the changes
+// were made, and must not call the scheduler back under... anything but its const reads.
+class FarmObserver {
+ public:
+  virtual ~FarmObserver() = default;
+  // Each job's status after a change to it (its state, priority, tiles or rays).
+  virtual void jobs_changed(const std::vector<JobStatus>& jobs) = 0;
+  using TileView = protocol::TileView;
+  struct TileChange {
+    std::string job_id;
+    int index = 0;
+    TileRect rect;
+    TileView view = TileView::pending;
+    std::string worker_id;          // rendering: its worker; done: who rendered it
+    std::string worker_name;        // of worker_id
+    std::uint64_t render_us = 0;    // done: as its worker timed it
+    std::span<const float> pixels;  // done: float32 RGB; valid during the call only
+    OutputTransfer transfer = OutputTransfer::srgb;  // how the job's images are encoded
+  };
+  virtual void tiles_changed(const std::vector<TileChange>& tiles) = 0;
+  using WorkerChange = protocol::WorkerChange;
+  virtual void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) = 0;
+  virtual void job_removed(const std::string& job_id) = 0;
+};
+
 enum class CancelOutcome { canceled, not_found, already_finished };
+
+// What a farm control (priority, pause, resume, retry, drain, removal) did: done, or
+// refused for the reason the API's 409 gives (`code`, `message`).
+struct ControlOutcome {
+  enum class Result { done, not_found, refused };
+  Result result = Result::done;
+  std::string code;
+  std::string message;
+};
 enum class RemoveOutcome { removed, not_found, not_finished };
 
 }  // namespace tessera

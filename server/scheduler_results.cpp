@@ -74,11 +74,19 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
       commit(change, "the result of tile " + std::to_string(fresh.front()->tile_index));
   std::vector<std::pair<int, std::span<const float>>> tiles;
   for (const TileResult* result : fresh) tiles.emplace_back(result->tile_index, result->pixels);
+  std::vector<FarmObserver::TileChange> done;
+  if (observer_)
+    for (const TileResult* result : fresh) {
+      done.push_back(tile_change(job, result->tile_index));
+      done.back().pixels = result->pixels;
+    }
   store_thread_.after(ticket, [this, id = job.status.id, tiles = std::move(tiles),
-                               job_done](const std::string& error) {
+                               done = std::move(done), job_done](const std::string& error) {
     if (!error.empty()) return;
     images_.stored(id, tiles, job_done);
     if (job_done) images_.completed(id);
+    // Before the answer's own callback, after which the pixels are gone.
+    if (observer_ && !done.empty()) observer_->tiles_changed(done);
   });
   return pending(ResultOutcome::accepted, before);
 }
@@ -116,9 +124,13 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
     tile.lease_expires_ms = 0;
     tile.rays = result->rays;
     tile.result_lease_id = lease_id;  // worker_id stays: who rendered it
+    tile.render_us = result->render_us;
     change.pixels[{&job, result->tile_index}] = result->pixels;
     status.rays += result->rays;
+    counters_.rays += result->rays;
+    if (result->render_us > 0) counters_.tile_render_seconds.observe(result->render_us * 1e-6);
   }
+  counters_.tiles_rendered += fresh.size();
   job.status.health.progress_at_ms = now;
   const bool job_done =
       job.status.tiles_done + static_cast<int>(fresh.size()) == job.status.tiles_total;
@@ -129,6 +141,17 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
   if (WorkerEntry* worker = find_worker(job.tiles[fresh.front()->tile_index].worker_id)) {
     WorkerEntry& staged = change.worker(*worker);
     staged.info.tiles_rendered += fresh.size();
+    std::uint64_t rays = 0;
+    for (const TileResult* result : fresh) rays += result->rays;
+    // One entry per second at most: the entry is copied with the worker at every change.
+    if (!staged.recent.empty() && std::get<0>(staged.recent.back()) / 1000 == now / 1000) {
+      std::get<1>(staged.recent.back()) += static_cast<int>(fresh.size());
+      std::get<2>(staged.recent.back()) += rays;
+    } else {
+      staged.recent.emplace_back(now, static_cast<int>(fresh.size()), rays);
+    }
+    while (!staged.recent.empty() && std::get<0>(staged.recent.front()) < now - 60'000)
+      staged.recent.pop_front();
     staged.info.last_seen_ms = now;
     if (staged.lease_id == lease_id) {
       // The lease's next tile in hand-out order, if any is left.

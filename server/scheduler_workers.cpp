@@ -32,7 +32,12 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
   info.last_seen_ms = clock_.now_ms();
   worker->secret_sha256 = secret_sha256;
   if (!secret_sha256.empty()) secret_owners_[secret_sha256] = info.id;
-  queue_write([row = worker_row(*worker)](Store& store) { store.upsert_worker(row); });
+  const StoreTicket ticket =
+      queue_write([row = worker_row(*worker)](Store& store) { store.upsert_worker(row); });
+  if (observer_)
+    store_thread_.after(ticket, [observer = observer_, info = info](const std::string& error) {
+      if (error.empty()) observer->workers_changed({{info, FarmObserver::WorkerChange::joined}});
+    });
   worker->persisted_seen_ms = info.last_seen_ms;
   const WorkerInfo result = info;
   workers_.emplace(result.id, std::move(worker));
@@ -129,7 +134,19 @@ std::vector<WorkerInfo> Scheduler::workers() const {
   std::lock_guard lock(mutex_);
   std::vector<WorkerInfo> result;
   result.reserve(workers_.size());
-  for (const auto& [id, worker] : workers_) result.push_back(worker->info);
+  const std::int64_t now = clock_.now_ms();
+  for (const auto& [id, worker] : workers_) {
+    WorkerInfo& info = result.emplace_back(worker->info);
+    int tiles = 0;
+    std::uint64_t rays = 0;
+    for (const auto& [when, count, traced] : worker->recent) {
+      if (when < now - 60'000) continue;
+      tiles += count;
+      rays += traced;
+    }
+    info.tiles_per_min = tiles;
+    info.rays_per_s = static_cast<double>(rays) / 60;
+  }
   std::sort(result.begin(), result.end(), [](const WorkerInfo& a, const WorkerInfo& b) {
     return a.name != b.name ? a.name < b.name : a.id < b.id;
   });

@@ -27,6 +27,9 @@
 #include "server/api_routes.hpp"
 #include "server/asset_collector.hpp"
 #include "server/asset_store.hpp"
+#include "server/event_hub.hpp"
+#include "server/farm_events.hpp"
+#include "server/http_metrics.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
 
@@ -46,12 +49,16 @@ struct ServerOptions {
   double stall_timeout_s = tessera::SchedulerConfig{}.stall_timeout_ms / 1e3;
   double forget_workers_after_s = tessera::SchedulerConfig{}.forget_workers_after_ms / 1e3;
   std::string log_level = "info";
+  std::string log_format = "text";
   std::string port_file;
   tessera::Limits limits;
   std::size_t max_job_bytes = 64 << 20;
   std::size_t submit_memory_budget = std::size_t{1} << 30;
   std::string api_token, api_token_file;
   std::string worker_token, worker_token_file;
+  std::string metrics_token, metrics_token_file;
+  double event_keepalive_s = 15;
+  std::size_t event_queue = tessera::EventLimits{}.queue_events;
   bool insecure = false;
   std::string tls_cert;  // PEM; with tls_key, the coordinator speaks HTTPS
   std::string tls_key;
@@ -84,6 +91,16 @@ std::pair<std::string, std::uint16_t> split_listen(const std::string& listen) {
 
 // Once a second: expired leases' tiles go back to the queue, and dead local workers are
 // replaced.
+// Sends the farm's coalesced progress events (FarmEvents) a few times a second.
+void schedule_event_flush(boost::asio::steady_timer& timer, tessera::FarmEvents& events) {
+  timer.expires_after(tessera::FarmEvents::kFlushInterval);
+  timer.async_wait([&timer, &events](const boost::system::error_code& ec) {
+    if (ec) return;
+    events.flush();
+    schedule_event_flush(timer, events);
+  });
+}
+
 void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& scheduler,
                      tessera::LocalWorkers* workers) {
   timer.expires_after(std::chrono::seconds(1));
@@ -101,7 +118,9 @@ tessera::AccessTokens checked_tokens(const ServerOptions& options, const std::st
   const AccessTokens tokens{
       resolve_secret(options.api_token, options.api_token_file, "TESSERA_API_TOKEN", "API token"),
       resolve_secret(options.worker_token, options.worker_token_file, "TESSERA_WORKER_TOKEN",
-                     "worker token")};
+                     "worker token"),
+      resolve_secret(options.metrics_token, options.metrics_token_file, "TESSERA_METRICS_TOKEN",
+                     "metrics token")};
   if (!is_loopback(host) && (tokens.client.empty() || tokens.worker.empty()) && !options.insecure)
     throw StartRefused(
         "refusing to listen on " + host +
@@ -168,7 +187,16 @@ int run(const ServerOptions& options) {
 
   Store store(options.data_dir);
   SystemClock clock;
+  // Before the scheduler, whose store thread tells them of changes until it stops.
+  EventLimits event_limits;
+  event_limits.keepalive =
+      std::chrono::milliseconds(static_cast<std::int64_t>(options.event_keepalive_s * 1000));
+  event_limits.queue_events = options.event_queue;
+  EventHub event_hub(event_limits);
+  FarmEvents farm_events(event_hub, clock);
   Scheduler scheduler(store, clock, scheduler_config(options));
+  scheduler.observe(&farm_events);
+  farm_events.rates_from(&scheduler);
 
   boost::asio::io_context io;
   LongPolls claims(io);
@@ -196,6 +224,11 @@ int run(const ServerOptions& options) {
   // Asset uploads and the checks of submitted scenes' mesh files, beside the encoder.
   AssetStore assets(std::filesystem::path(options.data_dir) / "assets", options.max_asset_bytes);
   context.assets = &assets;
+  HttpMetrics http_metrics;
+  context.http_metrics = &http_metrics;
+  context.metrics_loopback_only = tokens.metrics.empty();
+  context.data_dir = options.data_dir;
+  context.events = &event_hub;
   boost::asio::thread_pool disk(2);
   context.run_disk = [&disk](std::function<void()> work) {
     boost::asio::post(disk, std::move(work));
@@ -206,6 +239,7 @@ int run(const ServerOptions& options) {
       assets, scheduler, std::chrono::seconds(options.asset_retention_s));
 
   HttpServerOptions http;
+  http.metrics = &http_metrics;
   http.address = host;
   http.port = port;
   // A server without tokens trusts whoever reaches it: on loopback, only this machine's
@@ -254,6 +288,8 @@ int run(const ServerOptions& options) {
   await_hangup();
   boost::asio::steady_timer expiry(io);
   schedule_upkeep(expiry, scheduler, workers.get());
+  boost::asio::steady_timer event_flush(io);
+  schedule_event_flush(event_flush, farm_events);
   // The Store is open and the Scheduler has reconciled it (its constructor): /readyz says so.
   readiness.mark_ready();
 
@@ -269,11 +305,13 @@ int run(const ServerOptions& options) {
       if (workers) workers->signal_stop();
       claims.close();  // parked claims answer now; the workers see their signal and leave
       job_waits.close();
+      event_hub.end_all();  // event streams end: their connections must not hold the drain
       if (workers) workers->stop();
       // Timers and signal sets belong to the io threads.
-      boost::asio::post(io, [&expiry, &hangups] {
+      boost::asio::post(io, [&expiry, &hangups, &event_flush] {
         expiry.cancel();
         hangups.cancel();
+        event_flush.cancel();
       });
       if (local_port) local_port->stop();
       server.stop();
@@ -341,6 +379,11 @@ void add_farm_options(CLI::App& app, ServerOptions& options) {
                  "0: never")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--log-format", options.log_format,
+                 "text, or json: one JSON object per line, with the job, worker and lease ids "
+                 "a line names as fields (local workers log alike)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"text", "json"}));
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   app.add_option("--port-file", options.port_file,
@@ -392,6 +435,21 @@ void add_token_options(CLI::App& app, ServerOptions& options) {
                  "Secret workers must send; also $TESSERA_WORKER_TOKEN");
   app.add_option("--worker-token-file", options.worker_token_file,
                  "Read the worker token from this file");
+  app.add_option("--event-keepalive", options.event_keepalive_s,
+                 "Seconds between keep-alive comments on an idle event stream (shorter than "
+                 "the idle timeout of any proxy in front)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--event-queue", options.event_queue,
+                 "Events an event stream's client may fall behind by before it is sent "
+                 "\"resync\" instead")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10'000'000));
+  app.add_option("--metrics-token", options.metrics_token,
+                 "The token GET /metrics needs (default: $TESSERA_METRICS_TOKEN; without one, "
+                 "/metrics answers this machine only)");
+  app.add_option("--metrics-token-file", options.metrics_token_file,
+                 "Read the metrics token from this file");
   app.add_flag("--insecure", options.insecure, "Allow a non-loopback --listen without both tokens");
   auto* tls_cert =
       app.add_option("--tls-cert", options.tls_cert,
@@ -421,7 +479,12 @@ int main(int argc, char** argv) {
   add_limit_options(app, options);
   add_token_options(app, options);
   CLI11_PARSE(app, argc, argv);
-  tessera::use_escaped_log_lines();
+  if (options.log_format == "json") {
+    tessera::use_json_log_lines();
+    ::setenv("TESSERA_LOG_FORMAT", "json", 1);  // for the local workers
+  } else {
+    tessera::use_escaped_log_lines();
+  }
   spdlog::set_level(spdlog::level::from_str(options.log_level));
   try {
     return run(options);

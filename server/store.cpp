@@ -138,8 +138,8 @@ std::vector<TileFailureRow> Store::failure_rows() {
 std::vector<WorkerRow> Store::worker_rows() {
   std::vector<WorkerRow> rows;
   auto s = db_.statement(
-      "SELECT id, name, host, threads, state, tiles_rendered, last_seen_ms, secret_sha256 FROM "
-      "workers");
+      "SELECT id, name, host, threads, state, tiles_rendered, last_seen_ms, secret_sha256, "
+      "draining FROM workers");
   while (s->step()) {
     WorkerRow& worker = rows.emplace_back();
     worker.id = s->column_text(0);
@@ -150,6 +150,7 @@ std::vector<WorkerRow> Store::worker_rows() {
     worker.tiles_rendered = static_cast<std::uint64_t>(s->column_int64(5));
     worker.last_seen_ms = s->column_int64(6);
     worker.secret_sha256 = s->column_text(7);
+    worker.draining = s->column_int(8) != 0;
   }
   return rows;
 }
@@ -297,10 +298,11 @@ void Store::delete_worker(const std::string& id) {
 void Store::upsert_worker(const WorkerRow& worker) {
   db_.statement(
          "INSERT INTO workers (id, name, host, threads, state, tiles_rendered, last_seen_ms, "
-         "secret_sha256) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET "
-         "name = excluded.name, host = excluded.host, threads = excluded.threads, "
+         "secret_sha256, draining) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO "
+         "UPDATE SET name = excluded.name, host = excluded.host, threads = excluded.threads, "
          "state = excluded.state, tiles_rendered = excluded.tiles_rendered, "
-         "last_seen_ms = excluded.last_seen_ms, secret_sha256 = excluded.secret_sha256")
+         "last_seen_ms = excluded.last_seen_ms, secret_sha256 = excluded.secret_sha256, "
+         "draining = excluded.draining")
       ->bind(1, worker.id)
       .bind(2, worker.name)
       .bind(3, worker.host)
@@ -309,6 +311,7 @@ void Store::upsert_worker(const WorkerRow& worker) {
       .bind(6, static_cast<std::int64_t>(worker.tiles_rendered))
       .bind(7, worker.last_seen_ms)
       .bind(8, worker.secret_sha256)
+      .bind(9, static_cast<int>(worker.draining))
       .run();
 }
 

@@ -76,6 +76,7 @@ struct WorkerRow {
   std::uint64_t tiles_rendered = 0;
   std::int64_t last_seen_ms = 0;
   std::string secret_sha256;  // "" for a worker of a store from before secrets
+  bool draining = false;
 };
 
 // A tile is pending unless a lease owes it or a result delivered it; what the store keeps

@@ -8,7 +8,7 @@
 namespace tessera {
 namespace {
 
-constexpr int schema_version = 6;
+constexpr int schema_version = 7;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -40,7 +40,8 @@ CREATE TABLE workers (
   state TEXT NOT NULL,
   tiles_rendered INTEGER NOT NULL DEFAULT 0,
   last_seen_ms INTEGER NOT NULL,
-  secret_sha256 TEXT NOT NULL DEFAULT ''  -- of the secret its registration was given
+  secret_sha256 TEXT NOT NULL DEFAULT '',  -- of the secret its registration was given
+  draining INTEGER NOT NULL DEFAULT 0  -- 1: it takes no more tiles
 );
 )sql";
 
@@ -128,6 +129,8 @@ void Store::create_schema() {
   // registers again (the workers table is created with the column from version 6 on).
   if (version >= 1 && version <= 5)
     db_.exec("ALTER TABLE workers ADD COLUMN secret_sha256 TEXT NOT NULL DEFAULT ''");
+  if (version >= 1 && version <= 6)  // before workers could be drained
+    db_.exec("ALTER TABLE workers ADD COLUMN draining INTEGER NOT NULL DEFAULT 0");
   db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
   tx.commit();
 }

@@ -3,6 +3,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <sstream>
+
+#include <boost/beast/http/empty_body.hpp>
+#include <boost/beast/http/write.hpp>
 
 #include <spdlog/spdlog.h>
 
@@ -26,6 +30,14 @@ void fill_header(Message& message, const HttpResponse& response, bool close_afte
 }
 
 }  // namespace
+
+std::string stream_header(const HttpResponse& response) {
+  http::response<http::empty_body> message;
+  fill_header(message, response, true);
+  std::ostringstream text;
+  text << message.base();
+  return text.str();
+}
 
 RequestHead head_of(const BeastRequest& request) {
   RequestHead head;

@@ -33,6 +33,10 @@ HttpRequest plain_request(BeastRequest& request);
 // the open descriptor keeps its bytes until they are sent. One that cannot be opened
 // becomes a 500, logged with `where` (the route). The answer to a HEAD (`head_only`)
 // announces the length its GET's body would have, and carries none.
+// The header of a streamed response (HttpResponse::stream), as text: no length, no chunks,
+// "Connection: close", since its body runs until the connection ends.
+std::string stream_header(const HttpResponse& response);
+
 WireMessage response_message(HttpResponse response, bool head_only, bool close_after,
                              std::string_view where);
 

@@ -85,6 +85,10 @@ void WorkerDaemon::render_tiles(const Renderer& renderer, BatchTiles& tiles,
       inject_fault(tile.index);
       FinishedTile finished{tile.index, std::vector<float>(tile.rect.pixel_count() * 3), 0};
       finished.rays = renderer.render_tile(tile.rect, finished.pixels).total();
+      finished.render_us =
+          static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                         std::chrono::steady_clock::now() - tile_start)
+                                         .count());
       uploads_->push(std::move(finished));
     } catch (const std::exception& e) {
       std::lock_guard lock(progress.failure_mutex);

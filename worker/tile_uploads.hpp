@@ -21,6 +21,7 @@ struct FinishedTile {
   int index = 0;  // the tile's index in its job
   std::vector<float> pixels;
   std::uint64_t rays = 0;
+  std::uint64_t render_us = 0;  // how long it took its thread
 };
 
 class TileUploads {

@@ -267,6 +267,7 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
   std::string body;
   std::vector<std::uint64_t> indexes;
   std::vector<std::uint64_t> rays;
+  std::vector<std::uint64_t> render_us;
   std::size_t bytes = 0;
   for (const FinishedTile& tile : tiles) bytes += tile.pixels.size() * sizeof(float);
   body.reserve(bytes);
@@ -277,9 +278,11 @@ bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<Finishe
                 tile.pixels.size() * sizeof(float));
     indexes.push_back(static_cast<std::uint64_t>(tile.index));
     rays.push_back(tile.rays);
+    render_us.push_back(tile.render_us);
   }
   try {
-    with_retry("upload", [&] { return uploads_client_.upload(lease_id, indexes, rays, body); });
+    with_retry("upload",
+               [&] { return uploads_client_.upload(lease_id, indexes, rays, body, render_us); });
     return true;  // taken, or stopping while unreachable (the lease will expire)
   } catch (const ApiError& e) {
     if (e.status() == 409 || e.status() == 410 || e.status() >= 500) {

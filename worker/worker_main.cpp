@@ -51,11 +51,18 @@ int main(int argc, char** argv) {
   tessera::restart_with_huge_page_malloc(argv);
   tessera::WorkerOptions options;
   std::string log_level = "info";
+  std::string log_format = "text";
+  if (const char* format = std::getenv("TESSERA_LOG_FORMAT"); format && *format)
+    log_format = format;
   CLI::App app{"tessera-worker: renders tiles for a Tessera coordinator"};
   app.add_option("--server", options.server_url, "Coordinator URL")->capture_default_str();
   app.add_option("--threads", options.threads, "Rendering threads (default: one per core)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--name", options.name, "Name shown in `tessera workers` (default: host name)");
+  app.add_option("--log-format", log_format,
+                 "text, or json: one JSON object per line, with the job, worker and lease ids "
+                 "a line names as fields (default: $TESSERA_LOG_FORMAT, else text)")
+      ->check(CLI::IsMember({"text", "json"}));
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   std::string token_file;
@@ -88,7 +95,10 @@ int main(int argc, char** argv) {
   // Not a flag: only the test suite injects faults, and local workers inherit it from their
   // coordinator's environment.
   if (const char* fault = std::getenv("TESSERA_FAULT_INJECTION")) options.fault = fault;
-  tessera::use_escaped_log_lines();
+  if (log_format == "json")
+    tessera::use_json_log_lines();
+  else
+    tessera::use_escaped_log_lines();
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   // Signals go to one thread that turns them into a flag: the loop finishes the tiles in

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "common/protocol/assets.hpp"
+#include "common/protocol/events.hpp"
 #include "common/protocol/paths.hpp"
 
 namespace tessera {
@@ -98,6 +99,60 @@ protocol::JobStatus CoordinatorClient::cancel(std::string_view id) {
 
 void CoordinatorClient::remove(std::string_view id) { call("DELETE", fill(route::job, id)); }
 
+void CoordinatorClient::events(const std::string& target,
+                               const std::optional<std::string>& last_event_id,
+                               const std::function<bool()>& on_open,
+                               const std::function<bool(const ServerEvent&)>& on_event) {
+  HttpClient::Headers headers = identity();
+  if (last_event_id) headers.emplace_back(protocol::kLastEventIdHeader, *last_event_id);
+  bool opened = false;
+  EventStreamParser parser(on_event);
+  HttpResult result = http_.stream(
+      target,
+      [&](std::string_view piece) {
+        // The stream begins with a comment, so that it is known to be open at once.
+        if (!opened) {
+          opened = true;
+          if (!on_open()) return false;
+        }
+        return parser.feed(piece);
+      },
+      headers);
+  checked(std::move(result));
+}
+
+protocol::JobStatus CoordinatorClient::change(std::string_view id,
+                                              const protocol::JobChange& change) {
+  return read_body<protocol::JobStatus>(
+      call("PATCH", fill(route::job, id), protocol::to_json(change).dump()).body);
+}
+
+protocol::JobStatus CoordinatorClient::pause(std::string_view id) {
+  return read_body<protocol::JobStatus>(call("POST", fill(route::job_pause, id)).body);
+}
+
+protocol::JobStatus CoordinatorClient::resume(std::string_view id) {
+  return read_body<protocol::JobStatus>(call("POST", fill(route::job_resume, id)).body);
+}
+
+protocol::JobStatus CoordinatorClient::retry(std::string_view id) {
+  return read_body<protocol::JobStatus>(call("POST", fill(route::job_retry, id)).body);
+}
+
+protocol::JobList CoordinatorClient::jobs_with_prefix(std::string_view prefix, int limit) {
+  return read_body<protocol::JobList>(
+      call("GET", protocol::jobs_with_prefix_target(prefix, limit)).body);
+}
+
+protocol::Worker CoordinatorClient::drain(std::string_view worker_id, bool draining) {
+  return read_body<protocol::Worker>(
+      call("POST", fill(draining ? route::worker_drain : route::worker_undrain, worker_id)).body);
+}
+
+void CoordinatorClient::remove_worker(std::string_view worker_id) {
+  call("POST", fill(route::worker_remove, worker_id));
+}
+
 std::string CoordinatorClient::image(std::string_view id, const ImageFormat& format, bool partial) {
   HttpResult result = call("GET", protocol::image_target(id, format, partial));
   // A proxy's page answered with 200 must not be saved as the image.
@@ -176,10 +231,13 @@ std::string CoordinatorClient::scene(std::string_view digest) {
 protocol::ResultAnswer CoordinatorClient::upload(std::string_view lease,
                                                  std::span<const std::uint64_t> tiles,
                                                  std::span<const std::uint64_t> rays,
-                                                 std::string pixels) {
+                                                 std::string pixels,
+                                                 std::span<const std::uint64_t> render_us) {
   HttpClient::Headers headers = identity();
   headers.emplace_back(protocol::kTilesHeader, protocol::number_list(tiles));
   headers.emplace_back(protocol::kRaysHeader, protocol::number_list(rays));
+  if (!render_us.empty())
+    headers.emplace_back(protocol::kRenderMicrosecondsHeader, protocol::number_list(render_us));
   return read_body<protocol::ResultAnswer>(
       checked(http_.request("PUT", fill(route::lease_result, lease), std::move(pixels),
                             protocol::kPixelsContentType, headers))

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <mutex>
 #include <optional>
@@ -15,6 +16,7 @@
 #include <string_view>
 
 #include "common/image_format.hpp"
+#include "common/net/event_stream.hpp"
 #include "common/net/http_client.hpp"
 #include "common/protocol/error.hpp"
 #include "common/protocol/health.hpp"
@@ -64,8 +66,25 @@ class CoordinatorClient {
   protocol::JobList jobs(std::optional<JobState> state, int limit);
   protocol::JobStatus cancel(std::string_view id);
   void remove(std::string_view id);
+  // The farm's controls.
+  protocol::JobStatus change(std::string_view id, const protocol::JobChange& change);
+  protocol::JobStatus pause(std::string_view id);
+  protocol::JobStatus resume(std::string_view id);
+  protocol::JobStatus retry(std::string_view id);
+  // The jobs whose id begins with `prefix`.
+  protocol::JobList jobs_with_prefix(std::string_view prefix, int limit);
+  protocol::Worker drain(std::string_view worker_id, bool draining);
+  void remove_worker(std::string_view worker_id);
   std::string image(std::string_view id, const ImageFormat& format, bool partial);
   protocol::WorkerList workers();
+  // Follows a stream of server-sent events (route::events, or a job's): `on_open` once it
+  // is open, then `on_event` for each event, until either returns false (or the stream
+  // ends: the coordinator stopped). `last_event_id` resumes a stream. Throws ApiError for
+  // an error answer (404: no such job, or a coordinator without events), HttpError when
+  // the stream breaks.
+  void events(const std::string& target, const std::optional<std::string>& last_event_id,
+              const std::function<bool()>& on_open,
+              const std::function<bool(const ServerEvent&)>& on_event);
   protocol::Health health();  // GET /healthz
   // Assets by their SHA-256 (64 hex digits): whether the coordinator holds one (HEAD), and
   // an upload, true when it was new (201), false when already held (200).
@@ -94,8 +113,10 @@ class CoordinatorClient {
   void scene_asset_to(std::string_view sha256, const std::filesystem::path& into);
   // Tiles' pixels (float32 RGB, one tile after another) named by `tiles`, with the rays
   // each took.
+  // `render_us`: each tile's render time in microseconds, or nothing.
   protocol::ResultAnswer upload(std::string_view lease, std::span<const std::uint64_t> tiles,
-                                std::span<const std::uint64_t> rays, std::string pixels);
+                                std::span<const std::uint64_t> rays, std::string pixels,
+                                std::span<const std::uint64_t> render_us = {});
   void fail(std::string_view lease, const protocol::TileFailure& failure);
   void release(std::string_view lease);
   void leave(std::string_view worker);

@@ -26,6 +26,7 @@
 #include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/http/buffer_body.hpp>
 #include <boost/beast/http/file_body.hpp>
 #include <boost/beast/ssl.hpp>
 
@@ -317,6 +318,67 @@ struct HttpClient::Connection {
     return read_answer<http::string_body>(request, write_error, nullptr);
   }
 
+  // The answer to `request` read as stream() does.
+  Outcome stream_answer(http::request<http::empty_body>& request,
+                        const HttpClient::OnData& on_data) {
+    Outcome outcome;
+    if (const error_code ec = write(request, nullptr)) {
+      outcome.error = ec;
+      return outcome;
+    }
+    http::response_parser<http::buffer_body> parser;
+    parser.body_limit(std::numeric_limits<std::uint64_t>::max());
+    parser.header_limit(64 * 1024);
+    lowest().expires_after(timeout);
+    error_code ec = run([&](auto handler) {
+      with_stream([&](auto& stream) {
+        http::async_read_header(stream, buffer, parser, std::move(handler));
+      });
+    });
+    if (ec) {
+      outcome.error = ec;
+      outcome.got_some = parser.got_some();
+      return outcome;
+    }
+    HttpResult result;
+    result.status = static_cast<int>(parser.get().result_int());
+    for (const auto& field : parser.get()) {
+      auto [it, inserted] = result.headers.try_emplace(lower(field.name_string()), field.value());
+      if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
+    }
+    const bool taken = result.status >= 200 && result.status < 300;
+    std::vector<char> piece(16 * 1024);
+    while (!parser.is_done()) {
+      parser.get().body().data = piece.data();
+      parser.get().body().size = piece.size();
+      lowest().expires_after(timeout);
+      ec = run([&](auto handler) {
+        with_stream([&](auto& stream) {
+          http::async_read_some(stream, buffer, parser, std::move(handler));
+        });
+      });
+      if (ec == http::error::need_buffer) ec = {};
+      const std::size_t got = piece.size() - parser.get().body().size;
+      if (got > 0) {
+        if (!taken) {
+          if (result.body.size() < 64 * 1024) result.body.append(piece.data(), got);
+        } else if (!on_data(std::string_view(piece.data(), got))) {
+          break;
+        }
+      }
+      if (ec == http::error::end_of_stream) break;  // a body that runs until the close
+      if (ec) {
+        outcome.error = ec;
+        outcome.got_some = true;
+        close();
+        return outcome;
+      }
+    }
+    close();
+    outcome.result = std::move(result);
+    return outcome;
+  }
+
   template <typename ResponseBody>
   Outcome read_answer(const http::request_header<>& request, error_code write_error,
                       const std::filesystem::path* into) {
@@ -385,6 +447,17 @@ struct HttpClient::Pool {
         where(where_of(url)),
         timeout(limit),
         tls(url.tls ? client_tls_context(settings.ca_file) : nullptr) {}
+
+  // A connection for one request, back in the pool however the request ends.
+  struct Taken {
+    explicit Taken(Pool& from) : pool(from), connection(from.take(taken_in)) {}
+    ~Taken() { pool.give_back(std::move(connection), taken_in); }
+    Taken(const Taken&) = delete;
+    Taken& operator=(const Taken&) = delete;
+    Pool& pool;
+    std::uint64_t taken_in = 0;
+    std::unique_ptr<Connection> connection;
+  };
 
   // Also the interrupt generation it is taken in, which give_back() compares.
   std::unique_ptr<Connection> take(std::uint64_t& taken_in) {
@@ -497,6 +570,35 @@ HttpResult HttpClient::send_file(std::string_view method, std::string_view targe
   });
 }
 
+HttpResult HttpClient::stream(std::string_view target, const OnData& on_data,
+                              const Headers& headers) {
+  http::request<http::empty_body> message;
+  prepare(message, "GET", target, false, "", headers);
+  message.set(http::field::accept, "text/event-stream");
+  message.prepare_payload();
+  if (pool_->interrupted)
+    throw HttpError(HttpError::Kind::interrupted, "GET " + std::string(target) + ": interrupted");
+  const Pool::Taken taken(*pool_);
+  Connection& c = *taken.connection;
+  if (message.find(http::field::host) == message.end())
+    message.set(http::field::host, c.host_header);
+  // A connection of its own: a kept-alive one may have been closed meanwhile, and a stream
+  // is not sent twice.
+  if (c.open) c.close();
+  c.connect();
+  Connection::Outcome outcome = c.stream_answer(message, on_data);
+  if (outcome.result) {
+    if (observer_ && !outcome.result->body.empty()) observer_("GET", target, *outcome.result);
+    return std::move(*outcome.result);
+  }
+  const std::string what = "GET " + std::string(target) + " on " + c.where();
+  if (outcome.error == beast::error::timeout)
+    throw HttpError(HttpError::Kind::timeout,
+                    what + ": nothing within " + std::to_string(c.timeout.count()) + " ms");
+  throw HttpError(HttpError::Kind::protocol,
+                  what + ": connection failed: " + outcome.error.message());
+}
+
 HttpResult HttpClient::receive_file(std::string_view method, std::string_view target,
                                     const std::filesystem::path& into, const Headers& headers) {
   http::request<http::empty_body> message;
@@ -515,16 +617,8 @@ HttpResult HttpClient::send(Message& message, std::string_view method, std::stri
                                                        " on " + pool_->where + ": interrupted");
   };
   if (pool_->interrupted) throw interrupted();
-  std::uint64_t taken_in = 0;
-  std::unique_ptr<Connection> connection = pool_->take(taken_in);
-  // Back to the pool however the request ends.
-  struct Return {
-    Pool& pool;
-    std::unique_ptr<Connection>& c;
-    std::uint64_t taken_in;
-    ~Return() { pool.give_back(std::move(c), taken_in); }
-  } give_back{*pool_, connection, taken_in};
-  Connection& c = *connection;
+  const Pool::Taken taken(*pool_);
+  Connection& c = *taken.connection;
   // The caller's own Host, where it gave one (prepare()), stands.
   if (message.find(http::field::host) == message.end())
     message.set(http::field::host, c.host_header);

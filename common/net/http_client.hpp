@@ -103,6 +103,14 @@ class HttpClient {
   HttpResult receive_file(std::string_view method, std::string_view target,
                           const std::filesystem::path& into, const Headers& headers = {});
 
+  // A GET whose answer's body is handed to `on_data` a piece at a time as it arrives (a
+  // stream of server-sent events), until it ends, `on_data` returns false, or nothing
+  // arrives within the timeout (a stream that sends keep-alives never waits that long).
+  // An answer that is not 2xx is returned whole, as request() gives it; a 2xx one with an
+  // empty body. The connection is not reused.
+  using OnData = std::function<bool(std::string_view piece)>;
+  HttpResult stream(std::string_view target, const OnData& on_data, const Headers& headers = {});
+
   // For requests that may legitimately take long, such as a long-polled claim; from the
   // next request on.
   void set_timeout(std::chrono::milliseconds timeout);

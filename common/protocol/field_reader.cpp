@@ -92,6 +92,12 @@ double FieldReader::number(std::string_view key) const {
   return value.get<double>();
 }
 
+bool FieldReader::boolean(std::string_view key) const {
+  const json& value = required(key);
+  if (!value.is_boolean()) fail(key, std::string("must be true or false, got ") + type_name(value));
+  return value.get<bool>();
+}
+
 FieldReader FieldReader::object(std::string_view key) const {
   return FieldReader(required(key), pointer(key));
 }

@@ -48,6 +48,7 @@ class FieldReader {
                        std::int64_t max = std::numeric_limits<std::int64_t>::max()) const;
   std::uint64_t count(std::string_view key) const;  // a whole number from 0
   double number(std::string_view key) const;
+  bool boolean(std::string_view key) const;
   FieldReader object(std::string_view key) const;
   const nlohmann::json& array(std::string_view key) const;
   const nlohmann::json& any(std::string_view key) const;

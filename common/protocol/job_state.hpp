@@ -8,13 +8,16 @@
 
 namespace tessera {
 
-enum class JobState { queued, running, completed, failed, canceled };
+// paused: its tiles stay where they are, its leases run out and no new tile goes out,
+// until it is resumed (to running, or queued when it had not started).
+enum class JobState { queued, running, paused, completed, failed, canceled };
 
 namespace protocol {
 // The words of the API and of the database; changing one breaks both.
-inline constexpr NameTable<JobState, 5> kJobStateNames{{
+inline constexpr NameTable<JobState, 6> kJobStateNames{{
     {JobState::queued, "queued"},
     {JobState::running, "running"},
+    {JobState::paused, "paused"},
     {JobState::completed, "completed"},
     {JobState::failed, "failed"},
     {JobState::canceled, "canceled"},
@@ -30,5 +33,7 @@ inline std::optional<JobState> job_state_from_string(std::string_view text) {
 inline bool is_finished(JobState s) {
   return s == JobState::completed || s == JobState::failed || s == JobState::canceled;
 }
+// Whether its tiles go out to workers.
+inline bool hands_out_tiles(JobState s) { return s == JobState::queued || s == JobState::running; }
 
 }  // namespace tessera

@@ -46,6 +46,20 @@ JobState read_job_state(const FieldReader& body, std::string_view key) {
   return *state;
 }
 
+JobChange JobChange::read(const FieldReader& body) {
+  body.only({"priority"});
+  JobChange change;
+  if (const auto priority = body.optional_integer("priority", 0, 100))
+    change.priority = static_cast<int>(*priority);
+  return change;
+}
+
+json to_json(const JobChange& change) {
+  json body = json::object();
+  if (change.priority) body["priority"] = *change.priority;
+  return body;
+}
+
 JobSubmission JobSubmission::take(json& body) {
   JobSubmission submission = read_settings(FieldReader(body));
   submission.scene = std::move(body["scene"]);

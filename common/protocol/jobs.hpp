@@ -42,6 +42,14 @@ struct JobHealth {
 };
 nlohmann::json to_json(const JobHealth& health);
 
+// PATCH /v1/jobs/{id} (`JobChange`): what to change; a field left out stays as it is.
+struct JobChange {
+  std::optional<int> priority;
+
+  static JobChange read(const FieldReader& body);
+};
+nlohmann::json to_json(const JobChange& change);
+
 // A job's status (`JobStatus`): the answer to a submission, a status request or a cancel.
 struct JobStatus {
   struct Tiles {

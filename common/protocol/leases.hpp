@@ -51,6 +51,9 @@ nlohmann::json to_json(const TileFailure& failure);
 // little-endian float32 RGB rows from the top; these headers say which tiles, in order.
 inline constexpr std::string_view kTilesHeader = "X-Tessera-Tiles";
 inline constexpr std::string_view kRaysHeader = "X-Tessera-Rays";
+// Optional, with X-Tessera-Tiles: how long each tile took its worker, in microseconds (the
+// coordinator's render-time histogram and the dashboard's heatmap).
+inline constexpr std::string_view kRenderMicrosecondsHeader = "X-Tessera-Render-Us";
 inline constexpr std::string_view kPixelsContentType = "application/octet-stream";
 
 // "3,17,4" <-> {3, 17, 4}.

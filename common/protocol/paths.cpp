@@ -65,6 +65,11 @@ std::string jobs_target(std::optional<JobState> state, int limit) {
   return target;
 }
 
+std::string jobs_with_prefix_target(std::string_view prefix, int limit) {
+  return std::string(route::jobs) + "?" + with(query::limit, std::to_string(limit)) + "&" +
+         with(query::id_prefix, prefix);
+}
+
 std::string image_target(std::string_view id, const ImageFormat& format, bool partial) {
   std::string target = fill(route::job_image, id) + "?" + with(query::format, format.name);
   if (partial) target += "&" + with(query::partial, "1");

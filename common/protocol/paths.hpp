@@ -15,13 +15,25 @@ namespace tessera::protocol {
 namespace route {
 inline constexpr std::string_view healthz = "/healthz";
 inline constexpr std::string_view readyz = "/readyz";
+inline constexpr std::string_view metrics = "/metrics";  // Prometheus's text format
 inline constexpr std::string_view jobs = "/v1/jobs";
 inline constexpr std::string_view job = "/v1/jobs/{id}";
 inline constexpr std::string_view job_image = "/v1/jobs/{id}/image";
 inline constexpr std::string_view job_cancel = "/v1/jobs/{id}/cancel";
+inline constexpr std::string_view job_pause = "/v1/jobs/{id}/pause";
+inline constexpr std::string_view job_resume = "/v1/jobs/{id}/resume";
+inline constexpr std::string_view job_retry = "/v1/jobs/{id}/retry";
+inline constexpr std::string_view job_tiles = "/v1/jobs/{id}/tiles";
+// Server-sent events: the farm's, and one job's.
+inline constexpr std::string_view events = "/v1/events";
+inline constexpr std::string_view job_events = "/v1/jobs/{id}/events";
 inline constexpr std::string_view workers = "/v1/workers";
 inline constexpr std::string_view worker = "/v1/workers/{id}";
 inline constexpr std::string_view worker_claim = "/v1/workers/{id}/claim";
+// The farm's controls of a worker (the client's, not the worker's own).
+inline constexpr std::string_view worker_drain = "/v1/workers/{id}/drain";
+inline constexpr std::string_view worker_undrain = "/v1/workers/{id}/undrain";
+inline constexpr std::string_view worker_remove = "/v1/workers/{id}/remove";
 inline constexpr std::string_view scene = "/v1/scenes/{digest}";
 inline constexpr std::string_view lease_heartbeat = "/v1/leases/{id}/heartbeat";
 inline constexpr std::string_view lease_extend = "/v1/leases/{id}/extend";
@@ -32,11 +44,21 @@ inline constexpr std::string_view lease_release = "/v1/leases/{id}/release";
 // looked up by clients, fetched by workers from the second.
 inline constexpr std::string_view asset = "/v1/assets/{digest}";
 inline constexpr std::string_view scene_asset = "/v1/scene-assets/{digest}";
+// The web dashboard (server/web_routes.cpp): its page, at the paths of its views, and the
+// script and style the page loads.
+inline constexpr std::string_view ui_page = "/";
+inline constexpr std::string_view ui_job = "/jobs/{id}";
+inline constexpr std::string_view ui_workers = "/workers";
+inline constexpr std::string_view ui_script = "/ui/app.js";
+inline constexpr std::string_view ui_style = "/ui/app.css";
 // Every one of them, for the contract test.
 inline constexpr std::string_view all[] = {
-    healthz,      readyz,     jobs,          job,   job_image,       job_cancel,
-    workers,      worker,     worker_claim,  scene, lease_heartbeat, lease_extend,
-    lease_result, lease_fail, lease_release, asset, scene_asset};
+    healthz,       readyz,  metrics,         events,       job_events,   job_tiles,
+    jobs,          job,     job_image,       job_cancel,   job_pause,    job_resume,
+    job_retry,     workers, worker,          worker_claim, worker_drain, worker_undrain,
+    worker_remove, scene,   lease_heartbeat, lease_extend, lease_result, lease_fail,
+    lease_release, asset,   scene_asset,     ui_page,      ui_job,       ui_workers,
+    ui_script,     ui_style};
 }  // namespace route
 
 // The names of the routes' query parameters.
@@ -47,6 +69,8 @@ inline constexpr std::string_view state = "state";
 inline constexpr std::string_view limit = "limit";
 inline constexpr std::string_view format = "format";
 inline constexpr std::string_view partial = "partial";
+inline constexpr std::string_view id_prefix = "id_prefix";
+inline constexpr std::string_view offset = "offset";
 }  // namespace query
 
 // The name of a route's one parameter: "id" or "digest".
@@ -57,6 +81,8 @@ std::string fill(std::string_view pattern, std::string_view value);
 // Targets with their queries.
 std::string job_target(std::string_view id, double wait_s = 0);
 std::string jobs_target(std::optional<JobState> state, int limit);
+// The jobs whose id begins with `prefix` (at most `limit`).
+std::string jobs_with_prefix_target(std::string_view prefix, int limit);
 std::string image_target(std::string_view id, const ImageFormat& format, bool partial);
 std::string claim_target(std::string_view worker, double wait_s, int max_tiles);
 std::string extend_target(std::string_view lease, int max_tiles);

@@ -81,6 +81,9 @@ Worker Worker::read(const FieldReader& body) {
     worker.current_tile = static_cast<int>(*tile);
   worker.tiles_rendered = body.count("tiles_rendered");
   worker.last_seen = body.string("last_seen");
+  worker.draining = body.boolean("draining");
+  worker.tiles_per_min = body.number("tiles_per_min");
+  worker.rays_per_s = body.number("rays_per_s");
   return worker;
 }
 
@@ -93,7 +96,10 @@ json to_json(const Worker& w) {
           {"current_job", w.current_job ? json(*w.current_job) : json(nullptr)},
           {"current_tile", w.current_tile ? json(*w.current_tile) : json(nullptr)},
           {"tiles_rendered", w.tiles_rendered},
-          {"last_seen", w.last_seen}};
+          {"last_seen", w.last_seen},
+          {"draining", w.draining},
+          {"tiles_per_min", w.tiles_per_min},
+          {"rays_per_s", w.rays_per_s}};
 }
 
 WorkerList WorkerList::read(const FieldReader& body) {

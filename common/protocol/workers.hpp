@@ -72,7 +72,10 @@ struct Worker {
   std::optional<std::string> current_job;
   std::optional<int> current_tile;
   std::uint64_t tiles_rendered = 0;
-  std::string last_seen;  // RFC 3339 (timestamp.hpp)
+  std::string last_seen;     // RFC 3339 (timestamp.hpp)
+  bool draining = false;     // takes no more tiles once its lease is done
+  double tiles_per_min = 0;  // over the last minute
+  double rays_per_s = 0;     // over the last minute
 
   static Worker read(const FieldReader& body);
 };

@@ -1,7 +1,7 @@
 // deploy/k8s: the kustomization and its manifests carry what docs/deploy.md promises: one
 // coordinator with its own volume behind a Service that routes only to a ready one,
-// workers scaled by an autoscaler with as many threads as CPUs requested and time to stop
-// cleanly, and tokens only from the generated Secret.
+// workers with as many threads as CPUs requested and time to stop cleanly, scaled by KEDA
+// on the queue of waiting tiles down to none, and tokens only from the generated Secret.
 #include <algorithm>
 #include <set>
 
@@ -107,7 +107,7 @@ TEST(DeployK8s, TheKustomizationListsEveryManifestAndGeneratesTheTokens) {
   EXPECT_EQ(text_of(generators[0]["name"]), "tessera-tokens");
   const auto files = texts_of(generators[0]["files"]);
   EXPECT_EQ(std::set<std::string>(files.begin(), files.end()),
-            (std::set<std::string>{"api.token", "worker.token"}));
+            (std::set<std::string>{"api.token", "worker.token", "metrics.token"}));
   // The user makes these files; they must never be committed, nor sent to an image build.
   for (const std::string& file : files) {
     EXPECT_TRUE(test::ignored_by(k8s_dir + ".gitignore", file))
@@ -201,24 +201,72 @@ TEST(DeployK8s, WorkersHaveTimeToStopCleanly) {
   EXPECT_GE(pod_spec(deployment)["terminationGracePeriodSeconds"].as<int>(0), bound)
       << "a worker may need " << bound
       << " s after SIGTERM to upload its tile and release the rest";
-  // The autoscaler owns the replica count; a fixed one would be reset by every apply.
+  // KEDA owns the replica count; a fixed one would be reset by every apply.
   EXPECT_FALSE(deployment["spec"]["replicas"].IsDefined());
 }
 
-TEST(DeployK8s, TheAutoscalerScalesTheWorkers) {
+// The ScaledObject's one trigger (KEDA's), or an undefined node.
+YAML::Node trigger_of(const YAML::Node& scaled) {
+  const YAML::Node triggers = scaled["spec"]["triggers"];
+  return test::size_of(triggers) == 1 ? triggers[0] : YAML::Node(YAML::NodeType::Undefined);
+}
+
+TEST(DeployK8s, KedaScalesTheWorkersOnTheQueueOfWaitingTiles) {
   const YAML::Node deployment = only("Deployment");
-  const YAML::Node autoscaler = only("HorizontalPodAutoscaler");
-  EXPECT_EQ(text_of(autoscaler["apiVersion"]), "autoscaling/v2");
-  const YAML::Node target = autoscaler["spec"]["scaleTargetRef"];
+  const YAML::Node scaled = only("ScaledObject");
+  EXPECT_EQ(text_of(scaled["apiVersion"]), "keda.sh/v1alpha1");
+  const YAML::Node target = scaled["spec"]["scaleTargetRef"];
   EXPECT_EQ(text_of(target["kind"]), "Deployment");
   EXPECT_EQ(text_of(target["apiVersion"]), text_of(deployment["apiVersion"]));
   EXPECT_EQ(text_of(target["name"]), text_of(deployment["metadata"]["name"]));
-  const int low = autoscaler["spec"]["minReplicas"].as<int>(0);
-  EXPECT_GE(low, 1);
-  EXPECT_GT(autoscaler["spec"]["maxReplicas"].as<int>(0), low);
-  ASSERT_TRUE(test::is_sequence(autoscaler["spec"]["metrics"]));
-  EXPECT_EQ(text_of(autoscaler["spec"]["metrics"][0]["resource"]["name"]), "cpu")
-      << "workers are scaled on CPU, measured against requests.cpu";
+
+  ASSERT_EQ(test::size_of(scaled["spec"]["triggers"]), 1u) << "one trigger: the queue depth";
+  const YAML::Node trigger = trigger_of(scaled);
+  EXPECT_EQ(text_of(trigger["type"]), "prometheus");
+  const YAML::Node metadata = trigger["metadata"];
+  EXPECT_NE(text_of(metadata["query"]).find("tessera_pending_tiles"), std::string::npos)
+      << "the query " << text_of(metadata["query"]) << " does not read the queue depth";
+  EXPECT_EQ(text_of(metadata["serverAddress"]).rfind("http", 0), 0u)
+      << "serverAddress must be the URL of a Prometheus";
+}
+
+TEST(DeployK8s, WorkersScaleToZeroAndBackOnTheFirstWaitingTile) {
+  const YAML::Node scaled = only("ScaledObject");
+  ASSERT_TRUE(scaled["spec"]["minReplicaCount"].IsDefined());
+  EXPECT_EQ(scaled["spec"]["minReplicaCount"].as<int>(-1), 0) << "no tile waiting: no worker";
+  EXPECT_GT(scaled["spec"]["maxReplicaCount"].as<int>(0), 0);
+  // KEDA wakes the Deployment from zero when the query's value exceeds activationThreshold
+  // (0 when not given): one waiting tile must do it.
+  const std::string activation = text_of(trigger_of(scaled)["metadata"]["activationThreshold"]);
+  EXPECT_LT(std::stod(activation.empty() ? "0" : activation), 1.0)
+      << "activationThreshold " << activation << ": a single waiting tile would start no worker";
+}
+
+TEST(DeployK8s, TheLastWorkerOutlastsAStoppingWorkersGracePeriod) {
+  const YAML::Node scaled = only("ScaledObject");
+  const int grace = pod_spec(only("Deployment"))["terminationGracePeriodSeconds"].as<int>(0);
+  ASSERT_TRUE(scaled["spec"]["cooldownPeriod"].IsDefined()) << "say how long the queue waits";
+  EXPECT_GT(scaled["spec"]["cooldownPeriod"].as<int>(0), grace)
+      << "the queue empties when the last tiles are handed out: the last worker must have "
+         "longer than its grace period to render them before it goes";
+}
+
+TEST(DeployK8s, EachWorkerIsGivenAtLeastATilePerThread) {
+  const auto threads = flag_value(argv_of(container(only("Deployment"))), "--threads");
+  ASSERT_TRUE(threads);
+  const std::string threshold = text_of(trigger_of(only("ScaledObject"))["metadata"]["threshold"]);
+  ASSERT_FALSE(threshold.empty()) << "the trigger needs a threshold: tiles waiting per worker";
+  EXPECT_GE(std::stod(threshold), std::stod(*threads))
+      << "a threshold of " << threshold << " tiles per worker leaves some of its " << *threads
+      << " threads idle";
+}
+
+TEST(DeployK8s, NoAutoscalerOnCpuRemains) {
+  // KEDA makes the Deployment's HorizontalPodAutoscaler itself; a second one would fight it.
+  EXPECT_TRUE(test::of_kind(manifests(), "HorizontalPodAutoscaler").empty())
+      << "a HorizontalPodAutoscaler beside KEDA's ScaledObject";
+  for (const YAML::Node& trigger : only("ScaledObject")["spec"]["triggers"])
+    EXPECT_NE(text_of(trigger["type"]), "cpu") << "workers scale on the queue, not on CPU use";
 }
 
 TEST(DeployK8s, TokensComeOnlyFromTheGeneratedSecret) {
@@ -227,7 +275,7 @@ TEST(DeployK8s, TokensComeOnlyFromTheGeneratedSecret) {
   const auto keys = texts_of(kustomization["secretGenerator"][0]["files"]);
   EXPECT_TRUE(test::of_kind(manifests(), "Secret").empty()) << "a Secret committed with its value";
   const std::pair<const char*, std::vector<const char*>> uses[] = {
-      {"StatefulSet", {"--api-token-file", "--worker-token-file"}},
+      {"StatefulSet", {"--api-token-file", "--worker-token-file", "--metrics-token-file"}},
       {"Deployment", {"--token-file"}}};
   for (const auto& [kind, flags] : uses) {
     const YAML::Node workload = only(kind);

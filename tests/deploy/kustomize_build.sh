@@ -20,7 +20,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cp -r "$source_dir/deploy/k8s" "$work/k8s"
 cp -r "$source_dir/deploy/k8s-tls" "$work/k8s-tls"
-for token in api worker; do
+for token in api worker metrics; do
   echo "stand-in-$token-token" >"$work/k8s/$token.token"
 done
 if ! "${render[@]}" "$work/k8s" >"$work/rendered.yaml" 2>"$work/errors"; then
@@ -44,9 +44,15 @@ if grep -q 'secretName: tessera-tokens$' "$work/rendered.yaml"; then
   echo "FAIL: a workload still names the Secret without its hash"
   failed=1
 fi
-for kind in Namespace Secret Service StatefulSet Deployment HorizontalPodAutoscaler; do
+for kind in Namespace Secret Service StatefulSet Deployment ScaledObject; do
   grep -q "^kind: $kind\$" "$work/rendered.yaml" || { echo "FAIL: no $kind rendered"; failed=1; }
 done
+# KEDA makes the workers' HorizontalPodAutoscaler from the ScaledObject; a second one would
+# fight it over the replica count.
+if grep -q '^kind: HorizontalPodAutoscaler$' "$work/rendered.yaml"; then
+  echo "FAIL: a HorizontalPodAutoscaler is rendered beside KEDA's ScaledObject"
+  failed=1
+fi
 
 # The TLS overlay beside it: the coordinator gets its certificate and key, the workers only the CA,
 # and both speak https://.

@@ -100,13 +100,15 @@ CliRun run_cli(const fs::path& dir, const std::vector<std::string>& args) {
 // The commands that talk to a server, each with what it needs.
 std::vector<std::vector<std::string>> server_commands(const fs::path& dir) {
   const std::string scene = std::string(TESSERA_SOURCE_DIR) + "/tests/data/tiny.json";
-  return {{"status", "j-1"},
+  // A whole id: a shorter one would be looked up first (GET /v1/jobs?id_prefix=).
+  const std::string job = "j-" + std::string(32, '1');
+  return {{"status", job},
           {"list"},
           {"workers"},
-          {"watch", "j-1"},
-          {"cancel", "j-1"},
-          {"rm", "j-1"},
-          {"get", "j-1", "-o", (dir / "out.png").string()},
+          {"watch", job},
+          {"cancel", job},
+          {"rm", job},
+          {"get", job, "-o", (dir / "out.png").string()},
           {"submit", scene}};
 }
 

@@ -15,7 +15,8 @@ TEST(ContractCheck, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
   const test::Contract& contract = test::contract();
   const std::string worker = R"({"id": "w-1", "name": "n", "host": "h", "threads": 2,
       "state": "idle", "current_job": null, "current_tile": null, "tiles_rendered": 0,
-      "last_seen": "2026-12-05T03:00:00Z"})";
+      "last_seen": "2026-12-05T03:00:00Z", "draining": false, "tiles_per_min": 0,
+      "rays_per_s": 0})";
   const auto workers = [&](const std::string& one) {
     return answer(200, R"({"workers": [)" + one + "]}");
   };

@@ -92,6 +92,11 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
       EXPECT_EQ(call(method, path, "").status, 200);
       continue;
     }
+    if (role == "metrics") {
+      // Without --metrics-token, open to this machine (FarmMetrics tests the token).
+      EXPECT_EQ(call(method, path, "").status, 200);
+      continue;
+    }
     ASSERT_TRUE(role == "client" || role == "worker");
     const std::string& own = role == "client" ? api_token : worker_token;
     const std::string& other = role == "client" ? worker_token : api_token;
@@ -105,7 +110,14 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
     const HttpResult crossed = call(method, path, other);
     EXPECT_EQ(crossed.status, 403) << crossed.body;
     EXPECT_NE(crossed.body.find("wrong_role"), std::string::npos) << crossed.body;
-    // Its own token gets past the check (to whatever the dummy request deserves).
+    // Its own token gets past the check (to whatever the dummy request deserves). The
+    // farm's event stream does not end: its first piece is enough.
+    if (path == "/v1/events") {
+      HttpClient http = farm.http(10s);
+      http.set_bearer_token(own);
+      EXPECT_EQ(http.stream(path, [](std::string_view) { return false; }).status, 200);
+      continue;
+    }
     const HttpResult allowed = call(method, path, own);
     EXPECT_NE(allowed.status, 401) << allowed.body;
     EXPECT_NE(allowed.status, 403) << allowed.body;
@@ -183,7 +195,7 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   const test::CliRun with = test::run_cli(farm.dir(), {"--server", farm.url(), "list"});
   ::unsetenv("TESSERA_API_TOKEN");
   EXPECT_EQ(with.exit_code, 0) << with.output;
-  EXPECT_NE(with.output.find(id), std::string::npos) << with.output;
+  EXPECT_NE(with.output.find(id.substr(0, 10)), std::string::npos) << with.output;
 }
 
 TEST(FarmAuth, BeyondLoopbackOnlyWithTokensOrInsecure) {

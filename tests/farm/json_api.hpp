@@ -38,6 +38,16 @@ class JsonApi {
     return client_.image(id, *named, partial);
   }
   nlohmann::json workers() { return protocol::to_json(client_.workers()); }
+  nlohmann::json pause(const std::string& id) { return protocol::to_json(client_.pause(id)); }
+  nlohmann::json resume(const std::string& id) { return protocol::to_json(client_.resume(id)); }
+  nlohmann::json retry(const std::string& id) { return protocol::to_json(client_.retry(id)); }
+  nlohmann::json set_priority(const std::string& id, int priority) {
+    return protocol::to_json(client_.change(id, {priority}));
+  }
+  nlohmann::json drain(const std::string& worker, bool draining) {
+    return protocol::to_json(client_.drain(worker, draining));
+  }
+  void remove_worker(const std::string& worker) { client_.remove_worker(worker); }
   CoordinatorClient& client() { return client_; }
 
  private:

@@ -14,6 +14,7 @@
 #include "common/image_format.hpp"
 #include "common/protocol/assets.hpp"
 #include "common/protocol/error.hpp"
+#include "common/protocol/events.hpp"
 #include "common/protocol/health.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/leases.hpp"
@@ -188,7 +189,22 @@ JobStatus full_job() {
 Worker full_worker() {
   Worker worker{
       "w-1", "a", "h", 2, WorkerState::rendering, "j-1", 3, 7, "2026-12-04T20:00:00.000Z"};
+  worker.draining = true;
+  worker.tiles_per_min = 12;
+  worker.rays_per_s = 1.5e6;
   return worker;
+}
+
+TileStatus full_tile() {
+  TileStatus tile{3, 16, 32, 16, 8, TileView::done, "w-1", "a", 12.5, "AAAA"};
+  return tile;
+}
+
+// The schema of an event's data, from the stream's x-tessera-event-data.
+YAML::Node event_data(const OpenApi& api, const std::string& path, const std::string& type) {
+  return api.operation(
+      path,
+      "get")["responses"]["200"]["content"]["text/event-stream"]["x-tessera-event-data"][type];
 }
 
 TEST(ProtocolContract, EveryBodyIsItsSchema) {
@@ -197,6 +213,7 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
         Error{"over_limit", "too many", "/scene/objects", "max_objects", 10});
   check(api, api.schema("JobSubmission"), JobSubmission{"a", 60, json{{"version", 1}}});
   check(api, api.schema("JobStatus"), full_job());
+  check(api, api.request("/v1/jobs/{id}", "patch"), JobChange{70});
   check(api, api.response("/v1/jobs", "get", "200"), JobList{{full_job()}});
   check(api, api.schema("Worker"), full_worker());
   check(api, api.response("/v1/workers", "get", "200"), WorkerList{{full_worker()}});
@@ -209,6 +226,18 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   check(api, api.response("/healthz", "get", "200"), Health{});
   check(api, api.response("/readyz", "get", "200"), Ready{});
   check(api, api.schema("AssetStored"), AssetStored{"sha256:" + std::string(64, 'a'), true});
+  check(api, api.schema("TileStatus"), full_tile());
+  check(api, api.response("/v1/jobs/{id}/tiles", "get", "200"), TileList{{full_tile()}});
+  check(api, event_data(api, "/v1/events", "worker"),
+        WorkerEvent{WorkerChange::joined, full_worker()});
+  check(api, event_data(api, "/v1/events", "resync"), Resync{"fell behind"});
+  check(api, event_data(api, "/v1/events", "job_removed"), JobRemoved{"j-1"});
+  check(api, event_data(api, "/v1/jobs/{id}/events", "resync"), Resync{"fell behind"});
+  check(api, event_data(api, "/v1/jobs/{id}/events", "job_removed"), JobRemoved{"j-1"});
+  EXPECT_EQ(api.resolve(event_data(api, "/v1/events", "job"))["required"].size(),
+            api.schema("JobStatus")["required"].size());
+  EXPECT_EQ(api.resolve(event_data(api, "/v1/jobs/{id}/events", "tile"))["required"].size(),
+            api.schema("TileStatus")["required"].size());
 }
 
 TEST(ProtocolContract, EnumsAreTheSchemasEnums) {
@@ -219,6 +248,13 @@ TEST(ProtocolContract, EnumsAreTheSchemasEnums) {
   std::set<std::string> worker_states;
   for (const auto& [state, name] : kWorkerStateNames) worker_states.insert(std::string(name));
   EXPECT_EQ(worker_states, names(api.schema("Worker")["properties"]["state"]["enum"]));
+  std::set<std::string> tile_views;
+  for (const auto& [view, name] : kTileViewNames) tile_views.insert(std::string(name));
+  EXPECT_EQ(tile_views, names(api.schema("TileStatus")["properties"]["state"]["enum"]));
+  std::set<std::string> changes;
+  for (const auto& [change, name] : kWorkerChangeNames) changes.insert(std::string(name));
+  EXPECT_EQ(changes,
+            names(event_data(api, "/v1/events", "worker")["properties"]["change"]["enum"]));
   std::set<std::string> formats;
   for (const ImageFormat& format : kImageFormats) formats.insert(std::string(format.name));
   std::set<std::string> documented;
@@ -249,9 +285,10 @@ TEST(ProtocolContract, EveryRouteIsThePathsOfTheFile) {
       if (!method.second.IsMap()) continue;  // a path's own parameters
       for (const auto& parameter : method.second["parameters"]) {
         if (!parameter["in"] || parameter["in"].as<std::string>() != "header") continue;
-        EXPECT_TRUE(parameter["name"].as<std::string>() == kTilesHeader ||
-                    parameter["name"].as<std::string>() == kRaysHeader)
-            << parameter["name"].as<std::string>();
+        const std::string name = parameter["name"].as<std::string>();
+        EXPECT_TRUE(name == kTilesHeader || name == kRaysHeader ||
+                    name == kRenderMicrosecondsHeader || name == kLastEventIdHeader)
+            << name;
       }
     }
   }

@@ -39,6 +39,21 @@ class BlockingScheduler {
   }
   CancelOutcome cancel(const std::string& id) { return stored(scheduler().cancel(id)); }
   RemoveOutcome remove(const std::string& id) { return stored(scheduler().remove(id)); }
+  ControlOutcome set_priority(const std::string& id, int priority) {
+    return stored(scheduler().set_priority(id, priority));
+  }
+  ControlOutcome pause(const std::string& id) { return stored(scheduler().pause(id)); }
+  ControlOutcome resume(const std::string& id) { return stored(scheduler().resume(id)); }
+  ControlOutcome retry(const std::string& id) { return stored(scheduler().retry(id)); }
+  ControlOutcome drain_worker(const std::string& id, bool draining) {
+    return stored(scheduler().drain_worker(id, draining));
+  }
+  ControlOutcome remove_worker(const std::string& id) {
+    return stored(scheduler().remove_worker(id));
+  }
+  std::vector<std::string> job_ids_with_prefix(const std::string& prefix, std::size_t limit) const {
+    return scheduler().job_ids_with_prefix(prefix, limit);
+  }
   std::optional<std::string> scene_json(const std::string& digest) const {
     std::promise<std::optional<std::string>> scene;
     scheduler().scene_json(digest, [&](std::optional<std::string> json) { scene.set_value(json); });

@@ -30,6 +30,7 @@
 #include "server/http_server.hpp"
 #include "server/router.hpp"
 #include "tests/unit/server/raw_connection.hpp"
+#include "tests/unused_port.hpp"
 
 namespace tessera {
 namespace {
@@ -93,18 +94,7 @@ class Parking {
   std::size_t total_ = 0;
 };
 
-// A port on which nothing listens: bound for a moment by us, then let go.
-std::uint16_t unused_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
-  socklen_t size = sizeof address;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size);
-  ::close(fd);
-  return ntohs(address.sin_port);
-}
+using test::unused_port;
 
 class HttpTest : public ::testing::Test {
  protected:

@@ -26,8 +26,13 @@ using Clock = std::chrono::steady_clock;
 // One connection of such a client.
 class RawConnection {
  public:
-  explicit RawConnection(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+  // `receive_buffer`: the socket's receive buffer in bytes (0: the system's), small for a
+  // client that is to fall behind.
+  explicit RawConnection(std::uint16_t port, int receive_buffer = 0)
+      : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
     if (fd_ < 0) throw std::runtime_error("socket failed");
+    if (receive_buffer > 0)
+      ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &receive_buffer, sizeof receive_buffer);
     sockaddr_in address{};
     address.sin_family = AF_INET;
     address.sin_port = htons(port);
@@ -79,6 +84,21 @@ class RawConnection {
         return header;
       }
       if (!receive_some(deadline)) return std::exchange(received_, {});
+    }
+  }
+
+  // The next block of a server-sent event stream, through its blank line; "" when none
+  // came by the deadline or the connection closed.
+  std::string read_event(std::chrono::milliseconds limit = std::chrono::seconds(10)) {
+    const auto deadline = Clock::now() + limit;
+    while (true) {
+      const std::size_t end = received_.find("\n\n");
+      if (end != std::string::npos) {
+        std::string block = received_.substr(0, end + 2);
+        received_.erase(0, end + 2);
+        return block;
+      }
+      if (!receive_some(deadline)) return {};
     }
   }
 

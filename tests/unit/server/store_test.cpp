@@ -31,8 +31,15 @@ JobRow job_row(const std::string& id, const std::string& digest) {
   return job;
 }
 
-// Version 5 kept no digest of a worker's secret.
+// Version 6 could not drain workers.
+void make_version_6(SqliteDb& db) {
+  db.exec("ALTER TABLE workers DROP COLUMN draining");
+  db.exec("PRAGMA user_version=6");
+}
+
+// Version 5 kept no digest of a worker's secret either.
 void make_version_5(SqliteDb& db) {
+  make_version_6(db);
   db.exec("ALTER TABLE workers DROP COLUMN secret_sha256");
   db.exec("PRAGMA user_version=5");
 }
@@ -177,7 +184,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "pixels"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "6");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "7");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -196,7 +203,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
 void expect_upgraded(Store& store, const std::filesystem::path& db_file,
                      const std::vector<float>& pixels, bool with_failure) {
   SqliteDb db(db_file);
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "6");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "7");
   EXPECT_EQ(
       db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"),
       "0");
@@ -277,7 +284,7 @@ TEST_F(StoreTest, UpgradesAVersion4DatabaseReadingEachJobsOutputTransferFromItsS
     make_version_4(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "6");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
   std::map<std::string, std::string> transfers;
   for (const JobRow& job : store_->load().jobs) transfers[job.id] = job.output_transfer;
   EXPECT_EQ(transfers, (std::map<std::string, std::string>{
@@ -294,12 +301,30 @@ TEST_F(StoreTest, UpgradesAVersion5DatabaseWhoseWorkersHadNoSecrets) {
     make_version_5(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "6");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
   const StoredState state = store_->load();
   ASSERT_EQ(state.workers.size(), 1u);
   EXPECT_EQ(state.workers[0].name, "box");
   EXPECT_EQ(state.workers[0].tiles_rendered, 3u);
   EXPECT_EQ(state.workers[0].secret_sha256, "");
+}
+
+// A worker of a version 6 store was never drained: it loads taking tiles.
+TEST_F(StoreTest, UpgradesAVersion6DatabaseWhoseWorkersWereNeverDrained) {
+  store_->upsert_worker({"w-1", "box", "10.0.0.2", 4, "idle", 3, 1000, "digest", true});
+  store_.reset();
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_6(db);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
+  const StoredState state = store_->load();
+  ASSERT_EQ(state.workers.size(), 1u);
+  EXPECT_EQ(state.workers[0].secret_sha256, "digest");
+  EXPECT_FALSE(state.workers[0].draining);
+  store_->upsert_worker({"w-1", "box", "10.0.0.2", 4, "idle", 3, 1000, "digest", true});
+  EXPECT_TRUE(store_->load().workers[0].draining);
 }
 
 TEST_F(StoreTest, AJobKeepsItsOutputTransfer) {

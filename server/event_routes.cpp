@@ -1,0 +1,71 @@
+// Server-sent events (GET /v1/events, GET /v1/jobs/{id}/events) and a job's tiles
+// (GET /v1/jobs/{id}/tiles), which a page loads once and then follows by events.
+#include "common/protocol/events.hpp"
+#include "common/protocol/paths.hpp"
+#include "server/access.hpp"
+#include "server/api_json.hpp"
+#include "server/api_routes.hpp"
+#include "server/event_hub.hpp"
+#include "server/farm_events.hpp"
+
+namespace tessera {
+namespace {
+
+namespace route = protocol::route;
+
+std::optional<std::string> last_event_id(const HttpRequest& request) {
+  const auto it = request.headers.find(lower_ascii(protocol::kLastEventIdHeader));
+  if (it == request.headers.end()) return std::nullopt;
+  return it->second;
+}
+
+HttpResponse event_stream(std::shared_ptr<Subscription> subscription) {
+  HttpResponse response{200,
+                        "text/event-stream",
+                        "",
+                        {{"Cache-Control", "no-store"},
+                         // Proxies that buffer answers (nginx) would hold events back.
+                         {"X-Accel-Buffering", "no"}}};
+  response.stream = std::move(subscription);
+  return response;
+}
+
+}  // namespace
+
+void add_event_routes(Router& router, ApiContext& context) {
+  router.add(
+      "GET", std::string(route::events),
+      [&context](HttpRequest&& request, Respond respond) {
+        if (!context.events) return respond(error_response(404, "not_found", "no events here"));
+        respond(event_stream(context.events->subscribe("", last_event_id(request))));
+      },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(route::job_events),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        if (!context.events || !context.scheduler.job(id))
+          return respond(error_response(404, "not_found", "no job " + id));
+        respond(event_stream(context.events->subscribe(id, last_event_id(request))));
+      },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(route::job_tiles),
+      [&context](HttpRequest&& request, Respond respond) {
+        const std::string& id = request.params.at("id");
+        respond_durable(context.scheduler, std::move(respond), [&context, id] {
+          const auto tiles = context.scheduler.tiles(id);
+          if (!tiles) return error_response(404, "not_found", "no job " + id);
+          protocol::TileList list;
+          list.tiles.reserve(tiles->size());
+          for (const FarmObserver::TileChange& tile : *tiles) {
+            protocol::TileStatus& status = list.tiles.emplace_back();
+            status = tile_status(tile);
+          }
+          return body_response(200, list);
+        });
+      },
+      std::nullopt, role_client);
+}
+
+}  // namespace tessera
