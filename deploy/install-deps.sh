@@ -17,8 +17,6 @@ packages=(
   clang-format  # tests/format_check.sh: every C++ file as .clang-format writes it
   ca-certificates  # the system's CAs, which https:// servers are checked against by default
   openssl  # the TLS test makes its CA and certificates with it (tests/farm/farm_tls_test.cpp)
-  chromium  # the web dashboard's browser test drives it with playwright-core (tests/browser/)
-  prometheus  # a real Prometheus scrapes the coordinator (tests/farm/farm_metrics_test.cpp)
 )
 
 if [ "$(id -u)" -ne 0 ]; then
@@ -32,6 +30,13 @@ tools=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/tools
 # Debian's, unless this machine has a Node.js of its own (which Debian's npm would conflict with).
 if [ -f "$tools/package-lock.json" ] && ! command -v npm >/dev/null; then
   packages+=(nodejs npm)
+fi
+# Programs only tests run, against the real thing: in a checkout, not in a container build.
+if [ -f "$tools/package-lock.json" ]; then
+  packages+=(
+    chromium    # the web dashboard's browser test drives it with playwright-core (tests/browser/)
+    prometheus  # a real Prometheus scrapes the coordinator (tests/farm/farm_metrics_test.cpp)
+  )
 fi
 
 export DEBIAN_FRONTEND=noninteractive

@@ -719,10 +719,15 @@ function jobsView(main) {
     else if (type === 'resync') load();
   }, { poll: load });
   load();
-  const clock = setInterval(() => {
+  return ageingView(view, stream, () => {
     for (const row of rows.values()) setText(row.submitted, formatAgo(row.job.created_at));
-  }, 5000);
+  });
+}
 
+// A live table's view: its relative times ("3 min ago") redrawn every 5 s by `age`, and,
+// when the view goes, its stream stopped and its clock with it.
+function ageingView(view, stream, age) {
+  const clock = setInterval(age, 5000);
   return {
     unmount() {
       view.gone = true;
@@ -1376,17 +1381,9 @@ function workersView(main) {
     }
   }, { poll: load });
   load();
-  const clock = setInterval(() => {
+  return ageingView(view, stream, () => {
     for (const row of rows.values()) setText(row.seen, formatAgo(row.worker.last_seen));
-  }, 5000);
-
-  return {
-    unmount() {
-      view.gone = true;
-      stream.stop();
-      clearInterval(clock);
-    },
-  };
+  });
 }
 
 // ---------------------------------------------------------------------------------------

@@ -34,8 +34,9 @@ class BlockingScheduler {
     return submitted.get_future().get();
   }
   std::optional<JobStatus> job(const std::string& id) const { return scheduler().job(id); }
-  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit) const {
-    return scheduler().jobs(state, limit);
+  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
+                              std::size_t offset = 0) const {
+    return scheduler().jobs(state, limit, offset);
   }
   CancelOutcome cancel(const std::string& id) { return stored(scheduler().cancel(id)); }
   RemoveOutcome remove(const std::string& id) { return stored(scheduler().remove(id)); }

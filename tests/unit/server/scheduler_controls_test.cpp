@@ -193,5 +193,19 @@ TEST_F(SchedulerTest, JobsAreFoundByAPrefixOfTheirId) {
   EXPECT_TRUE(s().job_ids_with_prefix("j-x", 10).empty());
 }
 
+TEST_F(SchedulerTest, PagesOfTheJobListCoverEveryJobOnceNewestFirst) {
+  std::vector<std::string> submitted;
+  for (int i = 0; i < 25; ++i) {
+    submitted.push_back(submit(8, 8, 8).id);
+    clock_.advance_ms(1);
+  }
+  std::vector<std::string> paged;
+  for (std::size_t offset = 0; offset < 30; offset += 10)
+    for (const JobStatus& job : s().jobs(std::nullopt, 10, offset)) paged.push_back(job.id);
+  EXPECT_EQ(paged, std::vector<std::string>(submitted.rbegin(), submitted.rend()));
+  EXPECT_TRUE(s().jobs(std::nullopt, 10, 25).empty()) << "past the end";
+  EXPECT_EQ(s().jobs(JobState::queued, 5, 20).size(), 5u);
+}
+
 }  // namespace
 }  // namespace tessera
