@@ -133,11 +133,14 @@ std::shared_ptr<Subscription> EventHub::subscribe(const std::string& job_id,
       } catch (const std::exception&) {
       }
     }
-    const bool kept =
-        last && (kept_.empty() ? *last + 1 == next_ : kept_.front()->sequence <= *last + 1);
+    bool kept = last && (kept_.empty() ? *last + 1 == next_ : kept_.front()->sequence <= *last + 1);
+    // Events of the job that were not made since then (nobody followed it) are missing.
+    if (const auto skip = skipped_.find(job_id);
+        kept && !job_id.empty() && skip != skipped_.end() && skip->second >= *last)
+      kept = false;
     if (!kept) {
       std::lock_guard sub_lock(subscription->mutex_);
-      subscription->resync_locked(last ? "the events since then are no longer kept"
+      subscription->resync_locked(last ? "the events since then are not all kept"
                                        : "the coordinator restarted");
     } else {
       const auto from =
@@ -154,6 +157,15 @@ std::shared_ptr<Subscription> EventHub::subscribe(const std::string& job_id,
   else
     by_job_[job_id].push_back(subscription);
   return subscription;
+}
+
+bool EventHub::follows_or_skips(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  if (const auto it = by_job_.find(job_id); it != by_job_.end())
+    for (const auto& weak : it->second)
+      if (!weak.expired()) return true;
+  skipped_[job_id] = next_ - 1;
+  return false;
 }
 
 void EventHub::end_all() {

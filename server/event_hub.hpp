@@ -81,6 +81,10 @@ class EventHub {
   // resync event first when it is not.
   std::shared_ptr<Subscription> subscribe(const std::string& job_id,
                                           const std::optional<std::string>& last_event_id);
+  // Whether any stream follows `job_id`. When none does, its events of now on are not
+  // made (FarmObserver::wants_tiles), and a stream of the job that resumes from an event
+  // before now begins with a resync.
+  bool follows_or_skips(const std::string& job_id);
   // Ends every stream (shutting down): each subscription ends once its queue is taken.
   void end_all();
   std::size_t subscribers() const;
@@ -97,6 +101,8 @@ class EventHub {
   std::size_t kept_bytes_ = 0;
   std::vector<std::weak_ptr<Subscription>> global_;
   std::unordered_map<std::string, std::vector<std::weak_ptr<Subscription>>> by_job_;
+  // Per job, the last sequence given out when one of its events was not made.
+  std::unordered_map<std::string, std::uint64_t> skipped_;
 };
 
 }  // namespace tessera

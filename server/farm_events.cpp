@@ -123,6 +123,12 @@ void FarmEvents::workers_changed(const std::vector<std::pair<WorkerInfo, WorkerC
   }
 }
 
+bool FarmEvents::wants_tiles(const std::string& job_id) {
+  // Nobody follows the job: its tile events are not made, and a stream that resumes from
+  // before now is told to resync instead of missing them.
+  return hub_.follows_or_skips(job_id);
+}
+
 void FarmEvents::job_removed(const std::string& job_id) {
   {
     std::lock_guard lock(mutex_);

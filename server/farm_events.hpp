@@ -27,6 +27,7 @@ class FarmEvents : public FarmObserver {
   void tiles_changed(const std::vector<TileChange>& tiles) override;
   void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) override;
   void job_removed(const std::string& job_id) override;
+  bool wants_tiles(const std::string& job_id) override;
   // Sends the newest state of the jobs and workers whose progress changed since the last
   // flush. Called every kFlushInterval.
   void flush();

@@ -55,9 +55,15 @@ Scheduler::Observed Scheduler::observed_before(const StagedChange& change) const
   Observed observed;
   if (!observer_) return observed;
   for (const auto& [job, status] : change.jobs) observed.jobs.push_back(job);
+  const JobEntry* asked = nullptr;  // the job wants_tiles() was last asked of
+  bool wanted = false;
   for (const auto& [key, tile] : change.tiles) {
+    if (key.first != asked) {
+      asked = key.first;
+      wanted = observer_->wants_tiles(key.first->status.id);
+    }
     // A tile done is told with its pixels, once they are stored (complete()).
-    if (tile.state != TileState::done) observed.tiles.emplace_back(key.first, key.second);
+    if (wanted && tile.state != TileState::done) observed.tiles.emplace_back(key.first, key.second);
     if (!change.jobs.contains(key.first) &&
         std::find(observed.jobs.begin(), observed.jobs.end(), key.first) == observed.jobs.end())
       observed.jobs.push_back(key.first);  // its counts move

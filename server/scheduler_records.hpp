@@ -193,6 +193,10 @@ class FarmObserver {
     OutputTransfer transfer = OutputTransfer::srgb;  // how the job's images are encoded
   };
   virtual void tiles_changed(const std::vector<TileChange>& tiles) = 0;
+  // Whether anyone follows the tiles of `job_id` now: tile changes are recorded only then,
+  // since a farm renders thousands of tiles a second that nobody may be watching. Called
+  // under the scheduler's lock: it must be quick and must not call the scheduler.
+  virtual bool wants_tiles(const std::string& job_id) = 0;
   using WorkerChange = protocol::WorkerChange;
   virtual void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) = 0;
   virtual void job_removed(const std::string& job_id) = 0;

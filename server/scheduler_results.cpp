@@ -75,7 +75,7 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
   std::vector<std::pair<int, std::span<const float>>> tiles;
   for (const TileResult* result : fresh) tiles.emplace_back(result->tile_index, result->pixels);
   std::vector<FarmObserver::TileChange> done;
-  if (observer_)
+  if (observer_ && observer_->wants_tiles(job.status.id))
     for (const TileResult* result : fresh) {
       done.push_back(tile_change(job, result->tile_index));
       done.back().pixels = result->pixels;

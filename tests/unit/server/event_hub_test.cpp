@@ -143,5 +143,27 @@ TEST(EventHub, EndingAllEndsEachStreamOnceTaken) {
   EXPECT_TRUE(ended);
 }
 
+TEST(EventHub, AStreamResumedAcrossATimeNobodyFollowedItsJobResyncs) {
+  EventHub hub;
+  auto first = hub.subscribe("j-a", std::nullopt);
+  EXPECT_TRUE(hub.follows_or_skips("j-a"));
+  hub.publish("tile", "1", false, "j-a");
+  bool ended = false;
+  const std::string seen = last_id(first->take(ended));
+  first.reset();  // the client went
+  // Nobody follows the job: its tile events are not made meanwhile.
+  EXPECT_FALSE(hub.follows_or_skips("j-a"));
+  const auto resumed = hub.subscribe("j-a", seen);
+  const auto lines = taken(*resumed);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(lines[0].starts_with("resync ")) << lines[0];
+  // Followed again, its events are made, and a stream resumes after them as usual.
+  EXPECT_TRUE(hub.follows_or_skips("j-a"));
+  hub.publish("tile", "2", false, "j-a");
+  const std::string two = last_id(resumed->take(ended));
+  hub.publish("tile", "3", false, "j-a");
+  EXPECT_EQ(taken(*hub.subscribe("j-a", two)), (std::vector<std::string>{"tile 3"}));
+}
+
 }  // namespace
 }  // namespace tessera
