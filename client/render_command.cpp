@@ -9,10 +9,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "client/frame_paths.hpp"
 #include "client/scene_input.hpp"
+#include "common/frame_list.hpp"
 #include "common/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/printable.hpp"
+#include "common/scene_frames.hpp"
 #include "common/scene_parser.hpp"
 #include "common/scn_import.hpp"
 #include "worker/local_render.hpp"
@@ -24,6 +27,7 @@ struct RenderOptions {
   std::string scene_path;
   std::string output_path;
   std::optional<int> width, height, spp, max_depth, tile_size;
+  std::optional<std::string> frames;
   int threads = 0;
 };
 
@@ -86,9 +90,56 @@ int render_and_report(const RenderOptions& options, const Scene& scene,
   return 0;
 }
 
+double seconds_between(std::chrono::steady_clock::time_point from,
+                       std::chrono::steady_clock::time_point to) {
+  return std::chrono::duration<double>(to - from).count();
+}
+
+// The frames to render: those of --frames, else every frame when the output has '#' for
+// the number, else the first (a still from an animation).
+std::vector<int> frames_to_render(const RenderOptions& options, const Animation& animation,
+                                  const std::string& output) {
+  if (options.frames)
+    return parse_frame_list(*options.frames, animation.first, animation.last, Limits{}.max_frames);
+  if (!has_frame_number(output)) return {animation.first};
+  std::vector<int> all;
+  for (int frame = animation.first; frame <= animation.last; ++frame) all.push_back(frame);
+  return all;
+}
+
+// Each frame rendered and written as soon as it is done; a frame whose objects are those
+// of the frame before reuses its geometry (Renderer's second constructor).
+int render_frames(const RenderOptions& options, SceneFrames& frames, const std::vector<int>& list,
+                  const std::string& pattern) {
+  std::unique_ptr<Renderer> renderer;
+  Scene first = frames.take_first();
+  for (const int frame : list) {
+    const auto start = std::chrono::steady_clock::now();
+    Scene scene =
+        renderer ? frames.at(frame, renderer->scene())
+                 : (frame == first.frame ? std::move(first) : frames.at(frame, std::move(first)));
+    renderer = renderer ? std::make_unique<Renderer>(std::move(scene), *renderer)
+                        : std::make_unique<Renderer>(std::move(scene));
+    const auto built = std::chrono::steady_clock::now();
+    const LocalRenderResult result = render_local(*renderer, options.threads);
+    const auto rendered = std::chrono::steady_clock::now();
+    const std::filesystem::path path = frame_path(pattern, frame);
+    write_image(result.image, path, renderer->scene().render.output_transfer);
+    std::printf("frame %d: %dx%d in %.3f s (scene build %.3f s, tracing %.3f s), wrote %s\n", frame,
+                renderer->scene().width, renderer->scene().height, seconds_between(start, rendered),
+                seconds_between(start, built), seconds_between(built, rendered),
+                printable(std::filesystem::absolute(path).string()).c_str());
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int run_render(const RenderOptions& options) {
   std::filesystem::path output = options.output_path;
-  if (output.empty()) output = std::filesystem::path(options.scene_path).stem().string() + ".png";
+  if (output.empty()) {
+    const std::string stem = std::filesystem::path(options.scene_path).stem().string();
+    output = stem + (options.frames ? "_####.png" : ".png");
+  }
   if (!is_supported_image_path(output)) {
     std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
                  printable(output.string()).c_str());
@@ -106,16 +157,29 @@ int run_render(const RenderOptions& options) {
     return 2;
   }
   try {
-    // The text and the document are freed before tracing starts, not kept beside the Scene
-    // through it.
-    const Scene scene = [&] {
-      // Mesh files are named relative to the scene file.
-      const FolderSceneFiles files(std::filesystem::path(options.scene_path).parent_path());
-      return parse_scene_text(
-          std::exchange(text, {}), Limits{},
-          [&](nlohmann::json& document) { apply_overrides(document, options); }, &files);
-    }();
-    return render_and_report(options, scene, output);
+    // Mesh files are named relative to the scene file. The text is freed before tracing
+    // starts, not kept beside the Scene through it.
+    const FolderSceneFiles files(std::filesystem::path(options.scene_path).parent_path());
+    SceneFrames frames(
+        std::exchange(text, {}), Limits{},
+        [&](nlohmann::json& document) { apply_overrides(document, options); }, &files);
+    std::vector<int> list;
+    try {
+      list = frames_to_render(options, frames.animation(), output.string());
+    } catch (const FrameListError& e) {
+      std::fprintf(stderr, "error: --frames: %s\n", printable(e.what()).c_str());
+      return 2;
+    }
+    if (list.size() > 1 && !has_frame_number(output.string())) {
+      std::fprintf(stderr,
+                   "error: %s: %zu frames need '#' in the output's name where the frame number "
+                   "goes, such as out_####.png\n",
+                   printable(output.string()).c_str(), list.size());
+      return 2;
+    }
+    if (!options.frames && !frames.animation().animated)
+      return render_and_report(options, frames.take_first(), output);
+    return render_frames(options, frames, list, output.string());
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s: %s\n", printable(options.scene_path).c_str(),
                  printable(e.what()).c_str());
@@ -134,13 +198,17 @@ void add_render_command(CLI::App& app) {
   render->add_option("scene", options->scene_path, "Scene file (JSON, or a COS 426 .scn)")
       ->required();
   render->add_option("-o,--output", options->output_path,
-                     "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png)");
+                     "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png); "
+                     "# for the frame number (out_####.png)");
   render->add_option("--width", options->width, "Override image.width")->check(CLI::PositiveNumber);
   render->add_option("--height", options->height, "Override image.height")
       ->check(CLI::PositiveNumber);
   render->add_option("--spp", options->spp, "Override render.samples_per_pixel");
   render->add_option("--max-depth", options->max_depth, "Override render.max_depth");
   render->add_option("--tile-size", options->tile_size, "Override render.tile_size");
+  render->add_option("--frames", options->frames,
+                     "Frames of an animated scene: 1-48, 1-100x2 (every second), 1,5,10-20 "
+                     "(default: all when OUTPUT has # for the number, else the first)");
   render->add_option("--threads", options->threads, "Rendering threads (default: one per core)")
       ->check(CLI::NonNegativeNumber);
   render->final_callback([options] {

@@ -137,10 +137,12 @@ nlohmann::json parse_json_text(std::string_view text) {
 }
 
 Scene parse_scene_text(std::string_view text, const Limits& limits,
-                       const std::function<void(nlohmann::json&)>& edit, const SceneFiles* files) {
+                       const std::function<void(nlohmann::json&)>& edit, const SceneFiles* files,
+                       std::optional<int> frame) {
   if (auto fast = parse_json_fast_lifted(text, max_json_nesting, lifted_array_min_size)) {
     if (edit) edit(fast->document);
     try {
+      if (frame) return parse_scene_frame(fast->document, *frame, limits, &fast->lifted, files);
       return parse_scene(fast->document, limits, &fast->lifted, files);
     } catch (const LiftedArrayRefused&) {
       // Parsed again below, the ordinary way, for the error's words.
@@ -148,6 +150,7 @@ Scene parse_scene_text(std::string_view text, const Limits& limits,
   }
   nlohmann::json document = parse_json_text(text);
   if (edit) edit(document);
+  if (frame) return parse_scene_frame(document, *frame, limits, nullptr, files);
   return parse_scene(document, limits, nullptr, files);
 }
 

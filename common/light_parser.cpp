@@ -5,6 +5,9 @@
 namespace tessera {
 namespace {
 
+constexpr auto read_vec3 = [](const ValueReader& v) { return v.vec3(); };
+constexpr auto read_direction = [](const ValueReader& v) { return v.direction(); };
+
 Attenuation parse_attenuation(const ObjectReader& light) {
   Attenuation attenuation;
   const auto value = light.find("attenuation");
@@ -22,8 +25,8 @@ Attenuation parse_attenuation(const ObjectReader& light) {
 PointLight parse_point(const ObjectReader& reader) {
   reader.allow_only({"type", "position", "intensity", "attenuation"});
   PointLight light;
-  light.position = reader.require("position").vec3();
-  light.intensity = reader.color_or("intensity", light.intensity);
+  light.position = reader.require("position").animated(read_vec3);
+  light.intensity = reader.animated_color_or("intensity", light.intensity);
   light.attenuation = parse_attenuation(reader);
   return light;
 }
@@ -31,8 +34,8 @@ PointLight parse_point(const ObjectReader& reader) {
 DirectionalLight parse_directional(const ObjectReader& reader) {
   reader.allow_only({"type", "direction", "intensity"});
   DirectionalLight light;
-  light.direction = reader.require("direction").direction();
-  light.intensity = reader.color_or("intensity", light.intensity);
+  light.direction = reader.require("direction").animated(read_direction);
+  light.intensity = reader.animated_color_or("intensity", light.intensity);
   return light;
 }
 
@@ -40,13 +43,13 @@ SpotLight parse_spot(const ObjectReader& reader) {
   reader.allow_only(
       {"type", "position", "direction", "intensity", "attenuation", "cutoff", "exponent"});
   SpotLight light;
-  light.position = reader.require("position").vec3();
-  light.direction = reader.require("direction").direction();
-  light.intensity = reader.color_or("intensity", light.intensity);
+  light.position = reader.require("position").animated(read_vec3);
+  light.direction = reader.require("direction").animated(read_direction);
+  light.intensity = reader.animated_color_or("intensity", light.intensity);
   light.attenuation = parse_attenuation(reader);
-  light.cutoff_degrees =
-      reader.number_or("cutoff", light.cutoff_degrees, Range::between(0.0, true, 90.0, false));
-  light.exponent = reader.number_or("exponent", light.exponent, Range::at_least(0.0));
+  light.cutoff_degrees = reader.animated_number_or("cutoff", light.cutoff_degrees,
+                                                   Range::between(0.0, true, 90.0, false));
+  light.exponent = reader.animated_number_or("exponent", light.exponent, Range::at_least(0.0));
   return light;
 }
 
@@ -70,7 +73,13 @@ std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits)
   }
   std::vector<Light> result;
   result.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) result.push_back(parse_light(lights.element(i)));
+  for (std::size_t i = 0; i < count; ++i) {
+    const ValueReader light = lights.element(i);
+    const FrameReading* frames = light.frames();
+    const std::size_t tracks_before = frames && frames->record ? frames->record->size() : 0;
+    result.push_back(parse_light(light));
+    check_every_frame(light, tracks_before, parse_light);
+  }
   return result;
 }
 

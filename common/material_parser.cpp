@@ -65,10 +65,10 @@ void read_term(const ObjectReader& reader, TexturedTerm term, Color& color, Mate
   const std::string_view key = textured_term_names[static_cast<std::size_t>(term)];
   const auto value = reader.find(key);
   if (!value) return;
-  if (value->json().is_object())
+  if (value->json().is_object() && !value->is_track())
     m.texture(term) = parse_texture(*value, files);
   else
-    color = value->color();
+    color = value->animated([](const ValueReader& v) { return v.color(); }, true);
 }
 
 // Lists a few names so that an unknown-name error shows what the scene does offer.
@@ -92,10 +92,10 @@ Material parse_material(const ValueReader& value, const SceneFiles* files) {
   read_term(reader, TexturedTerm::ambient, m.ambient, m, files);
   read_term(reader, TexturedTerm::diffuse, m.diffuse, m, files);
   read_term(reader, TexturedTerm::specular, m.specular, m, files);
-  m.shininess = reader.number_or("shininess", m.shininess, Range::at_least(0.0));
-  m.reflection = reader.color_or("reflection", m.specular);
-  m.transmission = reader.color_or("transmission", m.transmission);
-  m.ior = reader.number_or("ior", m.ior, Range::above(0.0));
+  m.shininess = reader.animated_number_or("shininess", m.shininess, Range::at_least(0.0));
+  m.reflection = reader.animated_color_or("reflection", m.specular);
+  m.transmission = reader.animated_color_or("transmission", m.transmission);
+  m.ior = reader.animated_number_or("ior", m.ior, Range::above(0.0));
   if (const auto checker = reader.find("checker")) {
     if (m.texture(TexturedTerm::ambient) || m.texture(TexturedTerm::diffuse))
       checker->fail("cannot colour a material whose ambient or diffuse term is a texture");

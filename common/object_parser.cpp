@@ -26,7 +26,9 @@ double nonzero_number(const ValueReader& value) {
 Rotate parse_rotate(const ValueReader& value) {
   const ObjectReader reader(value, "an object {\"axis\": [x, y, z], \"degrees\": angle}");
   reader.allow_only({"axis", "degrees"});
-  return Rotate{reader.require("axis").direction(), reader.require("degrees").number()};
+  return Rotate{
+      reader.require("axis").animated([](const ValueReader& v) { return v.direction(); }),
+      reader.require("degrees").animated([](const ValueReader& v) { return v.number(); })};
 }
 
 Scale parse_scale(const ValueReader& value) {
@@ -61,9 +63,10 @@ TransformStep parse_step(const ValueReader& value) {
   }
   const std::string& kind = reader.members().begin()->first;
   const ValueReader argument = reader.require(kind);
-  if (kind == "translate") return Translate{argument.vec3()};
+  if (kind == "translate")
+    return Translate{argument.animated([](const ValueReader& v) { return v.vec3(); })};
   if (kind == "rotate") return parse_rotate(argument);
-  if (kind == "scale") return parse_scale(argument);
+  if (kind == "scale") return argument.animated(parse_scale);
   return parse_matrix(argument);
 }
 
@@ -132,6 +135,14 @@ void add_triangles(const ValueReader& objects, const ValueReader& element,
 }  // namespace
 
 Mat4 parse_transform(const ValueReader& steps) {
+  const FrameReading* frames = steps.frames();
+  const std::size_t tracks_before = frames && frames->record ? frames->record->size() : 0;
+  const Mat4 matrix = compose_steps(steps);
+  check_every_frame(steps, tracks_before, compose_steps);
+  return matrix;
+}
+
+Mat4 compose_steps(const ValueReader& steps) {
   const std::size_t count = steps.array_size("an array of transform steps");
   std::vector<TransformStep> parsed;
   parsed.reserve(count);
@@ -182,7 +193,7 @@ void check_objects(const ValueReader& objects, const ObjectTexts& texts, Materia
     // material, so that a refusal there has added nothing to the table.
     if (const auto value = texts.element_lifted(i, pointer, lifted)) {
       try {
-        const ValueReader element(*value, pointer, &lifted);
+        const ValueReader element(*value, pointer, &lifted, objects.frames());
         parse_object(element, materials, context, triangles, parsed);
         add_triangles(objects, element, parsed, triangles, made, limits);
         continue;
@@ -192,7 +203,7 @@ void check_objects(const ValueReader& objects, const ObjectTexts& texts, Materia
       }
     }
     const nlohmann::json value = texts.element(i);
-    const ValueReader element(value, pointer);
+    const ValueReader element(value, pointer, nullptr, objects.frames());
     parse_object(element, materials, context, triangles, parsed);
     add_triangles(objects, element, parsed, triangles, made, limits);
   }

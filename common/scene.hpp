@@ -14,6 +14,8 @@
 
 #include <glm/glm.hpp>
 
+#include "common/animation.hpp"
+
 namespace tessera {
 
 using Vec3 = glm::dvec3;
@@ -200,6 +202,10 @@ struct Scene {
   std::vector<Material> materials;  // index 0 is the default material
   std::vector<Light> lights;
   std::vector<Object> objects;
+  // The range and the tracks of an animated scene (the one frame 0 of a still one), and the
+  // frame whose values the rest holds.
+  Animation animation;
+  int frame = 0;
 };
 
 // What one scene may cost. One struct so that the server can expose each as a flag.
@@ -214,6 +220,9 @@ struct Limits {
   std::size_t max_lights = 1024;
   std::size_t max_materials = 10000;
   std::size_t max_triangles = 20000000;  // summed over meshes, boxes and triangles
+  std::size_t max_frames = 10000;        // in an animation's range
+  // Keyframe tracks in all; a submitted scene is checked at every frame of each.
+  std::size_t max_tracks = 256;
 
   // No limit at all: for a scene already validated against the coordinator's limits.
   static Limits none();

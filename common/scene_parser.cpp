@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -30,16 +32,18 @@ void parse_image(const ValueReader& value, const Limits& limits, Scene& scene) {
                      "max_pixels", limits.max_pixels);
 }
 
+constexpr auto read_vec3 = [](const ValueReader& v) { return v.vec3(); };
+
 Camera parse_camera(const ValueReader& value) {
   const ObjectReader reader(value);
   reader.allow_only({"eye", "look_at", "up", "fov_y"});
   Camera camera;
-  camera.eye = reader.require("eye").vec3();
+  camera.eye = reader.require("eye").animated(read_vec3);
   const ValueReader look_at = reader.require("look_at");
-  camera.look_at = look_at.vec3();
-  camera.up = reader.vec3_or("up", camera.up);
-  camera.fov_y_degrees =
-      reader.number_or("fov_y", camera.fov_y_degrees, Range::between(0.0, true, 180.0, true));
+  camera.look_at = look_at.animated(read_vec3);
+  camera.up = reader.animated_vec3_or("up", camera.up);
+  camera.fov_y_degrees = reader.animated_number_or("fov_y", camera.fov_y_degrees,
+                                                   Range::between(0.0, true, 180.0, true));
 
   const auto view = try_normalize(camera.look_at - camera.eye);
   if (!view) look_at.fail("must differ from \"eye\"");
@@ -70,22 +74,69 @@ RenderSettings parse_render(const ValueReader& value, const Limits& limits) {
   return render;
 }
 
+Animation parse_animation(const ObjectReader& root, const Limits& limits) {
+  Animation animation;
+  const auto found = root.find("animation");
+  if (!found) return animation;
+  const ObjectReader reader(*found, "an object {\"frames\": [first, last], \"fps\": rate}");
+  reader.allow_only({"frames", "fps"});
+  animation.animated = true;
+  const ValueReader frames = reader.require("frames");
+  frames.expect_array_of(2, "an array [first, last] of frame numbers");
+  const IntRange frame_range{0, max_frame_number,
+                             "frame numbers are at most " + std::to_string(max_frame_number)};
+  animation.first = static_cast<int>(frames.element(0).integer(frame_range));
+  animation.last = static_cast<int>(frames.element(1).integer(frame_range));
+  if (animation.last < animation.first) {
+    frames.element(1).fail("must be at least the first frame (" + std::to_string(animation.first) +
+                           "), got " + std::to_string(animation.last));
+  }
+  if (static_cast<std::uint64_t>(animation.frame_count()) > limits.max_frames) {
+    frames.fail_limit("must span <= " + std::to_string(limits.max_frames) +
+                          " frames (limit max_frames), got " +
+                          std::to_string(animation.frame_count()),
+                      "max_frames", limits.max_frames);
+  }
+  animation.fps = reader.number_or("fps", animation.fps, Range::between(0.0, true, 1000.0, false));
+  return animation;
+}
+
+// The frame a reading reads at: `frame`, or the animation's first.
+int frame_to_read(const Animation& animation, std::optional<int> frame) {
+  if (!frame) return animation.first;
+  if (!animation.contains(*frame)) {
+    throw SceneError(animation.animated ? "/animation/frames" : "",
+                     "has no frame " + std::to_string(*frame) + ": its frames are " +
+                         std::to_string(animation.first) + " to " + std::to_string(animation.last));
+  }
+  return *frame;
+}
+
+// `frame`: the one to read (the first when none); only the reading of the first frame
+// checks that every other frame is valid too.
 Scene read_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
-                 const ObjectTexts* apart, const SceneFiles* files) {
-  const ObjectReader root(ValueReader(document, "", lifted), "a JSON object");
+                 const ObjectTexts* apart, const SceneFiles* files, std::optional<int> frame) {
+  const ObjectReader plain_root(ValueReader(document, "", lifted), "a JSON object");
   // Before the key check: a future version may well have keys this one does not know.
-  if (const auto version = root.find("version")) {
+  if (const auto version = plain_root.find("version")) {
     if (version->integer() != 1)
       version->fail("must be 1, the only scene format version, got " + describe(version->json()));
   }
-  root.allow_only(scene_keys);
+  plain_root.allow_only(scene_keys);
 
   Scene scene;
+  scene.animation = parse_animation(plain_root, limits);
+  scene.frame = frame_to_read(scene.animation, frame);
+  const FrameReading reading{&scene.animation,  scene.frame, &scene.animation.tracks,
+                             limits.max_tracks, nullptr,     !frame.has_value()};
+  const ObjectReader root(ValueReader(document, "", lifted, &reading));
   parse_image(root.require("image"), limits, scene);
-  scene.camera = parse_camera(root.require("camera"));
+  const ValueReader camera = root.require("camera");
+  scene.camera = parse_camera(camera);
+  check_every_frame(camera, 0, parse_camera);
   if (const auto render = root.find("render")) scene.render = parse_render(*render, limits);
-  scene.background = root.color_or("background", scene.background);
-  scene.ambient_light = root.color_or("ambient_light", scene.ambient_light);
+  scene.background = root.animated_color_or("background", scene.background);
+  scene.ambient_light = root.animated_color_or("ambient_light", scene.ambient_light);
 
   MaterialTable materials(limits, files);
   if (const auto named = root.find("materials")) materials.add_named(*named);
@@ -106,8 +157,10 @@ Scene read_scene(const nlohmann::json& document, const Limits& limits, const Lif
 Limits Limits::none() {
   constexpr int most = std::numeric_limits<int>::max();
   constexpr std::size_t many = std::numeric_limits<std::size_t>::max();
-  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(), most, most, most, many, many,
-                many, many};
+  return Limits{most, most, std::numeric_limits<std::uint64_t>::max(),
+                most, most, most,
+                many, many, many,
+                many, many, many};
 }
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
@@ -116,12 +169,39 @@ Scene parse_scene(const nlohmann::json& document, const Limits& limits) {
 
 Scene parse_scene(const nlohmann::json& document, const Limits& limits, const LiftedArrays* lifted,
                   const SceneFiles* files) {
-  return read_scene(document, limits, lifted, nullptr, files);
+  return read_scene(document, limits, lifted, nullptr, files, std::nullopt);
+}
+
+Scene parse_scene_frame(const nlohmann::json& document, int frame, const Limits& limits,
+                        const LiftedArrays* lifted, const SceneFiles* files) {
+  return read_scene(document, limits, lifted, nullptr, files, frame);
+}
+
+Scene advance_scene(const nlohmann::json& document, Scene scene, int frame, const Limits& limits,
+                    const SceneFiles* files) {
+  scene.frame = frame_to_read(scene.animation, frame);
+  std::map<std::string, const Track*, std::less<>> known;
+  for (const Track& track : scene.animation.tracks) known.emplace(track.pointer, &track);
+  const FrameReading reading{&scene.animation, scene.frame, nullptr, 0, &known, false};
+  const ObjectReader root(ValueReader(document, "", nullptr, &reading), "a JSON object");
+  if (scene.animation.changes(TrackTarget::camera))
+    scene.camera = parse_camera(root.require("camera"));
+  scene.background = root.animated_color_or("background", Color(0.0));
+  scene.ambient_light = root.animated_color_or("ambient_light", Scene{}.ambient_light);
+  if (scene.animation.changes(TrackTarget::light))
+    scene.lights = parse_lights(root.require("lights"), limits);
+  if (scene.animation.changes(TrackTarget::named_material)) {
+    MaterialTable named(limits, files);
+    named.add_named(root.require("materials"));
+    std::vector<Material> read = std::move(named).take();
+    std::move(read.begin(), read.end(), scene.materials.begin());
+  }
+  return scene;
 }
 
 Scene check_scene(const nlohmann::json& document, const Limits& limits, const ObjectTexts& objects,
                   const SceneFiles* files) {
-  return read_scene(document, limits, nullptr, &objects, files);
+  return read_scene(document, limits, nullptr, &objects, files, std::nullopt);
 }
 
 }  // namespace tessera

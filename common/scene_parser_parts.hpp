@@ -34,9 +34,36 @@ SceneError json_syntax_error(std::string_view text, std::size_t position, std::s
 // --- scene_parser.cpp ---
 
 // The keys of a scene's root object; any other is refused.
-inline constexpr std::array<std::string_view, 9> scene_keys = {
-    "version",       "image",     "camera", "render", "background",
-    "ambient_light", "materials", "lights", "objects"};
+inline constexpr std::array<std::string_view, 10> scene_keys = {
+    "version",       "image",     "camera", "render",  "background",
+    "ambient_light", "materials", "lights", "objects", "animation"};
+
+// Reads `value` again with `read` at every frame of the animation but the one just read,
+// when the first reading recorded tracks inside it (`tracks_before`: how many it had before
+// `value`), so that a value that goes wrong only between keys (a light's direction through
+// zero, a camera looking at its own eye) is refused at once, naming the frame.
+template <typename Read>
+void check_every_frame(const ValueReader& value, std::size_t tracks_before, Read read) {
+  const FrameReading* frames = value.frames();
+  if (frames == nullptr || !frames->every_frame || frames->record == nullptr ||
+      frames->record->size() == tracks_before)
+    return;
+  std::map<std::string, const Track*, std::less<>> known;
+  for (std::size_t i = tracks_before; i < frames->record->size(); ++i)
+    known.emplace((*frames->record)[i].pointer, &(*frames->record)[i]);
+  const Animation& animation = *frames->animation;
+  for (int frame = animation.first; frame <= animation.last; ++frame) {
+    if (frame == frames->frame) continue;
+    const FrameReading at{&animation, frame, nullptr, 0, &known, false};
+    try {
+      (void)read(value.at(at));
+    } catch (const SceneError& error) {
+      if (!error.limit().empty()) throw;
+      throw SceneError(error.pointer(),
+                       "at frame " + std::to_string(frame) + ", " + error.detail());
+    }
+  }
+}
 
 // The role of a container that opens at the root, or in a job submission's envelope, in
 // the two readers of submitted text (scene_limits_scan.cpp and scene_stream.cpp), whose
@@ -88,6 +115,7 @@ class MaterialTable {
 
 // --- light_parser.cpp ---
 
+// Each light is checked at every frame (check_every_frame()).
 std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits);
 
 // --- object_parser.cpp ---
@@ -114,7 +142,10 @@ class ObjectTexts;
 // array standing for them: each is checked as it would be there, then dropped.
 void check_objects(const ValueReader& objects, const ObjectTexts& texts, MaterialTable& materials,
                    const ObjectContext& context);
+// An object's "transform", checked at every frame when it holds tracks.
 Mat4 parse_transform(const ValueReader& steps);
+// The same read at the reading's one frame.
+Mat4 compose_steps(const ValueReader& steps);
 
 // --- mesh_file_object.cpp ---
 

@@ -111,11 +111,11 @@ void ValueReader::fail_type(std::string_view expected) const {
 }
 
 ValueReader ValueReader::element(std::size_t index) const {
-  return ValueReader((*value_)[index], pointer_ + "/" + std::to_string(index), lifted_);
+  return ValueReader((*value_)[index], pointer_ + "/" + std::to_string(index), lifted_, frames_);
 }
 
 ValueReader ValueReader::member(std::string_view key) const {
-  return ValueReader(*value_->find(key), pointer_ + "/" + pointer_token(key), lifted_);
+  return ValueReader(*value_->find(key), pointer_ + "/" + pointer_token(key), lifted_, frames_);
 }
 
 const LiftedTriples* ValueReader::lifted() const {
@@ -262,6 +262,24 @@ Color ObjectReader::color_or(std::string_view key, const Color& fallback) const 
 Vec3 ObjectReader::vec3_or(std::string_view key, const Vec3& fallback) const {
   const auto found = find(key);
   return found ? found->vec3() : fallback;
+}
+
+double ObjectReader::animated_number_or(std::string_view key, double fallback,
+                                        const Range& range) const {
+  const auto found = find(key);
+  if (!found) return fallback;
+  const bool bounded = range.min.has_value() || range.max.has_value();
+  return found->animated([&](const ValueReader& v) { return v.number(range); }, bounded);
+}
+
+Color ObjectReader::animated_color_or(std::string_view key, const Color& fallback) const {
+  const auto found = find(key);
+  return found ? found->animated([](const ValueReader& v) { return v.color(); }, true) : fallback;
+}
+
+Vec3 ObjectReader::animated_vec3_or(std::string_view key, const Vec3& fallback) const {
+  const auto found = find(key);
+  return found ? found->animated([](const ValueReader& v) { return v.vec3(); }) : fallback;
 }
 
 }  // namespace tessera

@@ -3,8 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <limits>
+#include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -12,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/animation.hpp"
 #include "common/json_fast_parse.hpp"
 #include "common/scene.hpp"
 #include "common/scene_error.hpp"
@@ -59,12 +63,29 @@ std::optional<Vec3> try_normalize(const Vec3& v);
 // numbers; ValueReader::vec3() then says what is wrong, and where.
 std::optional<Vec3> plain_vec3(const nlohmann::json& value);
 
+// How a reading of the scene treats keyframe tracks (common/animation.hpp): the frame whose
+// values it reads, and whether it checks and records each track it meets.
+struct FrameReading {
+  const Animation* animation = nullptr;  // the scene's; a track is refused when not animated
+  int frame = 0;
+  // Where the first reading records each track, after checking its keys by the field's own
+  // rule; null when reading again at another frame.
+  std::vector<Track>* record = nullptr;
+  std::size_t max_tracks = 0;
+  // The tracks a reading at another frame takes its values from, by pointer, instead of
+  // reading their keys again.
+  const std::map<std::string, const Track*, std::less<>>* known = nullptr;
+  // Whether a value holding a track is read again at every other frame (check_every_frame()).
+  bool every_frame = false;
+};
+
 class ValueReader {
  public:
   // `lifted`: the arrays lifted out of the document (parse_json_fast_lifted()), if any.
+  // `frames`: how tracks are read; with none, a track is refused.
   ValueReader(const nlohmann::json& value, std::string pointer,
-              const LiftedArrays* lifted = nullptr)
-      : value_(&value), pointer_(std::move(pointer)), lifted_(lifted) {}
+              const LiftedArrays* lifted = nullptr, const FrameReading* frames = nullptr)
+      : value_(&value), pointer_(std::move(pointer)), lifted_(lifted), frames_(frames) {}
 
   const nlohmann::json& json() const { return *value_; }
   const std::string& pointer() const { return pointer_; }
@@ -98,10 +119,32 @@ class ValueReader {
   Vec3 direction() const;  // non-zero; returned normalized
   Color color() const;     // [r, g, b] or one number for gray; finite and >= 0
 
+  const FrameReading* frames() const { return frames_; }
+  // This value read at another frame (`frames` outliving the copy).
+  ValueReader at(const FrameReading& frames) const;
+  // A keyframe track, {"keys": [...], "interpolation": ...}, where a value belongs.
+  bool is_track() const { return value_->is_object() && value_->contains("keys"); }
+  // An animatable value: `read` (the field's own rule, such as
+  // [](const ValueReader& v) { return v.vec3(); }) applied to the value, or, for a track,
+  // to its value at the reading's frame, once `read` has accepted each of its keys.
+  // `bounded`: the field has bounds, which a smooth track's values must keep (Track).
+  template <typename Read>
+  auto animated(Read read, bool bounded = false) const -> decltype(read(*this)) {
+    if (!is_track()) return read(*this);
+    return read(track_at_frame([&](const ValueReader& key) { (void)read(key); }, bounded));
+  }
+
  private:
+  ValueReader track_at_frame(const std::function<void(const ValueReader&)>& check,
+                             bool bounded) const;
+  Track read_track(const std::function<void(const ValueReader&)>& check, bool bounded) const;
+
   const nlohmann::json* value_;
   std::string pointer_;
   const LiftedArrays* lifted_;
+  const FrameReading* frames_;
+  // The value of a track at a frame, which no document holds.
+  std::shared_ptr<const nlohmann::json> owned_;
 };
 
 // A JSON object whose keys are checked against the ones its part of the format knows.
@@ -130,6 +173,10 @@ class ObjectReader {
   bool boolean_or(std::string_view key, bool fallback) const;
   Color color_or(std::string_view key, const Color& fallback) const;
   Vec3 vec3_or(std::string_view key, const Vec3& fallback) const;
+  // The same for animatable fields: the value may be a track (ValueReader::animated()).
+  double animated_number_or(std::string_view key, double fallback, const Range& range) const;
+  Color animated_color_or(std::string_view key, const Color& fallback) const;
+  Vec3 animated_vec3_or(std::string_view key, const Vec3& fallback) const;
 
  private:
   ValueReader value_;

@@ -48,8 +48,8 @@ struct ApiContext {
   // open to loopback peers only (no --metrics-token).
   const HttpMetrics* http_metrics = nullptr;
   bool metrics_loopback_only = true;
-  std::filesystem::path data_dir;  // whose files /metrics sizes
-  EventHub* events = nullptr;      // server-sent events; none: not served
+  std::filesystem::path data_dir = {};  // whose files /metrics sizes
+  EventHub* events = nullptr;           // server-sent events; none: not served
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.

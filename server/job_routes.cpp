@@ -176,6 +176,15 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
   } catch (const SceneError& e) {
     return answer(scene_refused(e));
   }
+  if (scene.animation.animated) {
+    // Checked whole, and refused rather than rendered as its first frame alone: a job is
+    // one still until the coordinator schedules frames.
+    return answer(error_response(
+        422, "animation_not_supported",
+        "/scene/animation: the farm renders one still per job so far; render an animated "
+        "scene's frames with tessera render --frames (docs/scene-format.md, \"Animation\")",
+        "/scene/animation"));
+  }
   // The stored text is the scene's dump(), byte for byte: its digest is what workers ask
   // for, and the same scene sent twice is stored once.
   std::string scene_json = dump_scene(submission.scene, std::move(objects));

@@ -416,6 +416,10 @@ void add_limit_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--max-materials", limits.max_materials, "Most materials")->capture_default_str();
   app.add_option("--max-triangles", limits.max_triangles, "Most triangles, over all objects")
       ->capture_default_str();
+  app.add_option("--max-frames", limits.max_frames, "Most frames in an animated scene")
+      ->capture_default_str();
+  app.add_option("--max-tracks", limits.max_tracks, "Most keyframe tracks in a scene")
+      ->capture_default_str();
   app.add_option("--max-job-bytes", options.max_job_bytes,
                  "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
       ->capture_default_str()

@@ -199,14 +199,43 @@ void store_block(const TileOutput& out, const Block& block, const double (&sums)
   }
 }
 
+// Whether `next`, another frame of `previous`'s scene, can use the geometry built for
+// `previous`: SceneGeometry reads the objects, and of their materials only whether they
+// transmit light (which decides how a shape is registered).
+bool same_objects(const Scene& next, const Scene& previous) {
+  if (next.animation.changes_objects() || next.objects.size() != previous.objects.size())
+    return false;
+  const auto transmits = [](const Scene& scene, const Object& object) {
+    const Color& t = scene.materials[object.material].transmission;
+    return t.r != 0.0 || t.g != 0.0 || t.b != 0.0;
+  };
+  for (std::size_t i = 0; i < next.objects.size(); ++i) {
+    if (next.objects[i].material != previous.objects[i].material ||
+        transmits(next, next.objects[i]) != transmits(previous, previous.objects[i]))
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+Renderer::Built::Built(Scene& scene, const RendererOptions& options)
+    : geometry(scene, device, OpaquePlanes::outside_embree, options.compact_above,
+               options.keep_meshes ? nullptr : &scene),
+      textures(scene) {}
 
 Renderer::Renderer(Scene scene, const RendererOptions& options)
     : scene_(std::move(scene)),
-      geometry_(scene_, device_, OpaquePlanes::outside_embree, options.compact_above,
-                options.keep_meshes ? nullptr : &scene_),
-      textures_(scene_),
-      tracer_(scene_, geometry_, &textures_),
+      built_(std::make_shared<const Built>(scene_, options)),
+      tracer_(scene_, built_->geometry, &built_->textures),
+      camera_(scene_.camera, scene_.width, scene_.height) {}
+
+Renderer::Renderer(Scene scene, const Renderer& previous, const RendererOptions& options)
+    : scene_(std::move(scene)),
+      built_(same_objects(scene_, previous.scene_)
+                 ? previous.built_
+                 : std::make_shared<const Built>(scene_, options)),
+      tracer_(scene_, built_->geometry, &built_->textures),
       camera_(scene_.camera, scene_.width, scene_.height) {}
 
 RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) const {

@@ -27,9 +27,16 @@ struct RendererOptions {
 class TESSERA_TRACER_API Renderer {
  public:
   explicit Renderer(Scene scene, const RendererOptions& options = {});
+  // Another frame of `previous`'s animated scene. When the objects are the same (no track
+  // lies in them, and each is as transmissive as before) it shares `previous`'s Embree
+  // scene and textures, building nothing: a camera, a light or a colour that moves costs
+  // no BVH. Otherwise it builds its own.
+  Renderer(Scene scene, const Renderer& previous, const RendererOptions& options = {});
 
   const Scene& scene() const { return scene_; }
-  const SceneGeometry& geometry() const { return geometry_; }
+  const SceneGeometry& geometry() const { return built_->geometry; }
+  // Whether this renderer uses the geometry `other` built (or built it for `other`).
+  bool shares_geometry_with(const Renderer& other) const { return built_ == other.built_; }
   const PinholeCamera& camera() const { return camera_; }
   const Tracer& tracer() const { return tracer_; }
 
@@ -41,10 +48,16 @@ class TESSERA_TRACER_API Renderer {
   RayCounts render_tile(const TileRect& tile, std::span<float> out, std::size_t row_stride) const;
 
  private:
+  // What a frame of an animation may share with the next.
+  struct Built {
+    Built(Scene& scene, const RendererOptions& options);
+    EmbreeDevice device;
+    SceneGeometry geometry;
+    SceneTextures textures;
+  };
+
   Scene scene_;
-  EmbreeDevice device_;
-  SceneGeometry geometry_;
-  SceneTextures textures_;
+  std::shared_ptr<const Built> built_;
   Tracer tracer_;
   PinholeCamera camera_;
 };

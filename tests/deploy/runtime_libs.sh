@@ -45,6 +45,9 @@ for ((next = 0; next < ${#queue[@]}; next++)); do
     # by DeployDocker tests). What each of its builds links is checked in turn.
     if [ -n "$path" ] && [[ $(readlink -f "$path") == "$own_dir"/* ]]; then
       for build in "$own_dir/$library" "$own_dir"/glibc-hwcaps/*/"$library"; do
+        # A build with -DTESSERA_TRACER_VARIANTS=OFF has no glibc-hwcaps/ (the pattern
+        # then stands for itself).
+        [ -e "$build" ] || continue
         [[ " ${queue[*]} " == *" $build "* ]] || queue+=("$build")
       done
       continue

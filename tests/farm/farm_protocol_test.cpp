@@ -570,6 +570,42 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
 }
 
+TEST(FarmProtocol, AnimatedScenesAreCheckedWholeThenRefusedAsNotYetSupported) {
+  Farm farm("proto-animation", 0, {"--max-frames", "100"});
+  HttpClient http = farm.http(10s);
+  const auto submit = [&](const json& scene) {
+    return http.request("POST", "/v1/jobs", json{{"name", "anim"}, {"scene", scene}}.dump());
+  };
+  json scene = test::showcase(16, 16, 1, 16);
+  scene["animation"] = {{"frames", {1, 20}}};
+  scene["camera"]["eye"] = {{"keys", {{1, {0, 2, 8}}, {20, {4, 2, 6}}}}};
+  const HttpResult animated = submit(scene);
+  ASSERT_TRUE(is_error(animated, 422, "animation_not_supported")) << animated.body;
+  EXPECT_EQ(json::parse(animated.body)["error"]["path"], "/scene/animation");
+
+  // Before that, every frame of every track is checked, objects too, each kept apart as
+  // the coordinator reads them: a scale that passes through zero at frame 11.
+  json flat = scene;
+  flat["animation"]["frames"] = {1, 21};
+  flat["objects"][0]["transform"] = json::array({{{"scale", {{"keys", {{1, 1}, {21, -1}}}}}}});
+  const HttpResult squashed = submit(flat);
+  ASSERT_TRUE(is_error(squashed, 400, "invalid_scene")) << squashed.body;
+  const json error = json::parse(squashed.body)["error"];
+  EXPECT_EQ(error["path"], "/scene/objects/0/transform/0/scale");
+  EXPECT_NE(error["message"].get<std::string>().find("at frame 11, must be non-zero"),
+            std::string::npos)
+      << error.dump();
+
+  // The range is a limit of the server's, like the others.
+  scene["animation"]["frames"] = {1, 101};
+  const HttpResult long_one = submit(scene);
+  ASSERT_TRUE(is_error(long_one, 422, "over_limit")) << long_one.body;
+  EXPECT_EQ(json::parse(long_one.body)["error"]["limit"], "max_frames");
+
+  // And it keeps serving stills.
+  EXPECT_EQ(submit(test::showcase(16, 16, 1, 16)).status, 201);
+}
+
 TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   Farm farm("proto-errors", 0);
   HttpClient http = farm.http(10s);

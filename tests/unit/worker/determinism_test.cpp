@@ -14,66 +14,6 @@ namespace {
 
 using test::json;
 
-// Every feature and every shape at once, with several samples per pixel.
-json busy_scene() {
-  return {
-      {"image", {{"width", 67}, {"height", 45}}},
-      {"camera", {{"eye", {0, 2, 7}}, {"look_at", {0, 0.8, 0}}, {"fov_y", 40}}},
-      {"render", {{"samples_per_pixel", 4}, {"max_depth", 6}}},
-      {"background", {0.3, 0.4, 0.6}},
-      {"materials",
-       {{"floor", {{"checker", {{"size", 0.7}, {"diffuse", 0.1}}}}},
-        {"mirror", {{"diffuse", 0.1}, {"specular", 0.8}, {"shininess", 80}}},
-        {"glass",
-         {{"diffuse", 0},
-          {"ambient", 0},
-          {"transmission", 0.9},
-          {"ior", 1.5},
-          {"specular", 0.1},
-          {"shininess", 100}}}}},
-      {"lights",
-       {{{"type", "point"}, {"position", {3, 5, 4}}, {"attenuation", {1, 0.02, 0.005}}},
-        {{"type", "spot"},
-         {"position", {-3, 4, 2}},
-         {"direction", {1, -1, -0.5}},
-         {"cutoff", 30},
-         {"exponent", 4}},
-        {{"type", "directional"}, {"direction", {0.2, -1, -0.3}}, {"intensity", 0.3}}}},
-      {"objects",
-       {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}}, {"material", "floor"}},
-        {{"type", "sphere"}, {"center", {-1.2, 1, 0}}, {"radius", 1}, {"material", "mirror"}},
-        {{"type", "sphere"}, {"center", {1.2, 0.8, 0.5}}, {"radius", 0.8}, {"material", "glass"}},
-        {{"type", "box"},
-         {"min", {-0.4, 0, -2}},
-         {"max", {0.4, 1.5, -1.2}},
-         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}},
-        // Cylinders and cones, tilted and squashed: glass that bends and reflects rays
-        // inside it, a mirror, and a diffuse one whose shadow falls through the glass.
-        {{"type", "cylinder"},
-         {"center", {0, 0, 0}},
-         {"radius", 0.45},
-         {"height", 1.2},
-         {"material", "glass"},
-         {"transform",
-          {{{"rotate", {{"axis", {0, 0, 1}}, {"degrees", 25}}}},
-           {{"translate", {2.5, 0.7, -0.6}}}}}},
-        {{"type", "cone"},
-         {"center", {-2.6, 0.75, -0.5}},
-         {"radius", 0.6},
-         {"height", 1.5},
-         {"material", "mirror"},
-         {"transform", {{{"scale", {1, 1, 0.7}}}}}},
-        {{"type", "cylinder"}, {"center", {0.2, 0.25, 1.8}}, {"radius", 0.3}, {"height", 0.5}},
-        {{"type", "cone"},
-         {"center", {0, 0, 0}},
-         {"radius", 0.4},
-         {"height", 0.9},
-         {"material", "glass"},
-         {"transform",
-          {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 100}}}},
-           {{"translate", {-1, 0.4, 1.6}}}}}}}}};
-}
-
 // A torus as an inline mesh, with its normals when `smooth`.
 json torus(double major, double minor, bool smooth) {
   constexpr int around = 24, across = 12;
@@ -98,7 +38,7 @@ TEST(Determinism, CompactMeshesGiveTheBitsOfMeshesThatKeepTheirCorners) {
   // Meshes above kCompactMeshTriangles read their corners through Embree's buffers; with the
   // threshold at 0 every mesh does, and every pixel must keep its bits: smooth and flat,
   // mirrored by their transform, opaque and glass (whose bounds the shadow rays test).
-  json scene = busy_scene();
+  json scene = test::busy_scene();
   json smooth = torus(0.6, 0.2, true);
   smooth["material"] = "mirror";
   smooth["transform"] = {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 60}}}},
@@ -123,14 +63,14 @@ TEST(Determinism, CompactMeshesGiveTheBitsOfMeshesThatKeepTheirCorners) {
                         reference.pixels().size_bytes()),
             0);
   // The meshes are in the picture: without them it differs.
-  const Image without = render_local(Renderer(parse_scene(busy_scene())), 2, 16).image;
+  const Image without = render_local(Renderer(parse_scene(test::busy_scene())), 2, 16).image;
   EXPECT_NE(std::memcmp(without.pixels().data(), reference.pixels().data(),
                         reference.pixels().size_bytes()),
             0);
 }
 
 TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
-  const Renderer renderer(parse_scene(busy_scene()));
+  const Renderer renderer(parse_scene(test::busy_scene()));
   const Image reference = render_local(renderer, 1, 32).image;
   for (int tile_size : {1, 7, 32, 64})
     for (int threads : {1, 2}) {
@@ -146,7 +86,7 @@ TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
 TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
   // render_tile intersects primary rays, and their shadow rays, sixteen at a time; the
   // tracer's single-ray path must give every pixel the very same bits.
-  json scene = busy_scene();
+  json scene = test::busy_scene();
   scene["render"]["samples_per_pixel"] = 1;
   const Renderer renderer(parse_scene(scene));
   const Image image = render_local(renderer, 1, 16).image;
@@ -169,7 +109,7 @@ TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
   // pixel must still be the mean of single rays through sample_offset()'s positions, summed
   // in sample order and divided as render_tile divides (by a reciprocal for powers of two).
   for (int samples : {3, 4}) {
-    json scene = busy_scene();
+    json scene = test::busy_scene();
     scene["render"]["samples_per_pixel"] = samples;
     const Renderer renderer(parse_scene(scene));
     const Image image = render_local(renderer, 1, 16).image;
@@ -195,7 +135,7 @@ TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
 }
 
 TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
-  const Renderer renderer(parse_scene(busy_scene()));
+  const Renderer renderer(parse_scene(test::busy_scene()));
   const PinholeCamera& camera = renderer.camera();
   // Positions anywhere on the image plane and a little beyond it, as edge blocks have.
   double x[kPacketSize];
@@ -219,7 +159,7 @@ TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
 
 TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
   // As when a worker on another machine, with a freshly built BVH, renders one tile.
-  const json scene = busy_scene();
+  const json scene = test::busy_scene();
   const Image whole = render_local(Renderer(parse_scene(scene)), 2, 16).image;
   const Renderer fresh(parse_scene(scene));
   const TileRect tile{23, 11, 19, 13};

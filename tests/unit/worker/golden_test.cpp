@@ -56,14 +56,8 @@ void PrintTo(const Example& example, std::ostream* out) { *out << example.name; 
 
 class Golden : public ::testing::TestWithParam<Example> {};
 
-TEST_P(Golden, MatchesReferenceImage) {
-  nlohmann::json document = read_example(GetParam().path);
-  const int width = document["image"]["width"];
-  const int height = document["image"]["height"];
-  document["image"]["width"] = kGoldenWidth;
-  document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
-  const FolderSceneFiles files(GetParam().path.parent_path());
-  const Image image = test::render_image(document, 2, 0, &files);
+// `image` against tests/golden/NAME.exr, or written there with TESSERA_UPDATE_GOLDEN=1.
+void expect_matches_golden(const Image& image, const std::string& name) {
   // What a worker uploads must be what the coordinator accepts: finite values of 0 or more.
   const auto pixels = image.pixels();
   const auto impossible = std::find_if(pixels.begin(), pixels.end(),
@@ -71,8 +65,7 @@ TEST_P(Golden, MatchesReferenceImage) {
   EXPECT_EQ(impossible, pixels.end()) << "value " << (impossible - pixels.begin()) << " is "
                                       << (impossible == pixels.end() ? 0.0f : *impossible);
 
-  const fs::path golden =
-      fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" / (GetParam().name + ".exr");
+  const fs::path golden = fs::path(TESSERA_SOURCE_DIR) / "tests" / "golden" / (name + ".exr");
   if (const char* update = std::getenv("TESSERA_UPDATE_GOLDEN"); update && *update == '1') {
     fs::create_directories(golden.parent_path());
     write_image(image, golden, OutputTransfer::linear);
@@ -97,6 +90,21 @@ TEST_P(Golden, MatchesReferenceImage) {
   EXPECT_LE(fraction, kMaxMismatchFraction)
       << mismatched << " pixels differ by more than " << kPixelTolerance << " (largest difference "
       << max_difference << ")";
+}
+
+// The document at the golden images' size.
+void shrink(nlohmann::json& document) {
+  const int width = document["image"]["width"];
+  const int height = document["image"]["height"];
+  document["image"]["width"] = kGoldenWidth;
+  document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
+}
+
+TEST_P(Golden, MatchesReferenceImage) {
+  nlohmann::json document = read_example(GetParam().path);
+  shrink(document);
+  const FolderSceneFiles files(GetParam().path.parent_path());
+  expect_matches_golden(test::render_image(document, 2, 0, &files), GetParam().name);
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, Golden, ::testing::ValuesIn(examples()),
@@ -127,6 +135,36 @@ TEST(Examples, CoverEveryFeature) {
   EXPECT_TRUE(deep);
   EXPECT_TRUE(big_mesh);
 }
+
+// Frames of the animations in examples/animation/, each against its own image.
+struct AnimationFrame {
+  std::string name;
+  int frame;
+};
+
+void PrintTo(const AnimationFrame& shown, std::ostream* out) {
+  *out << shown.name << " frame " << shown.frame;
+}
+
+class GoldenFrames : public ::testing::TestWithParam<AnimationFrame> {};
+
+TEST_P(GoldenFrames, MatchReferenceImages) {
+  const fs::path path =
+      fs::path(TESSERA_SOURCE_DIR) / "examples" / "animation" / (GetParam().name + ".json");
+  nlohmann::json document = read_json_file(path);
+  shrink(document);
+  const Renderer renderer(parse_scene_frame(document, GetParam().frame, Limits{}));
+  expect_matches_golden(render_local(renderer, 2).image,
+                        GetParam().name + "_" + std::to_string(GetParam().frame));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Animations, GoldenFrames,
+    ::testing::Values(AnimationFrame{"turntable", 1}, AnimationFrame{"turntable", 13},
+                      AnimationFrame{"turntable", 30}, AnimationFrame{"corridor_flythrough", 1},
+                      AnimationFrame{"corridor_flythrough", 30},
+                      AnimationFrame{"corridor_flythrough", 60}),
+    [](const auto& info) { return info.param.name + "_" + std::to_string(info.param.frame); });
 
 }  // namespace
 }  // namespace tessera

@@ -26,6 +26,66 @@ inline json pinhole_scene(const Vec3& eye, const Vec3& look_at, const Vec3& up =
           {"objects", json::array()}};
 }
 
+// Every feature and every shape at once, with several samples per pixel.
+inline json busy_scene() {
+  return {
+      {"image", {{"width", 67}, {"height", 45}}},
+      {"camera", {{"eye", {0, 2, 7}}, {"look_at", {0, 0.8, 0}}, {"fov_y", 40}}},
+      {"render", {{"samples_per_pixel", 4}, {"max_depth", 6}}},
+      {"background", {0.3, 0.4, 0.6}},
+      {"materials",
+       {{"floor", {{"checker", {{"size", 0.7}, {"diffuse", 0.1}}}}},
+        {"mirror", {{"diffuse", 0.1}, {"specular", 0.8}, {"shininess", 80}}},
+        {"glass",
+         {{"diffuse", 0},
+          {"ambient", 0},
+          {"transmission", 0.9},
+          {"ior", 1.5},
+          {"specular", 0.1},
+          {"shininess", 100}}}}},
+      {"lights",
+       {{{"type", "point"}, {"position", {3, 5, 4}}, {"attenuation", {1, 0.02, 0.005}}},
+        {{"type", "spot"},
+         {"position", {-3, 4, 2}},
+         {"direction", {1, -1, -0.5}},
+         {"cutoff", 30},
+         {"exponent", 4}},
+        {{"type", "directional"}, {"direction", {0.2, -1, -0.3}}, {"intensity", 0.3}}}},
+      {"objects",
+       {{{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 1, 0}}, {"material", "floor"}},
+        {{"type", "sphere"}, {"center", {-1.2, 1, 0}}, {"radius", 1}, {"material", "mirror"}},
+        {{"type", "sphere"}, {"center", {1.2, 0.8, 0.5}}, {"radius", 0.8}, {"material", "glass"}},
+        {{"type", "box"},
+         {"min", {-0.4, 0, -2}},
+         {"max", {0.4, 1.5, -1.2}},
+         {"transform", {{{"rotate", {{"axis", {0, 1, 0}}, {"degrees", 30}}}}}}},
+        // Cylinders and cones, tilted and squashed: glass that bends and reflects rays
+        // inside it, a mirror, and a diffuse one whose shadow falls through the glass.
+        {{"type", "cylinder"},
+         {"center", {0, 0, 0}},
+         {"radius", 0.45},
+         {"height", 1.2},
+         {"material", "glass"},
+         {"transform",
+          {{{"rotate", {{"axis", {0, 0, 1}}, {"degrees", 25}}}},
+           {{"translate", {2.5, 0.7, -0.6}}}}}},
+        {{"type", "cone"},
+         {"center", {-2.6, 0.75, -0.5}},
+         {"radius", 0.6},
+         {"height", 1.5},
+         {"material", "mirror"},
+         {"transform", {{{"scale", {1, 1, 0.7}}}}}},
+        {{"type", "cylinder"}, {"center", {0.2, 0.25, 1.8}}, {"radius", 0.3}, {"height", 0.5}},
+        {{"type", "cone"},
+         {"center", {0, 0, 0}},
+         {"radius", 0.4},
+         {"height", 0.9},
+         {"material", "glass"},
+         {"transform",
+          {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 100}}}},
+           {{"translate", {-1, 0.4, 1.6}}}}}}}}};
+}
+
 inline Color render_pixel(const json& scene, int x = 0, int y = 0) {
   const Renderer renderer(parse_scene(scene));
   float rgb[3];
