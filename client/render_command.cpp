@@ -1,7 +1,11 @@
 #include "client/render_command.hpp"
 
+#include <stdlib.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -10,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "client/frame_paths.hpp"
+#include "client/movie_file.hpp"
 #include "client/scene_input.hpp"
 #include "common/frame_list.hpp"
 #include "common/image_io.hpp"
@@ -134,16 +139,60 @@ int render_frames(const RenderOptions& options, SceneFrames& frames, const std::
   return 0;
 }
 
+// The frames rendered as PNGs into a folder of their own, then encoded into `output`.
+int render_movie(const RenderOptions& options, SceneFrames& frames, const std::vector<int>& list,
+                 const std::filesystem::path& ffmpeg, const std::filesystem::path& output) {
+  std::string dir = (std::filesystem::temp_directory_path() / "tessera-frames-XXXXXX").string();
+  if (::mkdtemp(dir.data()) == nullptr) {
+    std::fprintf(stderr, "error: cannot make a folder for the frames: %s\n", std::strerror(errno));
+    return 1;
+  }
+  struct Remove {
+    std::filesystem::path dir;
+    ~Remove() {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  } remove{dir};
+  const std::string pattern = (std::filesystem::path(dir) / "frame_#######.png").string();
+  const double fps = frames.animation().fps;
+  if (const int code = render_frames(options, frames, list, pattern); code != 0) return code;
+  std::vector<std::filesystem::path> paths;
+  for (const int frame : list) paths.emplace_back(frame_path(pattern, frame));
+  try {
+    encode_movie(ffmpeg, paths, fps, output);
+  } catch (const MovieError& e) {
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
+    return 1;
+  }
+  std::printf("wrote %s: %zu frames at %g fps\n",
+              printable(std::filesystem::absolute(output).string()).c_str(), list.size(), fps);
+  return 0;
+}
+
 int run_render(const RenderOptions& options) {
   std::filesystem::path output = options.output_path;
   if (output.empty()) {
     const std::string stem = std::filesystem::path(options.scene_path).stem().string();
     output = stem + (options.frames ? "_####.png" : ".png");
   }
-  if (!is_supported_image_path(output)) {
-    std::fprintf(stderr, "error: %s: unknown image extension (use .exr, .png, .jpg or .tif)\n",
+  const bool movie = is_movie_path(output);
+  if (!movie && !is_supported_image_path(output)) {
+    std::fprintf(stderr,
+                 "error: %s: unknown image extension (use .exr, .png, .jpg or .tif, or .mp4, "
+                 ".mkv or .mov for a movie)\n",
                  printable(output.string()).c_str());
     return 2;
+  }
+  std::filesystem::path ffmpeg;
+  if (movie) {
+    // Before any rendering: a missing encoder is found out in a second, not after an hour.
+    try {
+      ffmpeg = find_ffmpeg();
+    } catch (const MovieError& e) {
+      std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
+      return 2;
+    }
   }
   std::string text;
   try {
@@ -163,13 +212,19 @@ int run_render(const RenderOptions& options) {
     SceneFrames frames(
         std::exchange(text, {}), Limits{},
         [&](nlohmann::json& document) { apply_overrides(document, options); }, &files);
+    if (movie && !frames.animation().animated) {
+      std::fprintf(stderr, "error: %s: a movie needs an animated scene (\"animation\")\n",
+                   printable(options.scene_path).c_str());
+      return 2;
+    }
     std::vector<int> list;
     try {
-      list = frames_to_render(options, frames.animation(), output.string());
+      list = frames_to_render(options, frames.animation(), movie ? "#" : output.string());
     } catch (const FrameListError& e) {
       std::fprintf(stderr, "error: --frames: %s\n", printable(e.what()).c_str());
       return 2;
     }
+    if (movie) return render_movie(options, frames, list, ffmpeg, output);
     if (list.size() > 1 && !has_frame_number(output.string())) {
       std::fprintf(stderr,
                    "error: %s: %zu frames need '#' in the output's name where the frame number "
@@ -199,7 +254,8 @@ void add_render_command(CLI::App& app) {
       ->required();
   render->add_option("-o,--output", options->output_path,
                      "Output image: .png, .jpg, .tif or .exr (default: SCENE's name with .png); "
-                     "# for the frame number (out_####.png)");
+                     "# for the frame number (out_####.png); .mp4, .mkv or .mov for a movie "
+                     "of the frames (needs ffmpeg)");
   render->add_option("--width", options->width, "Override image.width")->check(CLI::PositiveNumber);
   render->add_option("--height", options->height, "Override image.height")
       ->check(CLI::PositiveNumber);

@@ -36,6 +36,7 @@ if [ -f "$tools/package-lock.json" ]; then
   packages+=(
     chromium    # the web dashboard's browser test drives it with playwright-core (tests/browser/)
     prometheus  # a real Prometheus scrapes the coordinator (tests/farm/farm_metrics_test.cpp)
+    ffmpeg      # tessera render -o movie.mp4 runs it where it is installed (tests/cli_movie_test.cmake)
   )
 fi
 
