@@ -29,12 +29,12 @@ cmake --build "$build" --target tessera_scene_fuzzer >"$build/fuzz-build.log" 2>
 
 # New inputs go to a scratch corpus, so the repository's seeds stay as they are; crashes
 # are written into the build tree, where the message below points. The seeds are the
-# scenes the repository has anyway (examples/ and tests/data/), read where they are, and
+# scenes the repository has anyway (examples/, examples/animation/ and tests/data/), and
 # the few of corpus/ that exist only to seed the fuzzer.
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$build/fuzz-artifacts" "$work/new" "$work/seeds"
-cp "$root"/examples/*.json "$root"/tests/data/*.json "$work/seeds/"
+cp "$root"/examples/*.json "$root"/examples/animation/*.json "$root"/tests/data/*.json "$work/seeds/"
 "$build/tessera_scene_fuzzer" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
   -max_len=65536 -print_final_stats=1 -artifact_prefix="$build/fuzz-artifacts/" \
   "$work/new" "$work/seeds" "$here/corpus"
