@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -179,9 +180,26 @@ inline ::testing::AssertionResult same_pixels(const Image& actual, const Image& 
            << actual.width() << "x" << actual.height() << " instead of " << expected.width() << "x"
            << expected.height();
   if (std::memcmp(actual.pixels().data(), expected.pixels().data(),
-                  expected.pixels().size_bytes()) != 0)
-    return ::testing::AssertionFailure() << "pixels differ from the local render";
-  return ::testing::AssertionSuccess();
+                  expected.pixels().size_bytes()) == 0)
+    return ::testing::AssertionSuccess();
+  // Enough to tell a tile that never arrived (black where the render is not) from pixels
+  // rendered otherwise (a small difference), should this ever fail.
+  int differ = 0, black = 0, first_x = -1, first_y = -1;
+  float largest = 0;
+  for (int y = 0; y < actual.height(); ++y)
+    for (int x = 0; x < actual.width(); ++x) {
+      const float* a = actual.pixel(x, y);
+      const float* e = expected.pixel(x, y);
+      if (std::memcmp(a, e, 3 * sizeof(float)) == 0) continue;
+      if (differ++ == 0) first_x = x, first_y = y;
+      black += a[0] == 0.0f && a[1] == 0.0f && a[2] == 0.0f;
+      for (int c = 0; c < 3; ++c) largest = std::max(largest, std::fabs(a[c] - e[c]));
+    }
+  return ::testing::AssertionFailure()
+         << "pixels differ from the local render: " << differ << " of "
+         << actual.width() * actual.height() << " pixels, " << black
+         << " of them black, the first at (" << first_x << ", " << first_y
+         << "), the largest difference " << largest;
 }
 
 inline bool contains(const std::string& text, const std::string& part) {
