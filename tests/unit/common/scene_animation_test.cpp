@@ -1,12 +1,14 @@
 // Keyframe tracks: where they may stand, how they are checked, and the values they give
 // (docs/scene-format.md, "Animation"), against values worked out by hand.
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <variant>
 
 #include <gtest/gtest.h>
 
 #include "common/frame_list.hpp"
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/scene_frames.hpp"
 #include "scene_test_support.hpp"
 
@@ -153,6 +155,25 @@ TEST(SceneAnimation, EveryFrameIsChecked) {
                                      {"radius", 1},
                                      {"transform", {{{"scale", track({{0, 1}, {4, -1}})}}}}})),
                "/objects/0/transform/0/scale", {"at frame 2, must be non-zero"}));
+}
+
+TEST(SceneAnimation, TracksInAMeshFilesObject) {
+  const FolderSceneFiles files(std::filesystem::path(TESSERA_SOURCE_DIR) / "examples");
+  json document = animated(minimal_scene());
+  document["objects"] = {{{"type", "mesh"},
+                          {"file", "models/still_life.obj"},
+                          {"transform", {{{"scale", track({{0, 1}, {10, 2}})}}}}}};
+  const Scene scene = parse_scene_frame(document, 5, Limits{}, nullptr, &files);
+  ASSERT_GT(scene.objects.size(), 1u);  // the file's parts, all placed by the frame's scale
+  for (const Object& object : scene.objects) EXPECT_EQ(object.transform[0][0], 1.5);
+  document["objects"][0]["transform"][0]["scale"] = track({{0, 1}, {10, -1}});
+  try {
+    parse_scene(document, Limits{}, nullptr, &files);
+    FAIL() << "a scale through zero passed";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.pointer(), "/objects/0/transform/0/scale");
+    EXPECT_NE(e.detail().find("at frame 5, must be non-zero"), std::string::npos) << e.detail();
+  }
 }
 
 TEST(SceneAnimation, TrackLimit) {

@@ -2,12 +2,14 @@
 // track's value at n, for every kind of track; and a frame whose objects did not move
 // reuses the geometry built for the frame before.
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/scene_frames.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
 
@@ -36,8 +38,7 @@ json lerp(const json& a, const json& b, double s) {
   return out;
 }
 
-json animated_scene(const std::vector<Animated>& fields) {
-  json document = test::busy_scene();
+json animated_scene(const std::vector<Animated>& fields, json document = test::busy_scene()) {
   document["animation"] = {{"frames", {0, 12}}, {"fps", 24}};
   for (const Animated& field : fields) {
     document[json::json_pointer(field.pointer)] = {
@@ -46,8 +47,7 @@ json animated_scene(const std::vector<Animated>& fields) {
   return document;
 }
 
-json still_at_shown_frame(const std::vector<Animated>& fields) {
-  json document = test::busy_scene();
+json still_at_shown_frame(const std::vector<Animated>& fields, json document = test::busy_scene()) {
   const double s = static_cast<double>(shown - first_key) / (last_key - first_key);
   for (const Animated& field : fields)
     document[json::json_pointer(field.pointer)] = lerp(field.from, field.to, s);
@@ -60,18 +60,21 @@ bool same_bits(const Image& a, const Image& b) {
          std::memcmp(a.pixels().data(), b.pixels().data(), a.pixels().size() * sizeof(float)) == 0;
 }
 
-// Renders frame 0 and then frame `shown` of `fields`' animation the way `tessera render
-// --frames` does, and the still scene; says whether the frame reused frame 0's geometry.
-void check_equivalence(const std::vector<Animated>& fields, bool expect_shared) {
-  SceneFrames frames(animated_scene(fields).dump(), Limits{});
+// Renders frame 0 and then frame `shown` of `fields`' animation of `base` the way `tessera
+// render --frames` does, and the still scene; says whether the frame reused frame 0's
+// geometry. `files`: where `base`'s mesh files and textures are.
+void check_equivalence(const std::vector<Animated>& fields, bool expect_shared,
+                       const json& base = test::busy_scene(), const SceneFiles* files = nullptr) {
+  SceneFrames frames(animated_scene(fields, base).dump(), Limits{}, {}, files);
   const Renderer frame_zero(frames.take_first());
   const Renderer frame(frames.at(shown, frame_zero.scene()), frame_zero);
   EXPECT_EQ(frame.shares_geometry_with(frame_zero), expect_shared);
   const Image animated = render_local(frame, 2, 8).image;
-  const Image still = test::render_image(still_at_shown_frame(fields), 1, 16);
+  const Image still = test::render_image(still_at_shown_frame(fields, base), 1, 16, files);
   EXPECT_TRUE(same_bits(animated, still));
   // And the frame read whole, as a worker that holds no earlier frame reads it.
-  const Renderer whole(parse_scene_frame(animated_scene(fields), shown, Limits{}));
+  const Renderer whole(
+      parse_scene_frame(animated_scene(fields, base), shown, Limits{}, nullptr, files));
   EXPECT_TRUE(same_bits(render_local(whole, 1, 5).image, still));
   // The animation moves something: frame 0 differs.
   EXPECT_FALSE(same_bits(render_local(frame_zero, 1, 16).image, still));
@@ -119,6 +122,34 @@ TEST(AnimationDeterminism, InlineMaterial) {
 TEST(AnimationDeterminism, BackgroundAndAmbient) {
   check_equivalence({{"/background", {0.3, 0.4, 0.6}, 0}, {"/ambient_light", 0.1, {0.4, 0.2, 0}}},
                     true);
+}
+
+// A small copy of a scene of examples/ (or of the build's generated ones).
+json example(const std::filesystem::path& path) {
+  json document = read_json_file(path);
+  document["image"] = {{"width", 48}, {"height", 36}};
+  return document;
+}
+
+TEST(AnimationDeterminism, TexturesAreSharedWithTheGeometry) {
+  // Decoded and mip-mapped once, for frame 0; a moving camera changes every footprint.
+  const std::filesystem::path dir = std::filesystem::path(TESSERA_BINARY_DIR) / "examples";
+  const FolderSceneFiles files(dir);
+  const json base = example(dir / "textured_globe.json");
+  const json eye = base["camera"]["eye"];
+  check_equivalence({{"/camera/eye", eye, {eye[0].get<double>() + 0.7, eye[1], eye[2]}},
+                     {"/camera/fov_y", base["camera"].value("fov_y", 45.0), 30}},
+                    true, base, &files);
+}
+
+TEST(AnimationDeterminism, AMeshFileThatTurns) {
+  // A track in a mesh file's object: the whole text is read again for the frame, the
+  // file with it, and its parts placed by the frame's transform.
+  const std::filesystem::path dir = std::filesystem::path(TESSERA_SOURCE_DIR) / "examples";
+  const FolderSceneFiles files(dir);
+  check_equivalence({{"/objects/1/transform/0/rotate/axis", {0, 1, 0}, {0, 1, 0.2}},
+                     {"/objects/1/transform/0/rotate/degrees", 0, 40}},
+                    false, example(dir / "still_life.json"), &files);
 }
 
 TEST(AnimationDeterminism, TransmissionSwitchedOnRebuilds) {
