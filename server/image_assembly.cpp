@@ -90,7 +90,16 @@ void ImageAssembly::removed(const std::string& job_id) {
 }
 
 void ImageAssembly::assemble(const std::string& job_id,
-                             std::function<void(std::shared_ptr<const Image>)> then) const {
+                             std::function<void(std::shared_ptr<const Image>)> then,
+                             bool finished) const {
+  if (finished) {
+    // A read runs in a later round of the store thread than the callbacks of every write
+    // durable now, so its canvas has every tile and its completion is known here.
+    store_.read([this, job_id, then = std::move(then)](Store&) mutable {
+      assemble(job_id, std::move(then), false);
+    });
+    return;
+  }
   std::shared_ptr<const Frame> frame;
   {
     std::lock_guard lock(mutex_);

@@ -67,9 +67,12 @@ class ImageAssembly {
   void removed(const std::string& job_id);
 
   // The job's image as assembled so far, handed to `then`: on this thread from its canvas,
-  // or on the store thread from the store; null for a job it does not know.
-  void assemble(const std::string& job_id,
-                std::function<void(std::shared_ptr<const Image>)> then) const;
+  // or on the store thread from the store; null for a job it does not know. `finished`:
+  // the scheduler has the job completed, which it may tell others (an event, a long poll)
+  // before the callbacks of the same write have pasted its last tiles and marked it
+  // completed here; the image is then taken on the store thread, after those callbacks.
+  void assemble(const std::string& job_id, std::function<void(std::shared_ptr<const Image>)> then,
+                bool finished = false) const;
   // The image file of a completed job, once written.
   std::optional<std::filesystem::path> image_file(const std::string& job_id) const;
   bool has_file(const std::string& job_id) const { return files_.has(job_id); }

@@ -208,7 +208,13 @@ void Scheduler::scene_json(const std::string& digest,
 
 void Scheduler::assemble(const std::string& id,
                          std::function<void(std::shared_ptr<const Image>)> then) const {
-  images_.assemble(id, std::move(then));
+  bool finished = false;
+  {
+    std::lock_guard lock(mutex_);
+    const JobEntry* job = find_job(id);
+    finished = job != nullptr && job->status.state == JobState::completed;
+  }
+  images_.assemble(id, std::move(then), finished);
 }
 
 std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <regex>
 #include <set>
@@ -19,6 +20,57 @@ namespace tessera {
 namespace {
 
 using namespace test;
+
+// Asks for a job's image the moment it is told the job completed, on the store thread, as
+// a client following the farm's events may before the same write's other callbacks ran.
+class AskOnCompletion : public FarmObserver {
+ public:
+  explicit AskOnCompletion(Scheduler& scheduler) : scheduler_(scheduler) {}
+  void jobs_changed(const std::vector<JobStatus>& jobs) override {
+    for (const JobStatus& job : jobs) {
+      if (job.state != JobState::completed || asked_.exchange(true)) continue;
+      scheduler_.assemble(job.id, [this](std::shared_ptr<const Image> image) {
+        image_.set_value(std::move(image));
+      });
+    }
+  }
+  void tiles_changed(const std::vector<TileChange>&) override {}
+  bool wants_tiles(const std::string&) override { return false; }
+  void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>&) override {}
+  void job_removed(const std::string&) override {}
+  // Null when no image came within a few seconds.
+  std::shared_ptr<const Image> image() {
+    auto future = image_.get_future();
+    if (future.wait_for(std::chrono::seconds(10)) != std::future_status::ready) return nullptr;
+    return future.get();
+  }
+
+ private:
+  Scheduler& scheduler_;
+  std::atomic<bool> asked_{false};
+  std::promise<std::shared_ptr<const Image>> image_;
+};
+
+TEST_F(SchedulerTest, TheImageAskedForAsSoonAsTheJobCompletesHasItsLastTiles) {
+  AskOnCompletion observer(*scheduler_);
+  scheduler_->observe(&observer);
+  const std::string job = submit(64, 32, 16).id;  // 8 tiles
+  const std::string w = worker();
+  // The first tiles make the job's canvas; the last ones are pasted into it by a callback
+  // of their write, which runs after the observer hears of the completion.
+  const auto first = s().claim(w, 4);
+  ASSERT_TRUE(first);
+  ASSERT_EQ(deliver(*first, 0.25f), ResultOutcome::accepted);
+  s().wait_for_images();
+  finish(job, w, 0.25f);
+  const std::shared_ptr<const Image> image = observer.image();
+  scheduler_->observe(nullptr);
+  ASSERT_TRUE(image);
+  Image expected(64, 32);
+  for (const TileRect& rect : split_into_tiles(64, 32, 16))
+    expected.paste(rect, tile_pixels(rect, 0.25f));
+  EXPECT_TRUE(same_bits(image->pixels(), expected.pixels()));
+}
 
 TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   const JobStatus submitted = submit(100, 37, 32);
