@@ -25,30 +25,20 @@ namespace fs = std::filesystem;
 // Links, not copies: the frames stay where they are.
 class NumberedFrames {
  public:
-  explicit NumberedFrames(const std::vector<fs::path>& frames) {
-    std::string pattern = (fs::temp_directory_path() / "tessera-movie-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr)
-      throw MovieError(std::string("cannot make a folder for the frames: ") + std::strerror(errno));
-    dir_ = pattern;
+  explicit NumberedFrames(const std::vector<fs::path>& frames) : dir_("tessera-movie-") {
     for (std::size_t i = 0; i < frames.size(); ++i) {
       char name[32];
       std::snprintf(name, sizeof name, "%07zu.png", i);
       std::error_code error;
-      fs::create_symlink(fs::absolute(frames[i]), dir_ / name, error);
+      fs::create_symlink(fs::absolute(frames[i]), dir_.path() / name, error);
       if (error) throw MovieError("cannot link " + frames[i].string() + ": " + error.message());
     }
   }
-  ~NumberedFrames() {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-  NumberedFrames(const NumberedFrames&) = delete;
-  NumberedFrames& operator=(const NumberedFrames&) = delete;
 
-  std::string pattern() const { return (dir_ / "%07d.png").string(); }
+  std::string pattern() const { return (dir_.path() / "%07d.png").string(); }
 
  private:
-  fs::path dir_;
+  TemporaryFolder dir_;
 };
 
 // Runs `argv` (argv[0] the program's path) with its standard error in a pipe; the exit
@@ -92,6 +82,18 @@ std::pair<int, std::string> run(const std::vector<std::string>& argv) {
 }
 
 }  // namespace
+
+TemporaryFolder::TemporaryFolder(const std::string& prefix) {
+  std::string pattern = (fs::temp_directory_path() / (prefix + "XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr)
+    throw MovieError("cannot make a temporary folder: " + std::string(std::strerror(errno)));
+  path_ = pattern;
+}
+
+TemporaryFolder::~TemporaryFolder() {
+  std::error_code ignored;
+  fs::remove_all(path_, ignored);
+}
 
 bool is_movie_path(const fs::path& path) {
   std::string extension = path.extension().string();

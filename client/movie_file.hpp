@@ -16,6 +16,20 @@ class MovieError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A folder of its own under the system's temporary folder, removed with what it holds.
+class TemporaryFolder {
+ public:
+  // `prefix`: the start of its name. Throws MovieError when it cannot be made.
+  explicit TemporaryFolder(const std::string& prefix);
+  ~TemporaryFolder();
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 // .mp4, .mkv or .mov (any case): a name that frames are encoded into.
 bool is_movie_path(const std::filesystem::path& path);
 

@@ -1,11 +1,7 @@
 #include "client/render_command.hpp"
 
-#include <stdlib.h>
-
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -100,13 +96,13 @@ double seconds_between(std::chrono::steady_clock::time_point from,
   return std::chrono::duration<double>(to - from).count();
 }
 
-// The frames to render: those of --frames, else every frame when the output has '#' for
-// the number, else the first (a still from an animation).
+// The frames to render: those of --frames, else every frame when `every` (a movie, or an
+// output with '#' for the number), else the first (a still from an animation).
 std::vector<int> frames_to_render(const RenderOptions& options, const Animation& animation,
-                                  const std::string& output) {
+                                  bool every) {
   if (options.frames)
     return parse_frame_list(*options.frames, animation.first, animation.last, Limits{}.max_frames);
-  if (!has_frame_number(output)) return {animation.first};
+  if (!every) return {animation.first};
   std::vector<int> all;
   for (int frame = animation.first; frame <= animation.last; ++frame) all.push_back(frame);
   return all;
@@ -142,19 +138,14 @@ int render_frames(const RenderOptions& options, SceneFrames& frames, const std::
 // The frames rendered as PNGs into a folder of their own, then encoded into `output`.
 int render_movie(const RenderOptions& options, SceneFrames& frames, const std::vector<int>& list,
                  const std::filesystem::path& ffmpeg, const std::filesystem::path& output) {
-  std::string dir = (std::filesystem::temp_directory_path() / "tessera-frames-XXXXXX").string();
-  if (::mkdtemp(dir.data()) == nullptr) {
-    std::fprintf(stderr, "error: cannot make a folder for the frames: %s\n", std::strerror(errno));
+  std::optional<TemporaryFolder> dir;
+  try {
+    dir.emplace("tessera-frames-");
+  } catch (const MovieError& e) {
+    std::fprintf(stderr, "error: %s\n", printable(e.what()).c_str());
     return 1;
   }
-  struct Remove {
-    std::filesystem::path dir;
-    ~Remove() {
-      std::error_code ignored;
-      std::filesystem::remove_all(dir, ignored);
-    }
-  } remove{dir};
-  const std::string pattern = (std::filesystem::path(dir) / "frame_#######.png").string();
+  const std::string pattern = (dir->path() / "frame_#######.png").string();
   const double fps = frames.animation().fps;
   if (const int code = render_frames(options, frames, list, pattern); code != 0) return code;
   std::vector<std::filesystem::path> paths;
@@ -219,7 +210,8 @@ int run_render(const RenderOptions& options) {
     }
     std::vector<int> list;
     try {
-      list = frames_to_render(options, frames.animation(), movie ? "#" : output.string());
+      list =
+          frames_to_render(options, frames.animation(), movie || has_frame_number(output.string()));
     } catch (const FrameListError& e) {
       std::fprintf(stderr, "error: --frames: %s\n", printable(e.what()).c_str());
       return 2;

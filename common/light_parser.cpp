@@ -73,13 +73,8 @@ std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits)
   }
   std::vector<Light> result;
   result.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    const ValueReader light = lights.element(i);
-    const FrameReading* frames = light.frames();
-    const std::size_t tracks_before = frames && frames->record ? frames->record->size() : 0;
-    result.push_back(parse_light(light));
-    check_every_frame(light, tracks_before, parse_light);
-  }
+  for (std::size_t i = 0; i < count; ++i)
+    result.push_back(read_every_frame(lights.element(i), parse_light));
   return result;
 }
 

@@ -134,13 +134,7 @@ void add_triangles(const ValueReader& objects, const ValueReader& element,
 
 }  // namespace
 
-Mat4 parse_transform(const ValueReader& steps) {
-  const FrameReading* frames = steps.frames();
-  const std::size_t tracks_before = frames && frames->record ? frames->record->size() : 0;
-  const Mat4 matrix = compose_steps(steps);
-  check_every_frame(steps, tracks_before, compose_steps);
-  return matrix;
-}
+Mat4 parse_transform(const ValueReader& steps) { return read_every_frame(steps, compose_steps); }
 
 Mat4 compose_steps(const ValueReader& steps) {
   const std::size_t count = steps.array_size("an array of transform steps");

@@ -81,6 +81,13 @@ struct Material {
   }
 };
 
+// Whether a material lets light through at all, which decides how its shapes are
+// registered with Embree (worker/scene_geometry_build.cpp).
+inline bool transmits(const Material& material) {
+  const Color& t = material.transmission;
+  return t.r != 0.0 || t.g != 0.0 || t.b != 0.0;
+}
+
 struct Attenuation {
   double constant = 1.0;   // kc
   double linear = 0.0;     // kl

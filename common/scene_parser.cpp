@@ -131,9 +131,7 @@ Scene read_scene(const nlohmann::json& document, const Limits& limits, const Lif
                              limits.max_tracks, nullptr,     !frame.has_value()};
   const ObjectReader root(ValueReader(document, "", lifted, &reading));
   parse_image(root.require("image"), limits, scene);
-  const ValueReader camera = root.require("camera");
-  scene.camera = parse_camera(camera);
-  check_every_frame(camera, 0, parse_camera);
+  scene.camera = read_every_frame(root.require("camera"), parse_camera);
   if (const auto render = root.find("render")) scene.render = parse_render(*render, limits);
   scene.background = root.animated_color_or("background", scene.background);
   scene.ambient_light = root.animated_color_or("ambient_light", scene.ambient_light);

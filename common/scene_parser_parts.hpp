@@ -38,16 +38,17 @@ inline constexpr std::array<std::string_view, 10> scene_keys = {
     "version",       "image",     "camera", "render",  "background",
     "ambient_light", "materials", "lights", "objects", "animation"};
 
-// Reads `value` again with `read` at every frame of the animation but the one just read,
-// when the first reading recorded tracks inside it (`tracks_before`: how many it had before
-// `value`), so that a value that goes wrong only between keys (a light's direction through
-// zero, a camera looking at its own eye) is refused at once, naming the frame.
+// `read(value)`, which is also read again at every other frame of the animation when the
+// first reading records tracks inside it, so that a value that goes wrong only between keys
+// (a light's direction through zero, a camera looking at its own eye) is refused at once,
+// naming the frame.
 template <typename Read>
-void check_every_frame(const ValueReader& value, std::size_t tracks_before, Read read) {
+auto read_every_frame(const ValueReader& value, Read read) -> decltype(read(value)) {
   const FrameReading* frames = value.frames();
-  if (frames == nullptr || !frames->every_frame || frames->record == nullptr ||
-      frames->record->size() == tracks_before)
-    return;
+  if (frames == nullptr || !frames->every_frame || frames->record == nullptr) return read(value);
+  const std::size_t tracks_before = frames->record->size();
+  auto result = read(value);
+  if (frames->record->size() == tracks_before) return result;
   std::map<std::string, const Track*, std::less<>> known;
   for (std::size_t i = tracks_before; i < frames->record->size(); ++i)
     known.emplace((*frames->record)[i].pointer, &(*frames->record)[i]);
@@ -63,6 +64,7 @@ void check_every_frame(const ValueReader& value, std::size_t tracks_before, Read
                        "at frame " + std::to_string(frame) + ", " + error.detail());
     }
   }
+  return result;
 }
 
 // The role of a container that opens at the root, or in a job submission's envelope, in
@@ -115,7 +117,7 @@ class MaterialTable {
 
 // --- light_parser.cpp ---
 
-// Each light is checked at every frame (check_every_frame()).
+// Each light is checked at every frame (read_every_frame()).
 std::vector<Light> parse_lights(const ValueReader& lights, const Limits& limits);
 
 // --- object_parser.cpp ---

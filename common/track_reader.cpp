@@ -1,6 +1,7 @@
 // Reading a keyframe track where a scene's value belongs (ValueReader::animated()).
 #include <string>
 
+#include "common/scene_parser_parts.hpp"
 #include "common/value_reader.hpp"
 
 namespace tessera {
@@ -38,11 +39,8 @@ Track ValueReader::read_track(const std::function<void(const ValueReader&)>& che
   track.pointer = pointer_;
   track.target = target_of(pointer_);
   track.bounded = bounded;
-  if (const auto interpolation = reader.find("interpolation")) {
-    const std::string_view name = interpolation->choice(interpolation_names);
-    for (std::size_t i = 0; i < std::size(interpolation_names); ++i)
-      if (interpolation_names[i] == name) track.interpolation = static_cast<Interpolation>(i);
-  }
+  if (const auto interpolation = reader.find("interpolation"))
+    track.interpolation = enum_choice<Interpolation>(*interpolation, interpolation_names);
   const ValueReader keys = reader.require("keys");
   const std::size_t count = keys.array_size("an array of keys [frame, value]");
   if (count == 0) keys.fail("must hold at least one key [frame, value]");

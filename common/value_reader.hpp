@@ -75,7 +75,7 @@ struct FrameReading {
   // The tracks a reading at another frame takes its values from, by pointer, instead of
   // reading their keys again.
   const std::map<std::string, const Track*, std::less<>>* known = nullptr;
-  // Whether a value holding a track is read again at every other frame (check_every_frame()).
+  // Whether a value holding a track is read again at every other frame (read_every_frame()).
   bool every_frame = false;
 };
 

@@ -205,13 +205,10 @@ void store_block(const TileOutput& out, const Block& block, const double (&sums)
 bool same_objects(const Scene& next, const Scene& previous) {
   if (next.animation.changes_objects() || next.objects.size() != previous.objects.size())
     return false;
-  const auto transmits = [](const Scene& scene, const Object& object) {
-    const Color& t = scene.materials[object.material].transmission;
-    return t.r != 0.0 || t.g != 0.0 || t.b != 0.0;
-  };
   for (std::size_t i = 0; i < next.objects.size(); ++i) {
-    if (next.objects[i].material != previous.objects[i].material ||
-        transmits(next, next.objects[i]) != transmits(previous, previous.objects[i]))
+    const std::uint32_t material = next.objects[i].material;
+    if (material != previous.objects[i].material ||
+        transmits(next.materials[material]) != transmits(previous.materials[material]))
       return false;
   }
   return true;

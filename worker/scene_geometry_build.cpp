@@ -16,9 +16,7 @@ SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
-    const Color& transmission = scene.materials[object.material].transmission;
-    const bool transmissive =
-        transmission.r != 0.0 || transmission.g != 0.0 || transmission.b != 0.0;
+    const bool transmissive = transmits(scene.materials[object.material]);
     const unsigned mask = transmissive ? kTransmissiveMask : kOpaqueSolidMask;
     std::visit(
         [&](const auto& shape) {
