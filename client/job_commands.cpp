@@ -1,21 +1,25 @@
 #include "client/job_commands.hpp"
 
 #include <unistd.h>
-#include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <thread>
 
+#include "client/command_failure.hpp"
+#include "client/frame_paths.hpp"
 #include "client/human_time.hpp"
+#include "client/job_frames.hpp"
+#include "client/movie_file.hpp"
+#include "client/output_file.hpp"
 #include "client/scene_assets.hpp"
 #include "client/scene_input.hpp"
 #include "client/short_ids.hpp"
+#include "common/frame_list.hpp"
 #include "common/image_format.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
@@ -40,11 +44,13 @@ struct Options {
   int priority = 50;
   bool wait = false;
   std::string output;
+  std::optional<std::string> frames;  // and get
   // others
   std::string job;
   std::string state;
   int limit = 20;
   bool partial = false;
+  std::optional<double> fps;
   std::string worker;
 };
 
@@ -52,15 +58,6 @@ std::string server_url(const Options& options) {
   if (!options.server.empty()) return options.server;
   if (const char* env = std::getenv("TESSERA_SERVER"); env && *env) return env;
   return "http://127.0.0.1:8640";
-}
-
-struct CommandFailed {
-  int code;
-};
-
-[[noreturn]] void fail(int code, const std::string& message) {
-  std::fprintf(stderr, "error: %s\n", printable(message).c_str());
-  throw CommandFailed{code};
 }
 
 std::string format_duration(double seconds) {
@@ -100,6 +97,13 @@ void print_status(const protocol::JobStatus& job) {
               printable(job.id).c_str(), to_string(job.state), printable(job.name).c_str(),
               static_cast<int>(job.progress * 100), job.tiles.done, job.tiles.total, job.priority,
               job.width, job.height);
+  if (job.frames.total > 1) {
+    std::string frames = std::to_string(job.frames.done) + "/" + std::to_string(job.frames.total) +
+                         " done of " + job.frames.list;
+    if (job.frames.failed > 0) frames += ", failed " + job.frames.failed_list;
+    if (job.frames.current) frames += ", next to finish " + std::to_string(*job.frames.current);
+    std::printf("  frames: %s\n", printable(frames).c_str());
+  }
   if (job.error) std::printf("  error: %s\n", printable(*job.error).c_str());
   print_health(job.health);
 }
@@ -138,7 +142,24 @@ void print_worker_table(const std::vector<protocol::Worker>& workers) {
     std::printf("* draining: takes no more tiles once its lease is done\n");
 }
 
-std::string progress_line(const protocol::JobStatus& job, bool bar) {
+// What a job has done: its tiles, or for several frames the frames done and the tiles of
+// the frame it finishes next (`frame_tiles`, when known).
+std::string progress_count(const protocol::JobStatus& job,
+                           const std::optional<protocol::JobStatus::Tiles>& frame_tiles) {
+  const auto of = [](int done, int total) {
+    return std::to_string(done) + "/" + std::to_string(total);
+  };
+  if (job.frames.total <= 1) return of(job.tiles.done, job.tiles.total) + " tiles";
+  std::string count = of(job.frames.done, job.frames.total) + " frames";
+  if (job.frames.failed > 0) count += ", " + std::to_string(job.frames.failed) + " failed";
+  if (job.frames.current && frame_tiles)
+    count += " (frame " + std::to_string(*job.frames.current) + ": " +
+             of(frame_tiles->done, frame_tiles->total) + " tiles)";
+  return count;
+}
+
+std::string progress_line(const protocol::JobStatus& job, bool bar,
+                          const std::optional<protocol::JobStatus::Tiles>& frame_tiles) {
   const std::string eta = job.eta_s ? format_duration(*job.eta_s) : "--:--";
   char text[256];
   std::string drawn;
@@ -147,8 +168,8 @@ std::string progress_line(const protocol::JobStatus& job, bool bar) {
     const int filled = static_cast<int>(job.progress * kWidth);
     drawn = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] ";
   }
-  std::snprintf(text, sizeof text, "%s%s %d/%d tiles %5.1f%%  elapsed %s  eta %s  %.2f Mrays/s",
-                drawn.c_str(), to_string(job.state), job.tiles.done, job.tiles.total,
+  std::snprintf(text, sizeof text, "%s%s %s %5.1f%%  elapsed %s  eta %s  %.2f Mrays/s",
+                drawn.c_str(), to_string(job.state), progress_count(job, frame_tiles).c_str(),
                 job.progress * 100, format_duration(job.elapsed_s).c_str(), eta.c_str(),
                 job.stats.rays_per_s / 1e6);
   return text;
@@ -160,36 +181,83 @@ void print_json(const nlohmann::json& body) {
 }
 
 // A job's progress as it changes: a redrawn bar on a terminal, plain lines otherwise (at
-// most one a second, and the last).
+// most one a second, and the last). For an animation, the tiles of the frame it finishes
+// next are asked of the coordinator only for a line about to be shown.
 class ProgressPrinter {
  public:
+  ProgressPrinter(CoordinatorClient& api, std::string id) : api_(api), id_(std::move(id)) {}
+
   void show(const protocol::JobStatus& job) {
     using clock = std::chrono::steady_clock;
-    const std::string line = progress_line(job, tty_);
     const bool done = is_finished(job.state);
     if (tty_) {
-      std::printf("\r%s\033[K%s", line.c_str(), done ? "\n" : "");
-    } else if (line != last_ && (done || clock::now() - printed_ >= std::chrono::seconds(1))) {
-      std::printf("%s\n", line.c_str());
-      last_ = line;
-      printed_ = clock::now();
+      drawn_ = progress_line(job, true, frame_tiles(job));
+      std::printf("\r%s\033[K%s", drawn_.c_str(), done ? "\n" : "");
+      if (done) drawn_.clear();
+    } else if (done || clock::now() - printed_ >= std::chrono::seconds(1)) {
+      const std::string line = progress_line(job, false, frame_tiles(job));
+      if (line != last_) {
+        std::printf("%s\n", line.c_str());
+        last_ = line;
+        printed_ = clock::now();
+      }
     }
     std::fflush(stdout);
   }
 
+  // A line of its own, such as a file written; on a terminal, above the bar.
+  void note(const std::string& line) {
+    if (tty_ && !drawn_.empty()) std::printf("\r\033[K");
+    std::printf("%s\n", printable(line).c_str());
+    if (tty_ && !drawn_.empty()) std::printf("%s", drawn_.c_str());
+    std::fflush(stdout);
+  }
+
  private:
+  std::optional<protocol::JobStatus::Tiles> frame_tiles(const protocol::JobStatus& job) {
+    using clock = std::chrono::steady_clock;
+    if (job.frames.total <= 1 || !job.frames.current || !frames_served_) return std::nullopt;
+    // A bar redrawn at every event asks four times a second at most.
+    if (asked_frame_ == *job.frames.current &&
+        clock::now() - asked_ < std::chrono::milliseconds(250))
+      return tiles_;
+    tiles_.reset();
+    try {
+      for (const protocol::FrameStatus& frame : api_.frames(id_).frames)
+        if (frame.frame == *job.frames.current) tiles_ = frame.tiles;
+    } catch (const ApiError&) {
+      frames_served_ = false;  // the progress is shown without them
+    } catch (const protocol::ProtocolError&) {
+      frames_served_ = false;
+    }
+    asked_frame_ = *job.frames.current;
+    asked_ = clock::now();
+    return tiles_;
+  }
+
+  CoordinatorClient& api_;
+  std::string id_;
   const bool tty_ = ::isatty(STDOUT_FILENO);
   std::string last_;
+  std::string drawn_;  // the bar on the terminal now, if any
   std::chrono::steady_clock::time_point printed_{};
+  bool frames_served_ = true;
+  int asked_frame_ = -1;
+  std::chrono::steady_clock::time_point asked_{};
+  std::optional<protocol::JobStatus::Tiles> tiles_;
 };
+
+// Called with each status of a job followed, after it is shown.
+using OnUpdate = std::function<void(const protocol::JobStatus&)>;
 
 // Follows a job by long polls, each waiting on the server for the job to finish: for a
 // coordinator without events (an older build).
 protocol::JobStatus poll_until_finished(CoordinatorClient& api, const std::string& id,
-                                        ProgressPrinter& printer) {
+                                        ProgressPrinter& printer, const OnUpdate& on_update) {
   while (true) {
     const protocol::JobStatus job = api.job(id, 0.5);
     printer.show(job);
+    if (on_update) on_update(job);
     if (is_finished(job.state)) return job;
   }
 }
@@ -198,14 +266,15 @@ protocol::JobStatus poll_until_finished(CoordinatorClient& api, const std::strin
 // time it changes, four times a second at most, and its end at once. The job's status is
 // read once the stream is open, and again after a "resync"; a stream that breaks is
 // resumed after the last event seen.
-protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
-  ProgressPrinter printer;
+protocol::JobStatus watch(CoordinatorClient& api, const std::string& id, ProgressPrinter& printer,
+                          const OnUpdate& on_update = {}) {
   protocol::JobStatus job;
   bool finished = false;
   std::optional<std::string> last_event;
   const auto update = [&](protocol::JobStatus now) {
     job = std::move(now);
     printer.show(job);
+    if (on_update) on_update(job);
     finished = is_finished(job.state);
   };
   for (int breaks = 0; !finished;) {
@@ -234,10 +303,10 @@ protocol::JobStatus watch(CoordinatorClient& api, const std::string& id) {
             return !finished;
           });
       // A stream that ended before it opened came from no coordinator that has events.
-      if (!opened) return poll_until_finished(api, id, printer);
+      if (!opened) return poll_until_finished(api, id, printer, on_update);
     } catch (const ApiError& e) {
       if (e.status() != 404) throw;
-      return poll_until_finished(api, id, printer);  // a coordinator without events
+      return poll_until_finished(api, id, printer, on_update);  // a coordinator without events
     } catch (const HttpError&) {
       // The coordinator restarted, or the network broke: resumed, a few times.
       if (++breaks > 5) throw;
@@ -254,62 +323,117 @@ int job_exit_code(const protocol::JobStatus& job) {
                  printable(*job.error).c_str());
   else
     std::fprintf(stderr, "job %s %s\n", printable(job.id).c_str(), to_string(job.state));
+  if (job.frames.total > 1 && job.frames.failed > 0)
+    std::fprintf(stderr, "failed frames: %s (%d of %d)\n",
+                 printable(job.frames.failed_list).c_str(), job.frames.failed, job.frames.total);
   return kExitJobFailed;
 }
 
-void save_image(CoordinatorClient& api, const std::string& id, const std::string& output,
-                bool partial) {
+// The format of a single image's output; fails with kExitUsage for a folder or an
+// extension of no image format.
+const ImageFormat& image_output_format(const std::string& output) {
   std::error_code ec;
   if (std::filesystem::is_directory(output, ec))
     fail(kExitUsage, output + " is a directory; name the image file, such as " +
                          (std::filesystem::path(output) / "image.png").string());
   const ImageFormat* format = image_format_of_path(output);
   if (!format)
-    fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
-  // Opened before the download, so that a path that cannot be written costs no transfer;
-  // removed however the command ends unless renamed into place, so that nothing
-  // half-written is left behind.
-  struct PartFile {
-    std::filesystem::path path;
-    bool kept = false;
-    ~PartFile() {
-      std::error_code ignored;
-      if (!kept) std::filesystem::remove(path, ignored);
-    }
-  } part{output + ".part"};
-  std::ofstream out(part.path, std::ios::binary | std::ios::trunc);
-  if (!out) fail(kExitUsage, "cannot write " + output + ": " + std::strerror(errno));
+    fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) +
+                         ", or .mp4, .mkv or .mov for a movie of an animation's frames)");
+  return *format;
+}
+
+// The job's image, or one frame's.
+void save_image(CoordinatorClient& api, const std::string& id, const std::string& output,
+                bool partial, std::optional<int> frame = std::nullopt) {
+  const ImageFormat& format = image_output_format(output);
+  OutputFile file(output);
   std::string bytes;
   try {
-    bytes = api.image(id, *format, partial);
+    bytes = frame ? api.frame_image(id, *frame, format, partial) : api.image(id, format, partial);
   } catch (const ApiError& e) {
     if (e.status() != 409 || partial) throw;
+    if (frame)
+      fail(kExitJobFailed, "frame " + std::to_string(*frame) + " of job " + id +
+                               " is not done; `tessera get " + id + " --frames " +
+                               std::to_string(*frame) + " --partial -o " + output +
+                               "` gets the tiles rendered so far");
     fail(kExitJobFailed, "job " + id + " has not completed; `tessera get " + id + " --partial -o " +
                              output + "` gets the tiles rendered so far");
   }
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) fail(kExitJobFailed, "cannot write " + output + ": " + std::strerror(errno));
-  std::filesystem::rename(part.path, output, ec);
-  if (ec) fail(kExitJobFailed, "cannot write " + output + ": " + ec.message());
-  part.kept = true;
+  file.commit(bytes);
   std::printf("wrote %s\n", printable(std::filesystem::absolute(output).string()).c_str());
+}
+
+// What submit does with its output, settled before anything is sent: a mistake in the
+// command costs no render.
+struct SubmitPlan {
+  enum class Output { none, image, frames, movie };
+  Output output = Output::none;
+  std::optional<std::string> frames;  // what the submission asks for
+  std::filesystem::path ffmpeg;       // a movie's
+  double fps = 24;                    // a movie's: the scene's
+};
+
+SubmitPlan plan_submit(const Options& options, const Animation& animation) {
+  SubmitPlan plan;
+  plan.frames = options.frames;
+  plan.fps = animation.fps;
+  // A still scene's frames are the coordinator's to refuse: it names the field.
+  std::vector<int> listed;
+  if (options.frames && animation.animated) {
+    try {
+      listed =
+          parse_frame_list(*options.frames, animation.first, animation.last, Limits{}.max_frames);
+    } catch (const FrameListError& e) {
+      fail(kExitUsage, std::string("--frames: ") + e.what());
+    }
+  }
+  const std::string& output = options.output;
+  if (output.empty()) return plan;
+  check_output_folder(output);
+  if (is_movie_path(output)) {
+    if (!animation.animated)
+      fail(kExitUsage, options.scene_path + ": a movie needs an animated scene (\"animation\")");
+    plan.ffmpeg = ffmpeg_or_fail();  // before the render, not after it
+    plan.output = SubmitPlan::Output::movie;
+    return plan;
+  }
+  if (has_frame_number(output)) {
+    if (!image_format_of_path(frame_path(output, 0)))
+      fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
+    plan.output = SubmitPlan::Output::frames;
+    return plan;
+  }
+  image_output_format(output);
+  plan.output = SubmitPlan::Output::image;
+  if (!animation.animated) return plan;
+  if (listed.size() > 1)
+    fail(kExitUsage, output + ": " + std::to_string(listed.size()) +
+                         " frames need '#' in the output's name where the frame number goes, "
+                         "such as out_####.png");
+  // One image of an animation is its first frame, as `tessera render` makes it: the farm
+  // renders no other.
+  if (!options.frames) plan.frames = std::to_string(animation.first);
+  return plan;
 }
 
 int submit(const Options& options, CoordinatorClient& api) {
   nlohmann::json scene;
+  Animation animation;
   const std::filesystem::path folder = std::filesystem::path(options.scene_path).parent_path();
   try {
     scene = parse_json_text(read_scene_text(options.scene_path));
     // Mistakes are reported with their JSON Pointer (and a mesh file's, with its line)
     // before anything is sent.
     const FolderSceneFiles files(folder);
-    parse_scene(scene, Limits{}, nullptr, &files);
+    animation = parse_scene(scene, Limits{}, nullptr, &files).animation;
   } catch (const SceneError& e) {
     fail(kExitUsage, options.scene_path + ": " + e.what());
   } catch (const std::exception& e) {
     fail(kExitUsage, e.what());
   }
+  const SubmitPlan plan = plan_submit(options, animation);
   const std::string name = options.name.empty()
                                ? std::filesystem::path(options.scene_path).stem().string()
                                : options.name;
@@ -325,7 +449,12 @@ int submit(const Options& options, CoordinatorClient& api) {
     } catch (const SceneFileError& e) {
       fail(kExitUsage, options.scene_path + ": " + e.what());
     }
-    return api.submit({name, options.priority, std::move(with_files)});
+    protocol::JobSubmission submission;
+    submission.name = name;
+    submission.priority = options.priority;
+    submission.frames = plan.frames;
+    submission.scene = std::move(with_files);
+    return api.submit(submission);
   };
   protocol::JobStatus job;
   try {
@@ -335,17 +464,64 @@ int submit(const Options& options, CoordinatorClient& api) {
     job = send_and_submit(std::move(scene));
   }
   const std::string id = job.id;
-  if (options.json_output && !options.wait && options.output.empty())
+  const bool follow = options.wait || plan.output != SubmitPlan::Output::none;  // -o implies --wait
+  if (options.json_output && !follow)
     print_json(protocol::to_json(job));
   else
     std::printf("submitted %s (%s)\n", printable(id).c_str(), printable(name).c_str());
   std::fflush(stdout);  // scripts reading the id need it now, not when --wait ends
-  if (!options.wait && options.output.empty()) return kExitOk;  // -o implies --wait
-  const protocol::JobStatus final_job = watch(api, id);
+  if (!follow) return kExitOk;
+  ProgressPrinter printer(api, id);
+  if (plan.output == SubmitPlan::Output::none || plan.output == SubmitPlan::Output::image) {
+    const protocol::JobStatus final_job = watch(api, id, printer);
+    if (options.json_output) print_json(protocol::to_json(final_job));
+    const int code = job_exit_code(final_job);
+    if (code == kExitOk && plan.output == SubmitPlan::Output::image)
+      save_image(api, id, options.output, false);
+    return code;
+  }
+  // Frames are saved as each is done, rather than all at the end: a long animation's
+  // first frames can be looked at while the others render, and a job that fails leaves
+  // those done on disk.
+  const bool movie = plan.output == SubmitPlan::Output::movie;
+  std::optional<TemporaryFolder> movie_frames;
+  if (movie) {
+    try {
+      movie_frames.emplace("tessera-frames-");
+    } catch (const MovieError& e) {
+      fail(kExitJobFailed, e.what());
+    }
+  }
+  const std::string pattern =
+      movie ? (movie_frames->path() / "frame_#######.png").string() : options.output;
+  FrameDownloads downloads(api, id, pattern, [&](int frame, const std::filesystem::path& path) {
+    printer.note(
+        "frame " + std::to_string(frame) + ": " +
+        (movie ? std::string("downloaded") : "wrote " + std::filesystem::absolute(path).string()));
+  });
+  const protocol::JobStatus final_job =
+      watch(api, id, printer, [&](const protocol::JobStatus& now) { downloads.catch_up(now); });
   if (options.json_output) print_json(protocol::to_json(final_job));
+  // A movie needs every frame; the frames done of a job that failed are still saved.
+  if (!movie || final_job.state == JobState::completed) downloads.finish();
   const int code = job_exit_code(final_job);
-  if (code == kExitOk && !options.output.empty()) save_image(api, id, options.output, false);
-  return code;
+  if (code != kExitOk) {
+    if (movie)
+      std::fprintf(stderr, "%s not written: a movie needs every frame\n",
+                   printable(options.output).c_str());
+    return code;
+  }
+  if (movie) {
+    if (static_cast<int>(downloads.saved().size()) != final_job.frames.total)
+      fail(kExitJobFailed, "job " + id + " completed with " +
+                               std::to_string(final_job.frames.total) +
+                               " frames, of which the coordinator served " +
+                               std::to_string(downloads.saved().size()));
+    std::vector<std::filesystem::path> paths;
+    for (const auto& [frame, path] : downloads.saved()) paths.push_back(path);
+    encode_frames(plan.ffmpeg, paths, plan.fps, options.output);
+  }
+  return kExitOk;
 }
 
 // Runs one command, turning every failure into one line and its documented exit code.
@@ -426,8 +602,52 @@ void add_submit_command(CLI::App& app, const SharedOptions& options) {
   submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
       ->check(CLI::Range(0, 100));
   submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
+  submit_cmd->add_option("--frames", options->frames,
+                         "Frames of an animated scene: 1-48, 1-100x2 (every second), 1,5,10-20 "
+                         "(default: all, or the first for an OUTPUT without #)");
   submit_cmd->add_option("-o,--output", options->output,
-                         "Save the image here once the job completes (implies --wait)");
+                         "Save the image here once the job completes (implies --wait); # for "
+                         "the frame number (out_####.png), each frame saved as soon as it is "
+                         "done; .mp4, .mkv or .mov for a movie at the scene's fps (needs ffmpeg)");
+}
+
+// `tessera get`: a movie, frames to a name with '#', one frame, or the job's image. The
+// mistakes that need no coordinator to be seen are refused before it is asked anything.
+int get_output(const Options& o, CoordinatorClient& api) {
+  const std::string& output = o.output;
+  const bool movie = is_movie_path(output);
+  if (o.fps && !movie) fail(kExitUsage, "--fps is for a movie (-o OUT.mp4, .mkv or .mov)");
+  const std::optional<std::vector<int>> asked = read_frames_option(o.frames);
+  if (movie) {
+    if (o.partial) fail(kExitUsage, "a movie is made of frames done; --partial is for images");
+    std::error_code ec;
+    if (std::filesystem::is_directory(output, ec))
+      fail(kExitUsage, output + " is a directory; name the movie file, such as " +
+                           (std::filesystem::path(output) / "movie.mp4").string());
+    check_output_folder(output);
+    const std::filesystem::path ffmpeg = ffmpeg_or_fail();  // before any download
+    return save_job_movie(api, resolve_job_id(api, o.job), ffmpeg, output, asked,
+                          o.fps.value_or(24.0));
+  }
+  if (has_frame_number(output)) {
+    if (!image_format_of_path(frame_path(output, 0)))
+      fail(kExitUsage, output + ": unknown image extension (use " + image_format_names(true) + ")");
+    check_output_folder(output);
+    return save_job_frames(api, resolve_job_id(api, o.job), output, asked, o.partial);
+  }
+  image_output_format(output);
+  if (asked && asked->size() > 1)
+    fail(kExitUsage, output + ": " + std::to_string(asked->size()) +
+                         " frames need '#' in the output's name where the frame number goes, "
+                         "such as out_####.png");
+  const std::string id = resolve_job_id(api, o.job);
+  if (asked) {
+    frames_named(api.frames(id), asked, id);  // a frame the job does not render is named
+    save_image(api, id, output, o.partial, asked->front());
+  } else {
+    save_image(api, id, output, o.partial);
+  }
+  return kExitOk;
 }
 
 // status, watch, list and get: they read what the coordinator has.
@@ -445,7 +665,9 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
 
   CLI::App* watch_cmd = on(app, options, "watch", "Follow a job's progress until it finishes",
                            [](const Options& o, CoordinatorClient& api) {
-                             return job_exit_code(watch(api, resolve_job_id(api, o.job)));
+                             const std::string id = resolve_job_id(api, o.job);
+                             ProgressPrinter printer(api, id);
+                             return job_exit_code(watch(api, id, printer));
                            });
   watch_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
 
@@ -469,13 +691,25 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
   list_cmd->add_option("--state", options->state, "Only jobs in this state");
   list_cmd->add_option("--limit", options->limit, "At most this many")->check(CLI::Range(1, 1000));
 
-  CLI::App* get_cmd = on(app, options, "get", "Download a job's image",
-                         [](const Options& o, CoordinatorClient& api) {
-                           save_image(api, resolve_job_id(api, o.job), o.output, o.partial);
-                           return kExitOk;
-                         });
+  CLI::App* get_cmd =
+      on(app, options, "get", "Download a job's image, frames or movie", get_output);
   get_cmd->add_option("job", options->job, "Job id (or a unique prefix)")->required();
-  get_cmd->add_option("-o,--output", options->output, "OUT.png, .exr, .jpg or .tif")->required();
+  get_cmd
+      ->add_option("-o,--output", options->output,
+                   "OUT.png, .exr, .jpg or .tif; # for the frame number (out_####.exr): "
+                   "every frame done; .mp4, .mkv or .mov: a movie of the frames (needs ffmpeg)")
+      ->required();
+  get_cmd->add_option("--frames", options->frames,
+                      "Only these frames of an animation: 1-48, 1-100x2, 1,5,10-20");
+  get_cmd->add_option("--fps", options->fps, "A movie's frames per second (default 24)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            char* end = nullptr;
+            const double fps = std::strtod(text.c_str(), &end);
+            if (end != text.c_str() && *end == '\0' && std::isfinite(fps) && fps > 0) return "";
+            return "must be a number of frames a second above 0, such as 24 or 29.97";
+          },
+          "FPS"));
   get_cmd->add_flag("--partial", options->partial, "The tiles rendered so far, before completion");
 }
 

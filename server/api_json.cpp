@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "common/frame_list.hpp"
 #include "common/protocol/paths.hpp"
 #include "common/protocol/timestamp.hpp"
 #include "common/scene_parser.hpp"
@@ -91,6 +92,21 @@ protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms) {
   status.error = unless_empty(job.error);
   status.health = health_of(job.health, job, now_ms);
   status.stats = {job.rays, status.elapsed_s > 0 ? job.rays / status.elapsed_s : 0.0};
+  status.frames.list = job.frames->animated() ? job.frames->list : "0";
+  status.frames.total = static_cast<int>(job.frames->numbers.size());
+  status.frames.done = job.frames_done;
+  status.frames.failed = static_cast<int>(job.failed_frames.size());
+  status.frames.failed_list = format_frame_list(job.failed_frames);
+  status.frames.current = job.current_frame;
+  return status;
+}
+
+protocol::FrameStatus frame_status_of(const FrameInfo& frame) {
+  protocol::FrameStatus status;
+  status.frame = frame.frame;
+  status.state = frame.state;
+  status.tiles = {frame.tiles_total, frame.tiles_done, frame.tiles_rendering};
+  status.error = unless_empty(frame.error);
   return status;
 }
 
@@ -117,6 +133,7 @@ protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms) {
   l.id = lease.id;
   l.job_id = lease.job_id;
   l.scene_digest = lease.scene_digest;
+  l.frame = lease.frame;
   l.tiles.reserve(lease.tiles.size());
   for (const LeaseTile& tile : lease.tiles)
     l.tiles.push_back({tile.index, tile.rect.x, tile.rect.y, tile.rect.width, tile.rect.height});

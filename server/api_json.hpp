@@ -45,6 +45,7 @@ HttpResponse bad_wait();
 
 // The one mapping from each record to what the API shows of it.
 protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms);
+protocol::FrameStatus frame_status_of(const FrameInfo& frame);
 protocol::Worker worker_of(const WorkerInfo& worker);
 protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms);
 

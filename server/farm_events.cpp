@@ -46,6 +46,7 @@ std::string dumped(const json& value) {
 protocol::TileStatus tile_status(const FarmObserver::TileChange& tile) {
   protocol::TileStatus status;
   status.index = tile.index;
+  status.frame = tile.frame;
   status.x = tile.rect.x;
   status.y = tile.rect.y;
   status.width = tile.rect.width;

@@ -27,83 +27,82 @@ void ImageAssembly::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void ImageAssembly::add(const std::string& job_id, std::shared_ptr<const Frame> frame,
-                        Stage stage) {
+void ImageAssembly::add(const std::string& key, std::shared_ptr<const Frame> frame, Stage stage) {
   std::lock_guard lock(mutex_);
-  Job& job = jobs_[job_id];
+  Job& job = jobs_[key];
   job.frame = std::move(frame);
   job.completed = stage == Stage::completed;
   job.ended = stage == Stage::ended;
 }
 
-void ImageAssembly::stored(const std::string& job_id,
+void ImageAssembly::stored(const std::string& key,
                            const std::vector<std::pair<int, std::span<const float>>>& tiles,
                            bool last) {
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
   Job& job = it->second;
   if (job.canvas) {
-    for (const auto& [index, pixels] : tiles) job.canvas->paste(job.frame->tiles[index], pixels);
+    for (const auto& [index, pixels] : tiles) job.canvas->paste(job.frame->rect(index), pixels);
   } else if (!job.canvas_coming && !last && !job.completed && !job.ended) {
     // The job's first tiles, or the first since a restart: these are only stored, and
     // the canvas, made next, starts from the store.
     job.canvas_coming = true;
-    canvases_to_make_.push_back(job_id);
+    canvases_to_make_.push_back(key);
     changed_.notify_all();
   }
 }
 
-void ImageAssembly::completed(const std::string& job_id) {
+void ImageAssembly::completed(const std::string& key) {
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
   it->second.completed = true;
   // Should the write fail or the process die, the tiles are stored and a restart writes
   // the image again.
-  images_to_write_.push_back(job_id);
+  images_to_write_.push_back(key);
   changed_.notify_all();
 }
 
-void ImageAssembly::ended(const std::string& job_id) {
+void ImageAssembly::ended(const std::string& key) {
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
   it->second.ended = true;
   it->second.completed = false;
   it->second.canvas.reset();
 }
 
-void ImageAssembly::resumed(const std::string& job_id) {
+void ImageAssembly::resumed(const std::string& key) {
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   if (it != jobs_.end()) it->second.ended = false;
 }
 
-void ImageAssembly::removed(const std::string& job_id) {
+void ImageAssembly::removed(const std::string& key) {
   std::lock_guard lock(mutex_);
-  jobs_.erase(job_id);
+  jobs_.erase(key);
   // After the job's rows: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served. One
   // being written now is removed once written (write_image()).
-  files_.remove(job_id);
+  files_.remove(key);
 }
 
-void ImageAssembly::assemble(const std::string& job_id,
+void ImageAssembly::assemble(const std::string& key,
                              std::function<void(std::shared_ptr<const Image>)> then,
                              bool finished) const {
   if (finished) {
     // A read runs in a later round of the store thread than the callbacks of every write
     // durable now, so its canvas has every tile and its completion is known here.
-    store_.read([this, job_id, then = std::move(then)](Store&) mutable {
-      assemble(job_id, std::move(then), false);
+    store_.read([this, key, then = std::move(then)](Store&) mutable {
+      assemble(key, std::move(then), false);
     });
     return;
   }
   std::shared_ptr<const Frame> frame;
   {
     std::lock_guard lock(mutex_);
-    const auto it = jobs_.find(job_id);
+    const auto it = jobs_.find(key);
     if (it == jobs_.end()) return then(nullptr);
     const Job& job = it->second;
     // A completed job's canvas changes no more and can be shared; a running one's is copied.
@@ -112,24 +111,24 @@ void ImageAssembly::assemble(const std::string& job_id,
     frame = job.frame;
   }
   // From the store, after every tile accepted so far is durable.
-  store_.read([job_id, frame, then = std::move(then)](Store& store) {
+  store_.read([key, frame, then = std::move(then)](Store& store) {
     auto image = std::make_shared<Image>(frame->width, frame->height);
-    paste_stored(store, *image, job_id, *frame);
+    paste_stored(store, *image, *frame);
     then(std::move(image));
   });
 }
 
-std::optional<std::filesystem::path> ImageAssembly::image_file(const std::string& job_id) const {
+std::optional<std::filesystem::path> ImageAssembly::image_file(const std::string& key) const {
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   // The file appears whole (it is written beside its place and renamed), so once it is
   // there it can be sent.
-  if (it == jobs_.end() || !it->second.completed || !files_.has(job_id)) return std::nullopt;
-  return files_.path(job_id);
+  if (it == jobs_.end() || !it->second.completed || !files_.has(key)) return std::nullopt;
+  return files_.path(key);
 }
 
 void ImageAssembly::prune_files(
-    const std::function<bool(const std::string& job_id)>& completed) const {
+    const std::function<bool(const std::string& key)>& completed) const {
   files_.prune(completed);
 }
 
@@ -139,19 +138,20 @@ void ImageAssembly::wait_for_images() {
                 [&] { return images_to_write_.empty() && canvases_to_make_.empty() && !busy_; });
 }
 
-void ImageAssembly::paste_stored(Store& store, Image& image, const std::string& job_id,
-                                 const Frame& frame) {
+void ImageAssembly::paste_stored(Store& store, Image& image, const Frame& frame) {
   const auto floats_of = [&](int index) -> std::size_t {
-    if (index < 0 || index >= static_cast<int>(frame.tiles.size()))
-      throw std::runtime_error("job " + job_id + ": stored pixels for unknown tile " +
+    if (index < 0 || index >= frame.job_tiles)
+      throw std::runtime_error("job " + frame.job_id + ": stored pixels for unknown tile " +
                                std::to_string(index));
-    return frame.tiles[index].pixel_count() * 3;
+    // Every frame is cut alike: a tile of another frame is the size of this one's.
+    return (*frame.tiles)[index % frame.tiles->size()].pixel_count() * 3;
   };
   // Every stored result is a tile accepted once: a tile delivered again is refused, and
   // what start-up found unusable it deleted before anything was assembled.
-  store.for_each_tile_pixels(job_id, floats_of, [&](int index, std::span<const float> pixels) {
-    image.paste(frame.tiles[index], pixels);
-  });
+  store.for_each_tile_pixels(
+      frame.job_id, floats_of,
+      [&](int index, std::span<const float> pixels) { image.paste(frame.rect(index), pixels); },
+      [&](int index) { return frame.holds(index); });
 }
 
 void ImageAssembly::run() {
@@ -179,32 +179,32 @@ void ImageAssembly::run() {
   }
 }
 
-void ImageAssembly::make_canvas(const std::string& job_id, std::unique_lock<std::mutex>& lock) {
-  const auto it = jobs_.find(job_id);
+void ImageAssembly::make_canvas(const std::string& key, std::unique_lock<std::mutex>& lock) {
+  const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
   const std::shared_ptr<const Frame> frame = it->second.frame;
   lock.unlock();
   auto canvas = std::make_shared<Image>(frame->width, frame->height);
-  store_.read([this, job_id, canvas = std::move(canvas)](Store& store) mutable {
-    install_canvas(store, job_id, std::move(canvas));
+  store_.read([this, key, canvas = std::move(canvas)](Store& store) mutable {
+    install_canvas(store, key, std::move(canvas));
   });
   lock.lock();
 }
 
-void ImageAssembly::install_canvas(Store& store, const std::string& job_id,
+void ImageAssembly::install_canvas(Store& store, const std::string& key,
                                    std::shared_ptr<Image> canvas) {
   std::shared_ptr<const Frame> frame;
   {
     std::lock_guard lock(mutex_);
-    const auto it = jobs_.find(job_id);  // it may have been removed meanwhile
+    const auto it = jobs_.find(key);  // it may have been removed meanwhile
     if (it == jobs_.end()) return;
     frame = it->second.frame;
   }
   // On the store thread, unlocked: every tile durable so far is in the store, and every
   // later one is pasted by stored(), which runs on this thread too.
-  paste_stored(store, *canvas, job_id, *frame);
+  paste_stored(store, *canvas, *frame);
   std::lock_guard lock(mutex_);
-  const auto it = jobs_.find(job_id);
+  const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
   Job& job = it->second;
   job.canvas_coming = false;
@@ -214,12 +214,12 @@ void ImageAssembly::install_canvas(Store& store, const std::string& job_id,
   if (!job.ended) job.canvas = std::move(canvas);
 }
 
-void ImageAssembly::write_image(const std::string& job_id, std::unique_lock<std::mutex>& lock) {
+void ImageAssembly::write_image(const std::string& key, std::unique_lock<std::mutex>& lock) {
   // A canvas on its way is waited for, rather than assembling a second one from the store.
-  auto it = jobs_.find(job_id);
+  auto it = jobs_.find(key);
   while (it != jobs_.end() && it->second.canvas_coming) {
     changed_.wait(lock);
-    it = jobs_.find(job_id);
+    it = jobs_.find(key);
   }
   if (it == jobs_.end() || !it->second.completed) return;
   // A completed job's canvas changes no more, so it can be read unlocked.
@@ -231,27 +231,27 @@ void ImageAssembly::write_image(const std::string& job_id, std::unique_lock<std:
     if (!image)
       store_.call([&](Store& store) {
         auto assembled = std::make_shared<Image>(frame->width, frame->height);
-        paste_stored(store, *assembled, job_id, *frame);
+        paste_stored(store, *assembled, *frame);
         image = std::move(assembled);
       });
     // Encoding takes a while and touches no shared state: workers and clients go on.
-    files_.write(job_id, *image);
+    files_.write(key, *image);
   } catch (const std::exception& e) {
     error = e.what();
   }
   lock.lock();
-  it = jobs_.find(job_id);
+  it = jobs_.find(key);
   if (it == jobs_.end()) {
-    files_.remove(job_id);  // removed while it was being written
+    files_.remove(key);  // removed while it was being written
     return;
   }
   it->second.canvas.reset();  // the file (or the store) serves it from now on
   if (error.empty() || !it->second.completed) return;
   // Every tile is stored, so a resubmission renders again; a "completed" job without an
   // image file would only fail later, when someone looks for it.
-  spdlog::error("job {}: cannot write the image: {}", job_id, error);
+  spdlog::error("image {}: cannot write it: {}", key, error);
   lock.unlock();
-  write_failed_(job_id, error);
+  write_failed_(key, error);
   lock.lock();
 }
 

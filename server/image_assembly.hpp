@@ -1,4 +1,5 @@
-// The images of the jobs: each running job's canvas, into which its tiles are pasted as
+// The images of the jobs, each named by its key (a still job's id, or a frame's,
+// image_key()): each running image's canvas, into which its tiles are pasted as
 // they become durable, the image of any job on request, and the image thread that makes
 // canvases and writes each completed job's image file (ImageFiles) off the path of any
 // request. The Scheduler tells it what happens to a job; it never calls the Scheduler
@@ -25,17 +26,27 @@
 
 namespace tessera {
 
-// What a job's image is made of: its size and its tiles by index. Fixed at submit.
+// What an image is made of: a still job's, or one frame's of an animation. Fixed at
+// submit. Every frame of a job is cut alike, so its frames share one list of rectangles;
+// the job numbers its tiles frame after frame, this frame's from `first_tile` on.
 struct Frame {
   int width = 0;
   int height = 0;
-  std::vector<TileRect> tiles;
+  std::shared_ptr<const std::vector<TileRect>> tiles;  // one frame's, by index in the frame
+  std::string job_id;  // whose results (and pixel file) hold its tiles
+  int first_tile = 0;  // the job's index of this frame's first tile
+  int job_tiles = 0;   // the job's tiles, every frame's
+
+  bool holds(int job_index) const {
+    return job_index >= first_tile && job_index - first_tile < static_cast<int>(tiles->size());
+  }
+  const TileRect& rect(int job_index) const { return (*tiles)[job_index - first_tile]; }
 };
 
 class ImageAssembly {
  public:
   // Called on the image thread, unlocked, when a completed job's image cannot be written.
-  using WriteFailed = std::function<void(const std::string& job_id, const std::string& error)>;
+  using WriteFailed = std::function<void(const std::string& key, const std::string& error)>;
 
   ImageAssembly(const std::filesystem::path& data_dir, StoreThread& store,
                 WriteFailed write_failed);
@@ -50,34 +61,34 @@ class ImageAssembly {
   enum class Stage { rendering, completed, ended };
   // A job whose image may be asked for: at submit, or at start-up for every stored job
   // (a completed one without its image file is then also completed()).
-  void add(const std::string& job_id, std::shared_ptr<const Frame> frame,
+  void add(const std::string& key, std::shared_ptr<const Frame> frame,
            Stage stage = Stage::rendering);
   // On the store thread, once these tiles of the job are durable: pasted into its canvas,
   // or, without one, the canvas is asked for (not for a job's `last` tiles: its image is
   // then written from the store).
-  void stored(const std::string& job_id,
+  void stored(const std::string& key,
               const std::vector<std::pair<int, std::span<const float>>>& tiles, bool last);
   // The job's completion is durable: the image thread writes its image file.
-  void completed(const std::string& job_id);
+  void completed(const std::string& key);
   // The job failed or was canceled: its image comes from the store from now on.
-  void ended(const std::string& job_id);
+  void ended(const std::string& key);
   // The ended job renders again (a failed job retried): its tiles go to a canvas again.
-  void resumed(const std::string& job_id);
+  void resumed(const std::string& key);
   // The job's removal is durable: its image file goes too.
-  void removed(const std::string& job_id);
+  void removed(const std::string& key);
 
   // The job's image as assembled so far, handed to `then`: on this thread from its canvas,
   // or on the store thread from the store; null for a job it does not know. `finished`:
   // the scheduler has the job completed, which it may tell others (an event, a long poll)
   // before the callbacks of the same write have pasted its last tiles and marked it
   // completed here; the image is then taken on the store thread, after those callbacks.
-  void assemble(const std::string& job_id, std::function<void(std::shared_ptr<const Image>)> then,
+  void assemble(const std::string& key, std::function<void(std::shared_ptr<const Image>)> then,
                 bool finished = false) const;
   // The image file of a completed job, once written.
-  std::optional<std::filesystem::path> image_file(const std::string& job_id) const;
-  bool has_file(const std::string& job_id) const { return files_.has(job_id); }
+  std::optional<std::filesystem::path> image_file(const std::string& key) const;
+  bool has_file(const std::string& key) const { return files_.has(key); }
   // Deletes the image files of jobs that are not completed ones (start-up).
-  void prune_files(const std::function<bool(const std::string& job_id)>& completed) const;
+  void prune_files(const std::function<bool(const std::string& key)>& completed) const;
   // Waits until every canvas asked for is made and every image queued is written.
   void wait_for_images();
 
@@ -90,15 +101,14 @@ class ImageAssembly {
     bool ended = false;  // failed or canceled
   };
   // Pastes every stored tile of the job into `image`; on the store thread only.
-  static void paste_stored(Store& store, Image& image, const std::string& job_id,
-                           const Frame& frame);
+  static void paste_stored(Store& store, Image& image, const Frame& frame);
   void run();
   // The image thread zeroes a canvas (3 GiB for a 16384x16384 frame takes a second or more,
   // which no request and no commit should wait out); the store thread then pastes what is
   // stored into it and puts it in place, so that no durable tile is missed.
-  void make_canvas(const std::string& job_id, std::unique_lock<std::mutex>& lock);
-  void install_canvas(Store& store, const std::string& job_id, std::shared_ptr<Image> canvas);
-  void write_image(const std::string& job_id, std::unique_lock<std::mutex>& lock);
+  void make_canvas(const std::string& key, std::unique_lock<std::mutex>& lock);
+  void install_canvas(Store& store, const std::string& key, std::shared_ptr<Image> canvas);
+  void write_image(const std::string& key, std::unique_lock<std::mutex>& lock);
 
   ImageFiles files_;
   StoreThread& store_;

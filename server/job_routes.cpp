@@ -7,6 +7,7 @@
 #include <malloc.h>
 #endif
 
+#include "common/frame_list.hpp"
 #include "common/image_file_loader.hpp"
 #include "common/image_format.hpp"
 #include "common/image_io.hpp"
@@ -86,6 +87,36 @@ HttpResponse scene_refused(const SceneError& e) {
                                              e.limit(), e.limit_value()}));
 }
 
+// The most tiles one job holds, every frame's: those of a 16384x16384 still at 8-pixel
+// tiles, the largest the default limits take.
+constexpr std::uint64_t kMaxJobTiles = (16384 / 8) * (16384 / 8);
+
+// The frames a submission renders: those it names, or every frame of an animation's range;
+// none for a still, which renders its one frame 0 (and may name it). A FrameListError says
+// what is wrong, and where in the list.
+std::vector<int> frames_of(const protocol::JobSubmission& submission, const Scene& scene,
+                           const Limits& limits) {
+  const Animation& animation = scene.animation;
+  if (!animation.animated) {
+    if (submission.frames) {
+      try {
+        parse_frame_list(*submission.frames, 0, 0, 1);
+      } catch (const FrameListError& e) {
+        throw FrameListError(std::string(e.what()) +
+                             " (the scene has no \"animation\": a still is frame 0)");
+      }
+    }
+    return {};
+  }
+  // The scene's range is within max_frames already (the parser's limit).
+  if (!submission.frames) {
+    std::vector<int> every;
+    for (int frame = animation.first; frame <= animation.last; ++frame) every.push_back(frame);
+    return every;
+  }
+  return parse_frame_list(*submission.frames, animation.first, animation.last, limits.max_frames);
+}
+
 // What the network's thread hands the blocking pool of a submission it has read.
 struct Taken {
   protocol::JobSubmission submission;
@@ -120,7 +151,7 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
     scan_scene_limits(body, context.limits, "scene");
     objects.reserve(body.size());  // room only: untouched, it costs nothing
     // JobSubmission's keys: any other is refused by its name, and its value not built.
-    static constexpr std::string_view envelope_keys[] = {"name", "priority", "scene"};
+    static constexpr std::string_view envelope_keys[] = {"name", "priority", "frames", "scene"};
     envelope = parse_json_objects_apart(body, "scene", objects, envelope_keys);
   } catch (const SceneError& e) {
     // A syntax error is not the scene's: the scan puts it at the document ("").
@@ -176,15 +207,28 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
   } catch (const SceneError& e) {
     return answer(scene_refused(e));
   }
-  if (scene.animation.animated) {
-    // Checked whole, and refused rather than rendered as its first frame alone: a job is
-    // one still until the coordinator schedules frames.
-    return answer(error_response(
-        422, "animation_not_supported",
-        "/scene/animation: the farm renders one still per job so far; render an animated "
-        "scene's frames with tessera render --frames (docs/scene-format.md, \"Animation\")",
-        "/scene/animation"));
+  std::vector<int> frames;
+  try {
+    frames = frames_of(submission, scene, context.limits);
+  } catch (const FrameListError& e) {
+    return answer(
+        error_response(400, "invalid_request", std::string("/frames: ") + e.what(), "/frames"));
   }
+  // Each frame's tiles are kept in memory while the job lives: an animation may hold no
+  // more of them than the largest still the coordinator takes.
+  const std::uint64_t tiles =
+      frames.size() *
+      std::max<std::size_t>(
+          1, split_into_tiles(scene.width, scene.height, scene.render.tile_size).size());
+  if (tiles > kMaxJobTiles)
+    return answer(json_response(
+        422, protocol::to_json(protocol::Error{
+                 "over_limit",
+                 "/frames: " + std::to_string(frames.size()) + " frames of " +
+                     std::to_string(tiles / std::max<std::size_t>(1, frames.size())) +
+                     " tiles each are " + std::to_string(tiles) + " tiles; a job holds at most " +
+                     std::to_string(kMaxJobTiles) + " (fewer frames, or a larger tile_size)",
+                 "/frames", "max_job_tiles", kMaxJobTiles})));
   // The stored text is the scene's dump(), byte for byte: its digest is what workers ask
   // for, and the same scene sent twice is stored once.
   std::string scene_json = dump_scene(submission.scene, std::move(objects));
@@ -199,7 +243,8 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
         HttpResponse response = body_response(201, status_of(*job, context.clock.now_ms()));
         response.headers.emplace_back("Location", protocol::fill(protocol::route::job, job->id));
         respond(std::move(response));
-      });
+      },
+      std::move(frames));
 }
 
 HttpResponse list(ApiContext& context, const HttpRequest& request) {
@@ -288,6 +333,8 @@ HttpResponse encoded(ApiContext& context, const std::string& id, const Image& im
   return response;
 }
 
+// The image of a job's frame: GET /v1/jobs/{id}/frames/{frame}/image, or (without a frame
+// in the path) GET /v1/jobs/{id}/image, the first frame's, which for a still is its image.
 void image(ApiContext& context, const HttpRequest& request, Respond respond) {
   const std::string& id = request.params.at("id");
   const auto query_value = [&](std::string_view key, const char* fallback) {
@@ -303,14 +350,36 @@ void image(ApiContext& context, const HttpRequest& request, Respond respond) {
     return respond(error_response(400, "invalid_request", "partial must be 0 or 1"));
   const auto job = context.scheduler.job(id);
   if (!job) return respond(not_found(id));
-  if (job->state != JobState::completed && partial != "1")
-    return respond(error_response(409, "not_ready",
-                                  "job " + id + " is " + to_string(job->state) +
-                                      "; add ?partial=1 for the tiles rendered so far"));
-  // A completed job's EXR is the file the image thread wrote: sent as it is, with no
-  // image assembled in memory (3 GiB for a 16384x16384 frame).
-  if (format->kind == ImageFileKind::exr && job->state == JobState::completed) {
-    if (const auto written = context.scheduler.image_file(id)) {
+  const auto named = request.params.find("frame");
+  int frame = job->frames->numbers.front();
+  if (named != request.params.end()) {
+    const std::string& text = named->second;
+    if (text.empty() || text.size() > 9 ||
+        text.find_first_not_of("0123456789") != std::string::npos)
+      return respond(error_response(400, "invalid_request",
+                                    "frame must be a whole number from 0 to 999999999"));
+    frame = std::stoi(text);
+  }
+  const std::optional<FrameInfo> info = context.scheduler.frame(id, frame);
+  if (!info)
+    return respond(error_response(
+        404, "not_found",
+        "job " + id + " renders no frame " + std::to_string(frame) + "; its frames are " +
+            (job->frames->animated() ? job->frames->list : std::string("0"))));
+  const bool done = info->state == protocol::FrameState::done;
+  if (!done && partial != "1") {
+    const std::string what =
+        named == request.params.end() || !job->frames->animated()
+            ? "job " + id + " is " + to_string(job->state)
+            : "frame " + std::to_string(frame) + " of job " + id + " is " +
+                  std::string(protocol::name_in(protocol::kFrameStateNames, info->state));
+    return respond(
+        error_response(409, "not_ready", what + "; add ?partial=1 for the tiles rendered so far"));
+  }
+  // A frame done has the EXR the image thread wrote: sent as it is, with no image
+  // assembled in memory (3 GiB for a 16384x16384 frame).
+  if (format->kind == ImageFileKind::exr && done) {
+    if (const auto written = context.scheduler.frame_image_file(id, frame)) {
       HttpResponse response{200, std::string(format->content_type), "", {}};
       response.file = written->string();
       return respond(std::move(response));
@@ -318,15 +387,29 @@ void image(ApiContext& context, const HttpRequest& request, Respond respond) {
   }
   // Assembled from the canvas or, on the store thread, from the store; encoded where the
   // disk may be waited on.
-  context.scheduler.assemble(
-      id, [&context, id, format, transfer = job->output_transfer,
-           respond = std::move(respond)](std::shared_ptr<const Image> assembled) {
+  context.scheduler.assemble_frame(
+      id, frame,
+      [&context, id, format, transfer = job->output_transfer,
+       respond = std::move(respond)](std::shared_ptr<const Image> assembled) {
         if (!assembled) return respond(not_found(id));
         context.run_blocking(
             [&context, id, format, transfer, respond, assembled = std::move(assembled)] {
               respond(encoded(context, id, *assembled, *format, transfer));
             });
       });
+}
+
+// GET /v1/jobs/{id}/frames.
+void frame_list(ApiContext& context, const HttpRequest& request, Respond respond) {
+  const std::string id = request.params.at("id");
+  respond_durable(context.scheduler, std::move(respond), [&context, id] {
+    const auto frames = context.scheduler.frames(id);
+    if (!frames) return not_found(id);
+    protocol::FrameList list;
+    list.frames.reserve(frames->size());
+    for (const FrameInfo& frame : *frames) list.frames.push_back(frame_status_of(frame));
+    return body_response(200, list);
+  });
 }
 
 }  // namespace
@@ -378,6 +461,18 @@ void add_job_routes(Router& router, ApiContext& context) {
       "GET", std::string(protocol::route::job_image),
       [&context](HttpRequest&& request, Respond respond) {
         image(context, request, std::move(respond));
+      },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(protocol::route::job_frame_image),
+      [&context](HttpRequest&& request, Respond respond) {
+        image(context, request, std::move(respond));
+      },
+      std::nullopt, role_client);
+  router.add(
+      "GET", std::string(protocol::route::job_frames),
+      [&context](HttpRequest&& request, Respond respond) {
+        frame_list(context, request, std::move(respond));
       },
       std::nullopt, role_client);
   router.add(

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "common/frame_list.hpp"
 #include "server/ids.hpp"
 #include "server/scheduler_entries.hpp"
 #include "server/tile_order.hpp"
@@ -74,13 +75,21 @@ WorkerEntry* Scheduler::find_worker(const std::string& id) const {
 }
 
 void Scheduler::submit(const std::string& name, int priority, const Scene& scene,
-                       std::string scene_json, Submitted then) {
+                       std::string scene_json, Submitted then, std::vector<int> frames) {
   // Outside the lock: hashing a large mesh scene takes a while.
   const std::string digest = sha256_hex(scene_json);
   const std::vector<TileRect> rects =
       split_into_tiles(scene.width, scene.height, scene.render.tile_size);
+  auto job_frames = std::make_shared<JobFrames>();
+  if (frames.empty()) {
+    job_frames->numbers = {0};
+  } else {
+    job_frames->list = format_frame_list(frames);
+    job_frames->numbers = std::move(frames);
+  }
+  const int frame_count = static_cast<int>(job_frames->numbers.size());
   // Also outside: sorting a million tiles takes a while too.
-  std::vector<int> order = centre_first_order(rects, scene.width, scene.height);
+  std::vector<int> order = hand_out_order(rects, scene.width, scene.height, frame_count);
 
   auto job = std::make_shared<JobEntry>();
   JobStatus& s = job->status;
@@ -93,9 +102,10 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   s.created_at_ms = clock_.now_ms();
   s.scene_digest = digest;
   s.output_transfer = scene.render.output_transfer;
-  job->tiles.resize(rects.size());
-  for (std::size_t i = 0; i < rects.size(); ++i) job->tiles[i].rect = rects[i];
-  std::shared_ptr<const Frame> frame = frame_of(*job);  // outside the lock too
+  s.frames = std::move(job_frames);
+  job->tiles_per_frame = static_cast<int>(rects.size());
+  job->tiles.resize(rects.size() * frame_count);
+  for (std::size_t i = 0; i < job->tiles.size(); ++i) job->tiles[i].rect = rects[i % rects.size()];
 
   StoreTicket ticket = 0;
   {
@@ -109,7 +119,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   }
   // Nothing can lease a tile of the job, nor list it, before it is stored: a job the store
   // refuses (a full disk, say) leaves nothing behind.
-  store_thread_.after(ticket, [this, job, order = std::move(order), frame = std::move(frame),
+  store_thread_.after(ticket, [this, job, order = std::move(order),
                                then = std::move(then)](const std::string& error) mutable {
     if (!error.empty()) {
       spdlog::error("job {} ({}): cannot store it: {}", job->status.id, job->status.name, error);
@@ -125,12 +135,19 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       JobEntry& entry =
           *jobs_.emplace(id, std::make_unique<JobEntry>(std::move(*job))).first->second;
       index_tiles(entry, std::move(order));
-      images_.add(id, std::move(frame));
+      const std::vector<std::shared_ptr<const Frame>> images = frames_of(entry);
+      for (int slot = 0; slot < entry.frame_count(); ++slot)
+        images_.add(image_key(entry, slot), images[slot]);
       status = entry.status;
       notify = callbacks_;
     }
-    spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", status.id, status.name,
-                 status.width, status.height, status.tiles_total, status.priority);
+    if (status.frames->animated())
+      spdlog::info("job {} ({}): submitted, frames {} at {}x{} in {} tiles, priority {}", status.id,
+                   status.name, status.frames->list, status.width, status.height,
+                   status.tiles_total, status.priority);
+    else
+      spdlog::info("job {} ({}): submitted, {}x{} in {} tiles, priority {}", status.id, status.name,
+                   status.width, status.height, status.tiles_total, status.priority);
     if (observer) observer->jobs_changed({status});
     for (const auto& callback : notify) callback();
     then(status, "");
@@ -189,11 +206,14 @@ Pending<RemoveOutcome> Scheduler::remove(const std::string& id) {
   const StoreTicket ticket = queue_write([id](Store& store) { store.delete_job(id); });
   // After the job's rows: a file left behind by a failure here is pruned on the next start,
   // while a row without its image would be a completed job that cannot be served.
-  store_thread_.after(ticket, [this, id, observer = observer_](const std::string& error) {
-    if (!error.empty()) return;
-    images_.removed(id);
-    if (observer) observer->job_removed(id);
-  });
+  std::vector<std::string> keys;
+  for (int slot = 0; slot < job->frame_count(); ++slot) keys.push_back(image_key(*job, slot));
+  store_thread_.after(
+      ticket, [this, id, keys = std::move(keys), observer = observer_](const std::string& error) {
+        if (!error.empty()) return;
+        for (const std::string& key : keys) images_.removed(key);
+        if (observer) observer->job_removed(id);
+      });
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);
   jobs_.erase(id);
@@ -208,17 +228,106 @@ void Scheduler::scene_json(const std::string& digest,
 
 void Scheduler::assemble(const std::string& id,
                          std::function<void(std::shared_ptr<const Image>)> then) const {
+  // An animation's image is its first frame's.
+  std::optional<int> first;
+  {
+    std::lock_guard lock(mutex_);
+    if (const JobEntry* job = find_job(id)) first = job->status.frames->numbers.front();
+  }
+  if (!first) return then(nullptr);
+  assemble_frame(id, *first, std::move(then));
+}
+
+std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
+  std::optional<int> first;
+  {
+    std::lock_guard lock(mutex_);
+    if (const JobEntry* job = find_job(id)) first = job->status.frames->numbers.front();
+  }
+  if (!first) return std::nullopt;
+  return frame_image_file(id, *first);
+}
+
+void Scheduler::assemble_frame(const std::string& id, int frame,
+                               std::function<void(std::shared_ptr<const Image>)> then) const {
+  std::string key;
   bool finished = false;
   {
     std::lock_guard lock(mutex_);
     const JobEntry* job = find_job(id);
-    finished = job != nullptr && job->status.state == JobState::completed;
+    const std::optional<int> slot = job ? slot_of_frame(*job, frame) : std::nullopt;
+    if (!slot) return then(nullptr);
+    key = image_key(*job, *slot);
+    // Done: its observers may have heard so before the write's callbacks pasted its last
+    // tiles (ImageAssembly::assemble()).
+    finished = job->frame_done[*slot] == job->tiles_per_frame;
   }
-  images_.assemble(id, std::move(then), finished);
+  images_.assemble(key, std::move(then), finished);
 }
 
-std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
-  return images_.image_file(id);
+std::optional<std::filesystem::path> Scheduler::frame_image_file(const std::string& id,
+                                                                 int frame) const {
+  std::string key;
+  {
+    std::lock_guard lock(mutex_);
+    const JobEntry* job = find_job(id);
+    const std::optional<int> slot = job ? slot_of_frame(*job, frame) : std::nullopt;
+    if (!slot) return std::nullopt;
+    key = image_key(*job, *slot);
+  }
+  return images_.image_file(key);
+}
+
+std::optional<int> Scheduler::slot_of_frame(const JobEntry& job, int frame) {
+  const std::vector<int>& numbers = job.status.frames->numbers;
+  const auto it = std::lower_bound(numbers.begin(), numbers.end(), frame);
+  if (it == numbers.end() || *it != frame) return std::nullopt;
+  return static_cast<int>(it - numbers.begin());
+}
+
+FrameInfo Scheduler::frame_info(const JobEntry& job, int slot) const {
+  FrameInfo info;
+  info.frame = job.status.frames->numbers[slot];
+  info.tiles_total = job.tiles_per_frame;
+  info.tiles_done = job.frame_done[slot];
+  info.tiles_rendering = job.frame_rendering[slot];
+  using protocol::FrameState;
+  if (info.tiles_done == info.tiles_total) {
+    info.state = FrameState::done;
+  } else if (job.frame_spent[slot] > 0) {
+    info.state = FrameState::failed;
+    const int first = slot * job.tiles_per_frame;
+    for (int index = first; index < first + job.tiles_per_frame; ++index) {
+      const TileSlot& tile = job.tiles[index];
+      if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
+      info.error = "tile " + std::to_string(index - first) + " at (" + std::to_string(tile.rect.x) +
+                   ", " + std::to_string(tile.rect.y) + ") failed " +
+                   std::to_string(tile.attempts) + " times; the last error: " + tile.last_error;
+      break;
+    }
+  } else if (info.tiles_rendering > 0 || info.tiles_done > 0) {
+    info.state = FrameState::rendering;
+  }
+  return info;
+}
+
+std::optional<std::vector<FrameInfo>> Scheduler::frames(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  const JobEntry* job = find_job(id);
+  if (!job) return std::nullopt;
+  std::vector<FrameInfo> frames;
+  if (job->tiles_per_frame == 0) return frames;
+  frames.reserve(job->frame_count());
+  for (int slot = 0; slot < job->frame_count(); ++slot) frames.push_back(frame_info(*job, slot));
+  return frames;
+}
+
+std::optional<FrameInfo> Scheduler::frame(const std::string& id, int frame) const {
+  std::lock_guard lock(mutex_);
+  const JobEntry* job = find_job(id);
+  const std::optional<int> slot = job ? slot_of_frame(*job, frame) : std::nullopt;
+  if (!slot || job->tiles_per_frame == 0) return std::nullopt;
+  return frame_info(*job, *slot);
 }
 
 void Scheduler::wait_for_images() {
@@ -227,14 +336,25 @@ void Scheduler::wait_for_images() {
   images_.wait_for_images();
 }
 
-void Scheduler::image_write_failed(const std::string& id, const std::string& error) {
+void Scheduler::image_write_failed(const std::string& key, const std::string& error) {
   std::lock_guard lock(mutex_);
-  JobEntry* job = find_job(id);
-  if (!job || job->status.state != JobState::completed) return;
+  JobEntry* job = find_job(job_of_image(key));
+  if (!job) return;
+  const std::string why = (job->frame_count() == 1 ? "cannot write the image: "
+                                                   : "cannot write the image " + key + ": ") +
+                          error;
   StagedChange change;
-  JobStatus& status = change.job(*job);
-  status.state = JobState::failed;
-  status.error = "cannot write the image: " + error;
+  if (job->status.state == JobState::completed) {
+    JobStatus& status = change.job(*job);
+    status.state = JobState::failed;
+    status.error = why;
+  } else if (!is_finished(job->status.state)) {
+    // A frame of an animation that renders on: it fails now rather than end "completed"
+    // without that frame's image.
+    stage_job_failure(change, *job, why);
+  } else {
+    return;
+  }
   commit(change);
 }
 

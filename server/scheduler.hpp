@@ -53,8 +53,10 @@ class Scheduler {
   using Submitted = std::function<void(std::optional<JobStatus>, const std::string& error)>;
   // `scene` is already validated; `scene_json` is what is stored and served to workers. The
   // job exists, for every other call too, once it is stored.
+  // `frames`: the frames of an animated scene to render, ascending (checked against its
+  // range); empty for a still, its one frame 0.
   void submit(const std::string& name, int priority, const Scene& scene, std::string scene_json,
-              Submitted then);
+              Submitted then, std::vector<int> frames = {});
   std::optional<JobStatus> job(const std::string& id) const;
   // Newest first; `state` filters when set; at most `limit`, after the first `offset`.
   std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
@@ -88,6 +90,15 @@ class Scheduler {
                 std::function<void(std::shared_ptr<const Image>)> then) const;
   // The image file of a completed job, once the image thread has written it.
   std::optional<std::filesystem::path> image_file(const std::string& id) const;
+  // The same for one frame of the job, by the scene's frame number: `assemble` hands over
+  // null for a frame the job does not render, and `image_file` nothing until it is done.
+  void assemble_frame(const std::string& id, int frame,
+                      std::function<void(std::shared_ptr<const Image>)> then) const;
+  std::optional<std::filesystem::path> frame_image_file(const std::string& id, int frame) const;
+  // Every frame of the job, in the order they go out; nothing when there is no such job.
+  std::optional<std::vector<FrameInfo>> frames(const std::string& id) const;
+  // One frame of the job; nothing when there is no such job or frame.
+  std::optional<FrameInfo> frame(const std::string& id, int frame) const;
   // Waits until the image file of every job completed so far is written (or has failed).
   void wait_for_images();
 
@@ -215,9 +226,8 @@ class Scheduler {
   // Keeps each worker's one live lease, with a fresh timeout, and sends the others' tiles
   // back to the queue; a worker without a lease is gone until it talks again.
   void stage_leases_kept(StagedChange& change, std::int64_t now);
-  // Brings each job's state in line with its tiles; returns the completed jobs whose image
-  // file is still to be written.
-  std::vector<JobEntry*> stage_job_states(StagedChange& change, std::int64_t now);
+  // Brings each job's state in line with its tiles and frames.
+  void stage_job_states(StagedChange& change, std::int64_t now);
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
   // The image thread could not write a completed job's image: the job fails.
@@ -257,6 +267,17 @@ class Scheduler {
   // Takes the tile order of a freshly built job (computes it when `order` is empty) and
   // tracks all its tiles.
   void index_tiles(JobEntry& job, std::vector<int> order = {});
+  // A frame's tiles are pending (handed out) only while it has not failed: when one of its
+  // tiles spends its attempts the others leave the pending set, and come back should the
+  // job be retried.
+  void set_frame_pending(JobEntry& job, int slot, bool pending);
+  FrameInfo frame_info(const JobEntry& job, int slot) const;
+  // The slot of the scene's frame `frame` in the job; nothing when it does not render it.
+  static std::optional<int> slot_of_frame(const JobEntry& job, int frame);
+  // Why a job of failed frames failed: the frames failed so far and `more` (staged now),
+  // and the first one's error.
+  std::string failed_frames_error(const JobEntry& job, const std::vector<int>& more,
+                                  const StagedChange& change) const;
 
   // Stages taking the lease off its live tiles and its worker. An expired lease counts a
   // failure against each tile it still owed.
@@ -273,7 +294,8 @@ class Scheduler {
       const JobEntry& job, const std::string& lease_id, const std::vector<int>& live,
       std::span<const TileResult> results, std::set<int>& named) const;
   // Stages the fresh results' tiles as done, with the job's rays and the worker's next
-  // tile; true when they are the job's last.
+  // tile, and the job's end when they settle its last open frame; true when they are
+  // their frame's last.
   bool stage_results(StagedChange& change, JobEntry& job, const std::string& lease_id,
                      const std::vector<const TileResult*>& fresh, const std::vector<int>& live,
                      const std::set<int>& named);
@@ -297,10 +319,12 @@ class Scheduler {
   int batch_size(const JobEntry& job, int max_tiles) const;
   // Stages up to `count` of the job's pending tiles, in hand-out order, onto the lease;
   // returns their indexes in that order. An extension (`extending`) stops before a tile
-  // that failed before, which goes out alone under a lease of its own.
+  // that failed before, which goes out alone under a lease of its own. A lease's tiles are
+  // of one frame: the batch stops at the end of its first tile's frame, or takes nothing
+  // but tiles of frame slot `slot` when that is not -1 (an extension's lease's).
   std::vector<int> stage_batch(StagedChange& change, JobEntry& job, const std::string& lease_id,
                                const std::string& worker_id, int count, std::int64_t expires_ms,
-                               bool extending);
+                               bool extending, int slot = -1);
   // Records contact; persisted at most once per second per worker.
   void note_seen(WorkerEntry& worker, std::int64_t now);
 

@@ -203,9 +203,12 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
   if (hands_out_tiles(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
   // A canceled or failed job's partial image is read from the store from now on.
+  // Its frames done so far keep their images.
   if ((job.status.state == JobState::failed || job.status.state == JobState::canceled) &&
       was != job.status.state)
-    images_.ended(job.status.id);
+    for (int slot = 0; slot < job.frame_count(); ++slot)
+      if (job.frame_done.empty() || job.frame_done[slot] < job.tiles_per_frame)
+        images_.ended(image_key(job, slot));
 }
 
 void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {
@@ -217,19 +220,60 @@ void Scheduler::apply_tile(JobEntry& job, int index, TileSlot next) {
 void Scheduler::track_tile(JobEntry& job, int index, int sign) {
   const TileSlot& tile = job.tiles[index];
   const int position = job.rank[index];
-  if (tile.state == TileState::pending) {
-    if (sign > 0)
-      job.pending.insert(position);
-    else
-      job.pending.erase(position);
+  const int slot = job.slot_of(index);
+  if (tile.state != TileState::done && tile.attempts >= config_.max_tile_attempts) {
+    const bool failed = job.frame_spent[slot] > 0;
+    job.frame_spent[slot] += sign;
+    if (failed != (job.frame_spent[slot] > 0)) set_frame_pending(job, slot, failed);
   }
-  if (tile.state == TileState::done) job.status.tiles_done += sign;
+  if (tile.state == TileState::pending) {
+    if (sign < 0)
+      job.pending.erase(position);
+    else if (job.frame_spent[slot] == 0)
+      job.pending.insert(position);
+  }
+  if (tile.state == TileState::done) {
+    job.status.tiles_done += sign;
+    job.frame_done[slot] += sign;
+  }
   if (!tile.lease_id.empty()) {
     job.status.tiles_rendering += sign;
+    job.frame_rendering[slot] += sign;
     index_lease_tile(tile.lease_id, job.status.id, index, sign, true, tile.lease_expires_ms);
   }
   if (!tile.result_lease_id.empty())
     index_lease_tile(tile.result_lease_id, job.status.id, index, sign, false);
+  // The frame's own state follows from its counts: done, failed, or open.
+  const bool done = job.frame_done[slot] == job.tiles_per_frame;
+  const bool failed = !done && job.frame_spent[slot] > 0;
+  const bool was_open = job.open_slots.contains(slot);
+  const int number = job.status.frames->numbers[slot];
+  std::vector<int>& failed_frames = job.status.failed_frames;
+  const auto listed = std::lower_bound(failed_frames.begin(), failed_frames.end(), number);
+  const bool was_failed = listed != failed_frames.end() && *listed == number;
+  const bool was_done = !was_open && !was_failed;
+  if (done != was_done) job.status.frames_done += done ? 1 : -1;
+  if (failed && !was_failed) failed_frames.insert(listed, number);
+  if (!failed && was_failed) failed_frames.erase(listed);
+  if (!done && !failed)
+    job.open_slots.insert(slot);
+  else if (was_open)
+    job.open_slots.erase(slot);
+  if (job.open_slots.empty())
+    job.status.current_frame.reset();
+  else
+    job.status.current_frame = job.status.frames->numbers[*job.open_slots.begin()];
+}
+
+void Scheduler::set_frame_pending(JobEntry& job, int slot, bool pending) {
+  const int first = slot * job.tiles_per_frame;
+  for (int index = first; index < first + job.tiles_per_frame; ++index) {
+    if (job.tiles[index].state != TileState::pending) continue;
+    if (pending)
+      job.pending.insert(job.rank[index]);
+    else
+      job.pending.erase(job.rank[index]);
+  }
 }
 
 void Scheduler::index_lease_tile(const std::string& lease_id, const std::string& job_id, int index,
@@ -275,11 +319,14 @@ void Scheduler::renew_lease(const std::string& lease_id, std::int64_t expires_ms
 }
 
 void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {
+  const int frames = job.frame_count();
+  if (job.tiles_per_frame == 0) job.tiles_per_frame = static_cast<int>(job.tiles.size()) / frames;
   if (order.empty()) {
     std::vector<TileRect> rects;
-    rects.reserve(job.tiles.size());
-    for (const TileSlot& tile : job.tiles) rects.push_back(tile.rect);
-    order = centre_first_order(rects, job.status.width, job.status.height);
+    rects.reserve(job.tiles_per_frame);
+    for (int index = 0; index < job.tiles_per_frame; ++index)
+      rects.push_back(job.tiles[index].rect);
+    order = hand_out_order(rects, job.status.width, job.status.height, frames);
   }
   job.order = std::move(order);
   job.rank.assign(job.order.size(), 0);
@@ -289,7 +336,18 @@ void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {
   job.status.tiles_total = static_cast<int>(job.tiles.size());
   job.status.tiles_done = 0;
   job.status.tiles_rendering = 0;
+  job.frame_done.assign(frames, 0);
+  job.frame_rendering.assign(frames, 0);
+  job.frame_spent.assign(frames, 0);
+  job.open_slots.clear();
+  job.status.frames_done = 0;
+  job.status.failed_frames.clear();
+  // Every frame is open until its tiles say otherwise; a frame without tiles (a job whose
+  // stored size cannot be read) is neither, and fails the job at start-up.
+  if (job.tiles_per_frame > 0)
+    for (int slot = 0; slot < frames; ++slot) job.open_slots.insert(job.open_slots.end(), slot);
   for (int index = 0; index < job.status.tiles_total; ++index) track_tile(job, index, +1);
+  if (job.status.tiles_total == 0) job.status.current_frame.reset();
   if (hands_out_tiles(job.status.state))
     active_.insert({-job.status.priority, job.status.created_at_ms, job.status.id});
 }

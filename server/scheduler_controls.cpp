@@ -104,8 +104,9 @@ Pending<ControlOutcome> Scheduler::retry(const std::string& id) {
     job.status.health = JobHealth{};
     job.status.health.progress_at_ms = clock_.now_ms();
     job.failures_by_worker.clear();
-    // Its tiles go to a canvas again as they arrive.
-    images_.resumed(id);
+    // Its tiles go to a canvas again as they arrive (its frames done keep their images).
+    for (int slot = 0; slot < job.frame_count(); ++slot)
+      if (job.frame_done[slot] < job.tiles_per_frame) images_.resumed(image_key(job, slot));
     spdlog::info("job {} ({}): retrying {} tile(s)", id, job.status.name, again);
     return std::nullopt;
   });

@@ -1,8 +1,13 @@
 #include "server/scheduler_entries.hpp"
 
+#include <algorithm>
 #include <array>
+#include <limits>
+#include <memory>
 
+#include "common/frame_list.hpp"
 #include "common/output_transfer.hpp"
+#include "server/tile_order.hpp"
 
 namespace tessera {
 namespace {
@@ -60,7 +65,8 @@ JobRow job_row(const JobStatus& s) {
           s.finished_at_ms,
           s.error,
           s.rays,
-          std::string(output_transfer_name(s.output_transfer))};
+          std::string(output_transfer_name(s.output_transfer)),
+          s.frames->list};
 }
 
 bool status_from_row(JobRow&& row, JobStatus& s) {
@@ -79,14 +85,79 @@ bool status_from_row(JobRow&& row, JobStatus& s) {
   s.rays = row.rays;
   s.scene_digest = std::move(row.scene_digest);
   s.output_transfer = output_transfer_named(row.output_transfer);
-  return state.has_value();
+  bool known = state.has_value();
+  if (row.frames.empty()) {
+    s.frames = still_frames();
+  } else {
+    auto frames = std::make_shared<JobFrames>();
+    try {
+      frames->numbers = parse_frame_list(row.frames, 0, std::numeric_limits<int>::max(),
+                                         std::numeric_limits<std::size_t>::max());
+      frames->list = std::move(row.frames);
+    } catch (const FrameListError&) {
+      frames->numbers = {0};  // a row this build cannot read: the job fails, as below
+      known = false;
+    }
+    s.frames = std::move(frames);
+  }
+  return known;
 }
 
-std::shared_ptr<const Frame> frame_of(const JobEntry& job) {
-  auto frame = std::make_shared<Frame>(Frame{job.status.width, job.status.height, {}});
-  frame->tiles.reserve(job.tiles.size());
-  for (const TileSlot& tile : job.tiles) frame->tiles.push_back(tile.rect);
-  return frame;
+std::shared_ptr<const JobFrames> still_frames() {
+  static const auto still = std::make_shared<const JobFrames>(JobFrames{{0}, ""});
+  return still;
+}
+
+std::vector<std::shared_ptr<const Frame>> frames_of(const JobEntry& job) {
+  auto rects = std::make_shared<std::vector<TileRect>>();
+  rects->reserve(job.tiles_per_frame);
+  for (int i = 0; i < job.tiles_per_frame; ++i) rects->push_back(job.tiles[i].rect);
+  std::vector<std::shared_ptr<const Frame>> frames;
+  for (int slot = 0; slot < job.frame_count(); ++slot)
+    frames.push_back(std::make_shared<const Frame>(Frame{job.status.width, job.status.height, rects,
+                                                         job.status.id, slot * job.tiles_per_frame,
+                                                         static_cast<int>(job.tiles.size())}));
+  return frames;
+}
+
+namespace {
+constexpr std::string_view kFrameKeyMark = ".f";  // a job id never holds a '.'
+}  // namespace
+
+std::string image_key(const JobEntry& job, int slot) {
+  if (job.frame_count() == 1) return job.status.id;
+  return job.status.id + std::string(kFrameKeyMark) +
+         std::to_string(job.status.frames->numbers[slot]);
+}
+
+std::string job_of_image(const std::string& key) {
+  const std::size_t mark = key.rfind(kFrameKeyMark);
+  return mark == std::string::npos ? key : key.substr(0, mark);
+}
+
+std::optional<int> slot_of_image(const JobEntry& job, const std::string& key) {
+  if (key == job.status.id) return job.frame_count() == 1 ? std::optional<int>(0) : std::nullopt;
+  const std::string prefix = job.status.id + std::string(kFrameKeyMark);
+  if (job.frame_count() == 1 || !key.starts_with(prefix)) return std::nullopt;
+  const std::string number = key.substr(prefix.size());
+  if (number.empty() || number.size() > 9 ||
+      number.find_first_not_of("0123456789") != std::string::npos)
+    return std::nullopt;
+  const std::vector<int>& numbers = job.status.frames->numbers;
+  const auto it = std::lower_bound(numbers.begin(), numbers.end(), std::stoi(number));
+  if (it == numbers.end() || *it != std::stoi(number)) return std::nullopt;
+  return static_cast<int>(it - numbers.begin());
+}
+
+std::vector<int> hand_out_order(const std::vector<TileRect>& rects, int width, int height,
+                                int frames) {
+  const std::vector<int> one = centre_first_order(rects, width, height);
+  std::vector<int> order;
+  order.reserve(one.size() * static_cast<std::size_t>(frames));
+  const int per_frame = static_cast<int>(rects.size());
+  for (int slot = 0; slot < frames; ++slot)
+    for (const int index : one) order.push_back(slot * per_frame + index);
+  return order;
 }
 
 WorkerRow worker_row(const WorkerEntry& w) {

@@ -56,10 +56,22 @@ struct TileSlot {
 
 struct JobEntry {
   JobStatus status;  // tiles_total/done/rendering are kept current by Scheduler::track_tile
+  // Every frame's tiles, frame after frame: frame slot k (status.frames->numbers[k]) holds
+  // indexes k * tiles_per_frame to (k + 1) * tiles_per_frame - 1, cut alike.
   std::vector<TileSlot> tiles;
-  std::vector<int> order;  // position in hand-out order -> tile index (centre-first)
-  std::vector<int> rank;   // tile index -> position
-  PendingTiles pending;    // positions of pending tiles; the first is handed out next
+  int tiles_per_frame = 0;
+  int slot_of(int index) const { return index / tiles_per_frame; }
+  int frame_of_tile(int index) const { return status.frames->numbers[slot_of(index)]; }
+  int frame_count() const { return static_cast<int>(status.frames->numbers.size()); }
+  // Per frame slot, kept by Scheduler::track_tile: its tiles done, under a live lease, and
+  // spent (not done, their attempts used up: the frame has failed while it has any).
+  std::vector<int> frame_done;
+  std::vector<int> frame_rendering;
+  std::vector<int> frame_spent;
+  std::set<int> open_slots;  // the slots neither done nor failed
+  std::vector<int> order;    // position in hand-out order -> tile index (centre-first)
+  std::vector<int> rank;     // tile index -> position
+  PendingTiles pending;      // positions of pending tiles; the first is handed out next
   // Failures on this job by worker, as "name@host" so that a restarted worker process is
   // still the same worker; in memory only.
   std::map<std::string, int> failures_by_worker;
@@ -95,6 +107,9 @@ struct StagedChange {
   std::map<std::pair<const JobEntry*, int>, std::span<const float>> pixels;
   // Stored results to delete (load_and_reconcile() found them unusable).
   std::vector<std::int64_t> forgotten_results;
+  // Frame slots of an animation that fail in this change (a tile spent its attempts): in
+  // memory they follow from the tiles once applied; staged, later failures see them here.
+  std::map<const JobEntry*, std::set<int>> failing_slots;
 };
 
 // A job's status and its stored row, each from the other: the one mapping between them.
@@ -102,7 +117,19 @@ JobRow job_row(const JobStatus& status);
 // False when the row's state is not one this build knows (the job is then failed).
 bool status_from_row(JobRow&& row, JobStatus& status);
 WorkerRow worker_row(const WorkerEntry& worker);
-// What the job's image is made of, for ImageAssembly.
-std::shared_ptr<const Frame> frame_of(const JobEntry& job);
+// The images of the job, for ImageAssembly: one per frame slot, each under its
+// image_key().
+std::vector<std::shared_ptr<const Frame>> frames_of(const JobEntry& job);
+// What a frame's image is known by: a still's (or a one-frame job's) by the job's id, an
+// animation's frames by the id and the frame number ("j-....f12").
+std::string image_key(const JobEntry& job, int slot);
+// The job id of an image key, and the frame slot it names in `job` (nothing for a key
+// that is not one of the job's).
+std::string job_of_image(const std::string& key);
+std::optional<int> slot_of_image(const JobEntry& job, const std::string& key);
+// The tiles a job of `frames` frames of `rects` has, in hand-out order: frames in order,
+// each frame's centre first.
+std::vector<int> hand_out_order(const std::vector<TileRect>& rects, int width, int height,
+                                int frames);
 
 }  // namespace tessera

@@ -1,6 +1,11 @@
 // Failures: of a tile (an error reported, a lease expired), of a job (at a tile's limit,
 // stalled, or unstorable), and the workers kept off a job they failed on.
+#include <algorithm>
+#include <set>
+
 #include <spdlog/spdlog.h>
+
+#include "common/frame_list.hpp"
 
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
@@ -19,10 +24,58 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
   spdlog::warn("job {}: tile {} failed ({} of {} attempts): {}", job.status.id, index,
                tile.attempts, config_.max_tile_attempts, error);
   if (tile.attempts < config_.max_tile_attempts) return;
-  stage_job_failure(change, job,
-                    "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
-                        std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
-                        " times; the last error: " + error);
+  if (job.frame_count() == 1) {
+    stage_job_failure(change, job,
+                      "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) +
+                          ", " + std::to_string(tile.rect.y) + ") failed " +
+                          std::to_string(tile.attempts) + " times; the last error: " + error);
+    return;
+  }
+  // An animation loses the frame, not the job: the frame's other tiles are withdrawn (its
+  // pending ones leave the queue once this is applied, track_tile()), and the job goes on
+  // with its other frames until every one is done or failed.
+  const int slot = job.slot_of(index);
+  std::set<int>& failing = change.failing_slots[&job];
+  if (!job.open_slots.contains(slot) || !failing.insert(slot).second) return;
+  spdlog::warn("job {}: frame {} failed: tile {} failed {} times", job.status.id,
+               job.status.frames->numbers[slot], index, tile.attempts);
+  std::vector<std::string> withdrawn;
+  for (const auto& [lease_id, entry] : leases_)
+    if (entry.job_id == job.status.id && !entry.live.empty() &&
+        job.slot_of(entry.live.front()) == slot)
+      withdrawn.push_back(lease_id);
+  for (const std::string& lease_id : withdrawn) stage_lease_end(change, lease_id, false);
+  // Settled once every open frame is failing now, or done, which a failure changes not.
+  for (const int open : job.open_slots)
+    if (!failing.contains(open)) return;
+  std::vector<int> more;
+  for (const int failed : failing) more.push_back(job.status.frames->numbers[failed]);
+  stage_job_failure(change, job, failed_frames_error(job, more, change));
+}
+
+std::string Scheduler::failed_frames_error(const JobEntry& job, const std::vector<int>& more,
+                                           const StagedChange& change) const {
+  std::vector<int> failed = job.status.failed_frames;
+  failed.insert(failed.end(), more.begin(), more.end());
+  std::sort(failed.begin(), failed.end());
+  failed.erase(std::unique(failed.begin(), failed.end()), failed.end());
+  if (failed.empty()) return "frames failed";
+  std::string error = std::to_string(failed.size()) + " of " + std::to_string(job.frame_count()) +
+                      " frames failed: " + format_frame_list(failed);
+  // The first failed frame's reason, as GET /v1/jobs/{id}/frames gives each.
+  const std::optional<int> slot = slot_of_frame(job, failed.front());
+  if (!slot) return error;
+  const int first = *slot * job.tiles_per_frame;
+  for (int index = first; index < first + job.tiles_per_frame; ++index) {
+    const auto staged = change.tiles.find({const_cast<JobEntry*>(&job), index});
+    const TileSlot& tile = staged != change.tiles.end() ? staged->second : job.tiles[index];
+    if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
+    error += "; frame " + std::to_string(failed.front()) + ", tile " +
+             std::to_string(index - first) + " at (" + std::to_string(tile.rect.x) + ", " +
+             std::to_string(tile.rect.y) + "): " + tile.last_error;
+    break;
+  }
+  return error;
 }
 
 void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error) {

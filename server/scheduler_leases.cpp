@@ -129,11 +129,16 @@ JobEntry* Scheduler::next_job_for(const WorkerEntry& worker) const {
 
 std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
                                         const std::string& lease_id, const std::string& worker_id,
-                                        int count, std::int64_t expires_ms, bool extending) {
+                                        int count, std::int64_t expires_ms, bool extending,
+                                        int slot) {
   std::vector<int> batch;
   int position = job.pending.first_from(0);  // staging leaves the pending set alone
-  for (int i = 0; i < count; ++i, position = job.pending.first_from(position + 1)) {
+  for (int i = 0; i < count && position >= 0;
+       ++i, position = job.pending.first_from(position + 1)) {
     const int index = job.order[position];
+    // Frames go out in order, so the first pending tile not of the lease's frame ends it.
+    if (slot < 0) slot = job.slot_of(index);
+    if (job.slot_of(index) != slot) break;
     // A tile that failed before goes out alone, as the first of a new lease, so that
     // another failure is charged to it and not to tiles that happened to share its batch.
     if ((i > 0 || extending) && job.tiles[index].attempts > 0) break;
@@ -175,7 +180,8 @@ Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int
       const int room = config_.max_lease_tiles - static_cast<int>(live.size());
       if (worker && !worker->info.draining && room > 0 && next_job_for(*worker) == &job)
         added = stage_batch(change, job, lease_id, worker_id,
-                            std::min(batch_size(job, max_tiles), room), expires, true);
+                            std::min(batch_size(job, max_tiles), room), expires, true,
+                            job.slot_of(live.front()));
       commit(change);
       if (worker) note_seen(*worker, now);
       Lease lease = lease_of(lease_id);
@@ -335,6 +341,7 @@ Lease Scheduler::lease_of(const std::string& lease_id) const {
   lease.job_id = job.status.id;
   lease.scene_digest = job.status.scene_digest;
   if (!live.empty()) {
+    lease.frame = job.frame_of_tile(live.front());
     lease.worker_id = job.tiles[live.front()].worker_id;
     lease.expires_at_ms = job.tiles[live.front()].lease_expires_ms;
   }

@@ -49,28 +49,39 @@ void Scheduler::load_and_reconcile() {
   for (const std::string& id : unknown_state)
     change.job(*find_job(id)).error = "unknown state in the database";
   stage_leases_kept(change, now);
-  const std::vector<JobEntry*> needs_image = stage_job_states(change, now);
+  stage_job_states(change, now);
   if (!change.empty()) commit(change);
 
+  // A frame whose tiles are all done has its image, whatever became of its job; the
+  // others' come from the store once the job has ended.
+  std::vector<std::string> needs_image;
   for (const auto& [id, job] : jobs_) {
     const JobState state = job->status.state;
-    images_.add(id, frame_of(*job),
-                state == JobState::completed ? ImageAssembly::Stage::completed
-                : is_finished(state)         ? ImageAssembly::Stage::ended
-                                             : ImageAssembly::Stage::rendering);
+    const std::vector<std::shared_ptr<const Frame>> frames = frames_of(*job);
+    for (int slot = 0; slot < job->frame_count(); ++slot) {
+      const std::string key = image_key(*job, slot);
+      const bool done = job->tiles_per_frame > 0 && job->frame_done[slot] == job->tiles_per_frame;
+      images_.add(key, frames[slot],
+                  done                 ? ImageAssembly::Stage::completed
+                  : is_finished(state) ? ImageAssembly::Stage::ended
+                                       : ImageAssembly::Stage::rendering);
+      // The process stopped between the commit that finished it and the image's write.
+      if (done && !images_.has_file(key)) needs_image.push_back(key);
+    }
   }
   // Written by the image thread once what was reconciled is durable, which the
   // constructor waits for.
-  for (JobEntry* job : needs_image)
-    if (job->status.state == JobState::completed) images_.completed(job->status.id);
+  for (const std::string& key : needs_image) images_.completed(key);
   std::set<std::string> kept;
   for (const auto& [id, job] : jobs_) kept.insert(id);
   queue_write([kept = std::move(kept)](Store& store) {
     store.prune_pixels([&](const std::string& job_id) { return kept.contains(job_id); });
   });
-  images_.prune_files([this](const std::string& job_id) {
-    const JobEntry* job = find_job(job_id);
-    return job && job->status.state == JobState::completed;
+  images_.prune_files([this](const std::string& key) {
+    const JobEntry* job = find_job(job_of_image(key));
+    if (!job || job->tiles_per_frame == 0) return false;
+    const std::optional<int> slot = slot_of_image(*job, key);
+    return slot && job->frame_done[*slot] == job->tiles_per_frame;
   });
 }
 
@@ -102,12 +113,16 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
     jobs_.emplace(id, std::move(job));
   }
 
-  // A job's tiles follow from its size; each is pending unless the store says otherwise.
+  // A job's tiles follow from its size and frames; each is pending unless the store says
+  // otherwise.
   for (auto& [id, job] : jobs_) {
     const JobStatus& s = job->status;
     if (s.width <= 0 || s.height <= 0 || s.tile_size <= 0) continue;  // fails below: no tiles
-    for (const TileRect& rect : split_into_tiles(s.width, s.height, s.tile_size))
-      job->tiles.emplace_back().rect = rect;
+    const std::vector<TileRect> rects = split_into_tiles(s.width, s.height, s.tile_size);
+    job->tiles_per_frame = static_cast<int>(rects.size());
+    job->tiles.resize(rects.size() * s.frames->numbers.size());
+    for (std::size_t i = 0; i < job->tiles.size(); ++i)
+      job->tiles[i].rect = rects[i % rects.size()];
   }
   return unknown_state;
 }
@@ -210,19 +225,24 @@ void Scheduler::stage_leases_kept(StagedChange& change, std::int64_t now) {
       change.worker(*worker).info.state = worker_gone;
 }
 
-std::vector<JobEntry*> Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {
-  std::vector<JobEntry*> needs_image;
+void Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {
   for (auto& [id, job_ptr] : jobs_) {
     JobEntry& job = *job_ptr;
     int done = 0;
     bool touched = false;
+    // Frames neither done nor failed, by the tiles as they are once reconciled.
+    std::vector<int> open_done(job.frame_count(), 0);
     for (int index = 0; index < job.status.tiles_total; ++index) {
       const auto staged = change.tiles.find({&job, index});
       const TileState state =
           staged != change.tiles.end() ? staged->second.state : job.tiles[index].state;
       done += state == TileState::done;
+      open_done[job.slot_of(index)] += state == TileState::done;
       touched = touched || state != TileState::pending;
     }
+    bool open = false;
+    for (int slot = 0; slot < job.frame_count() && job.tiles_per_frame > 0; ++slot)
+      open = open || (open_done[slot] < job.tiles_per_frame && job.frame_spent[slot] == 0);
     const JobState state = job.status.state;
     if (!is_finished(state)) {
       if (job.status.tiles_total == 0) {
@@ -234,24 +254,21 @@ std::vector<JobEntry*> Scheduler::stage_job_states(StagedChange& change, std::in
         JobStatus& s = change.job(job);
         s.state = JobState::completed;
         if (s.finished_at_ms == 0) s.finished_at_ms = now;
-        needs_image.push_back(&job);
+      } else if (!open) {
+        // Every frame is done or failed: the process stopped as the last one settled.
+        stage_job_failure(change, job, failed_frames_error(job, {}, change));
       } else if (state == JobState::queued && touched) {
         JobStatus& s = change.job(job);
         s.state = JobState::running;
         if (s.started_at_ms == 0) s.started_at_ms = now;
       }
-    } else if (state == JobState::completed) {
-      if (done != job.status.tiles_total) {
-        JobStatus& s = change.job(job);
-        s.state = JobState::running;
-        s.finished_at_ms = 0;
-        if (s.started_at_ms == 0) s.started_at_ms = now;
-      } else if (!images_.has_file(id)) {
-        needs_image.push_back(&job);  // the process stopped between commit and write
-      }
+    } else if (state == JobState::completed && done != job.status.tiles_total) {
+      JobStatus& s = change.job(job);
+      s.state = JobState::running;
+      s.finished_at_ms = 0;
+      if (s.started_at_ms == 0) s.started_at_ms = now;
     }
   }
-  return needs_image;
 }
 
 }  // namespace tessera

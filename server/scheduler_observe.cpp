@@ -38,6 +38,7 @@ FarmObserver::TileChange Scheduler::tile_change(const JobEntry& job, int index) 
   FarmObserver::TileChange change;
   change.job_id = job.status.id;
   change.index = index;
+  change.frame = job.frame_of_tile(index);
   change.rect = tile.rect;
   change.view = view_of(tile);
   if (change.view == FarmObserver::TileView::rendering ||

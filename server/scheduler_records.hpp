@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -15,6 +16,7 @@
 #include "common/image.hpp"
 #include "common/protocol/events.hpp"
 #include "common/protocol/job_state.hpp"
+#include "common/protocol/jobs.hpp"
 #include "common/protocol/limits.hpp"
 #include "common/scene.hpp"
 #include "server/histogram.hpp"
@@ -58,6 +60,15 @@ struct JobHealth {
   std::int64_t progress_at_ms = 0;
 };
 
+// The frames a job renders, fixed at submit and shared by every copy of its status.
+struct JobFrames {
+  std::vector<int> numbers;  // the scene's frame numbers, ascending: the order they go out
+  std::string list;          // as a frame list (format_frame_list); "" for a still
+  bool animated() const { return !list.empty(); }
+};
+// A still's frames: the one frame 0.
+std::shared_ptr<const JobFrames> still_frames();
+
 struct JobStatus {
   std::string id;
   std::string name;
@@ -77,6 +88,15 @@ struct JobStatus {
   std::string scene_digest;                               // hex SHA-256 of the scene JSON as stored
   OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
   JobHealth health;  // in memory; only the Scheduler changes it, in place
+  // Its tiles are every frame's, frame after frame: tiles_total is frames times the tiles
+  // of one frame. Never null once the job exists.
+  std::shared_ptr<const JobFrames> frames = still_frames();
+  // Kept current with the tiles, by Scheduler::track_tile: frames whose every tile is done;
+  // frames of which a tile failed for good (its attempts spent), by number, ascending; and
+  // the first frame that is neither (none when every frame is one or the other).
+  int frames_done = 0;
+  std::vector<int> failed_frames;
+  std::optional<int> current_frame;
 };
 
 struct WorkerInfo {
@@ -100,6 +120,16 @@ struct LeaseTile {
   TileRect rect;
 };
 
+// One frame of a job, for GET /v1/jobs/{id}/frames.
+struct FrameInfo {
+  int frame = 0;
+  protocol::FrameState state = protocol::FrameState::pending;
+  int tiles_total = 0;
+  int tiles_done = 0;
+  int tiles_rendering = 0;
+  std::string error;  // failed: its failed tile's last error
+};
+
 // A lease binds a batch of one or more tiles of one job to one worker. Its id is the
 // fencing token: a tile's pixels are accepted only under the lease it is currently bound
 // to. Tiles leave the lease one by one as their results arrive; the lease ends when none
@@ -110,6 +140,7 @@ struct Lease {
   std::string worker_id;
   std::vector<LeaseTile> tiles;  // the tiles still owed, in hand-out order
   std::string scene_digest;
+  int frame = 0;  // the scene's frame all its tiles are of: a lease never spans two
   std::int64_t expires_at_ms = 0;
 };
 
@@ -184,6 +215,7 @@ class FarmObserver {
   struct TileChange {
     std::string job_id;
     int index = 0;
+    int frame = 0;  // the scene's frame it is of
     TileRect rect;
     TileView view = TileView::pending;
     std::string worker_id;          // rendering: its worker; done: who rendered it

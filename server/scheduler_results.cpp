@@ -69,7 +69,8 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
   const auto& fresh = std::get<std::vector<const TileResult*>>(checked);
 
   StagedChange change;
-  const bool job_done = stage_results(change, job, lease_id, fresh, live, named);
+  const bool frame_done = stage_results(change, job, lease_id, fresh, live, named);
+  const std::string image = image_key(job, job.slot_of(fresh.front()->tile_index));
   const StoreTicket ticket =
       commit(change, "the result of tile " + std::to_string(fresh.front()->tile_index));
   std::vector<std::pair<int, std::span<const float>>> tiles;
@@ -80,11 +81,11 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
       done.push_back(tile_change(job, result->tile_index));
       done.back().pixels = result->pixels;
     }
-  store_thread_.after(ticket, [this, id = job.status.id, tiles = std::move(tiles),
-                               done = std::move(done), job_done](const std::string& error) {
+  store_thread_.after(ticket, [this, image, tiles = std::move(tiles), done = std::move(done),
+                               frame_done](const std::string& error) {
     if (!error.empty()) return;
-    images_.stored(id, tiles, job_done);
-    if (job_done) images_.completed(id);
+    images_.stored(image, tiles, frame_done);
+    if (frame_done) images_.completed(image);
     // Before the answer's own callback, after which the pixels are gone.
     if (observer_ && !done.empty()) observer_->tiles_changed(done);
   });
@@ -132,11 +133,17 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
   }
   counters_.tiles_rendered += fresh.size();
   job.status.health.progress_at_ms = now;
-  const bool job_done =
-      job.status.tiles_done + static_cast<int>(fresh.size()) == job.status.tiles_total;
-  if (job_done) {
-    status.state = JobState::completed;
-    status.finished_at_ms = now;
+  // A lease's tiles are of one frame, so the upload finishes that frame or none.
+  const int slot = job.slot_of(fresh.front()->tile_index);
+  const bool frame_done =
+      job.frame_done[slot] + static_cast<int>(fresh.size()) == job.tiles_per_frame;
+  if (frame_done && job.open_slots.size() == 1 && *job.open_slots.begin() == slot) {
+    if (job.status.failed_frames.empty()) {
+      status.state = JobState::completed;
+      status.finished_at_ms = now;
+    } else {
+      stage_job_failure(change, job, failed_frames_error(job, {}, change));
+    }
   }
   if (WorkerEntry* worker = find_worker(job.tiles[fresh.front()->tile_index].worker_id)) {
     WorkerEntry& staged = change.worker(*worker);
@@ -166,7 +173,7 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
       }
     }
   }
-  return job_done;
+  return frame_done;
 }
 
 std::optional<std::vector<std::size_t>> Scheduler::tile_pixel_counts(

@@ -53,7 +53,8 @@ std::vector<JobRow> Store::job_rows() {
   std::vector<JobRow> rows;
   auto s = db_.statement(
       "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
-      "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer FROM jobs");
+      "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer, frames FROM "
+      "jobs");
   while (s->step()) {
     JobRow& job = rows.emplace_back();
     job.id = s->column_text(0);
@@ -70,6 +71,7 @@ std::vector<JobRow> Store::job_rows() {
     job.error = s->column_text(11);
     job.rays = static_cast<std::uint64_t>(s->column_int64(12));
     job.output_transfer = s->column_text(13);
+    job.frames = s->column_text(14);
   }
   return rows;
 }
@@ -163,8 +165,8 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
       .run();
   db_.statement(
          "INSERT INTO jobs (id, name, priority, state, width, height, tile_size, scene_digest, "
-         "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer) "
-         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)")
+         "created_at_ms, started_at_ms, finished_at_ms, error, rays, output_transfer, frames) "
+         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)")
       ->bind(1, job.id)
       .bind(2, job.name)
       .bind(3, job.priority)
@@ -179,6 +181,7 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
       .bind(12, job.error)
       .bind(13, static_cast<std::int64_t>(job.rays))
       .bind(14, job.output_transfer)
+      .bind(15, job.frames)
       .run();
   tx.commit();
 }

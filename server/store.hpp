@@ -34,6 +34,10 @@ struct JobRow {
   // Facts of the scene that later requests need, kept at submit so that no request parses
   // the scene again: how its 8- and 16-bit images are encoded ("srgb" or "linear").
   std::string output_transfer = "srgb";
+  // The frames of an animation it renders, as a frame list ("1-48", in the order they go
+  // out); "" for a still, its one frame 0. Its tiles are every frame's, one frame after
+  // the other.
+  std::string frames;
 };
 
 // A live lease: the tiles it still owes. Its expiry is not stored: a restart gives every
@@ -132,10 +136,13 @@ class Store {
   void put_tile_failure(const TileFailureRow& failure);
   // Calls `visit` for each tile of the job's results, in the order they were stored;
   // `floats_of(tile_index)` says how many floats each tile has (load() has checked that
-  // they add up). The span is valid during the call.
+  // they add up). The span is valid during the call. With `wanted`, a result none of whose
+  // tiles it wants is not read at all: one frame of an animation is read without the
+  // pixels of the others.
   void for_each_tile_pixels(
       const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
-      const std::function<void(int tile_index, std::span<const float>)>& visit);
+      const std::function<void(int tile_index, std::span<const float>)>& visit,
+      const std::function<bool(int tile_index)>& wanted = {});
 
   void upsert_worker(const WorkerRow& worker);
   void delete_worker(const std::string& id);

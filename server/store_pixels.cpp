@@ -72,7 +72,8 @@ std::int64_t Store::append_pixels(const std::string& job_id,
 
 void Store::for_each_tile_pixels(
     const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
-    const std::function<void(int tile_index, std::span<const float>)>& visit) {
+    const std::function<void(int tile_index, std::span<const float>)>& visit,
+    const std::function<bool(int tile_index)>& wanted) {
   auto s = db_.statement(
       "SELECT tiles, pixels_at, pixel_bytes FROM results WHERE job_id = ? ORDER BY id");
   s->bind(1, job_id);
@@ -89,6 +90,7 @@ void Store::for_each_tile_pixels(
     const std::vector<int> tiles = unpack<int>(s->column_blob(0));
     const std::int64_t at = s->column_int64(1);
     const auto bytes = static_cast<std::size_t>(s->column_int64(2));
+    if (wanted && std::none_of(tiles.begin(), tiles.end(), wanted)) continue;
     if (fd < 0 && (fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC)) < 0)
       throw std::runtime_error("store: cannot open " + path.string() + ": " + std::strerror(errno));
     floats.resize(bytes / sizeof(float));
@@ -110,7 +112,8 @@ void Store::for_each_tile_pixels(
       if ((offset + size) * sizeof(float) > got)
         throw std::runtime_error("store: the stored pixels of job " + job_id + " end before tile " +
                                  std::to_string(index));
-      visit(index, std::span<const float>(floats).subspan(offset, size));
+      if (!wanted || wanted(index))
+        visit(index, std::span<const float>(floats).subspan(offset, size));
       offset += size;
     }
   }

@@ -8,7 +8,7 @@
 namespace tessera {
 namespace {
 
-constexpr int schema_version = 7;
+constexpr int schema_version = 8;
 
 constexpr const char* schema_sql = R"sql(
 CREATE TABLE scenes (
@@ -29,7 +29,8 @@ CREATE TABLE jobs (
   finished_at_ms INTEGER NOT NULL DEFAULT 0,
   error TEXT NOT NULL DEFAULT '',
   rays INTEGER NOT NULL DEFAULT 0,
-  output_transfer TEXT NOT NULL DEFAULT 'srgb'  -- the scene's render.output_transfer
+  output_transfer TEXT NOT NULL DEFAULT 'srgb',  -- the scene's render.output_transfer
+  frames TEXT NOT NULL DEFAULT ''  -- an animation's frame list; '' for a still (frame 0)
 );
 CREATE INDEX jobs_by_scene ON jobs(scene_digest);
 CREATE TABLE workers (
@@ -131,6 +132,8 @@ void Store::create_schema() {
     db_.exec("ALTER TABLE workers ADD COLUMN secret_sha256 TEXT NOT NULL DEFAULT ''");
   if (version >= 1 && version <= 6)  // before workers could be drained
     db_.exec("ALTER TABLE workers ADD COLUMN draining INTEGER NOT NULL DEFAULT 0");
+  if (version >= 1 && version <= 7)  // before jobs rendered frames of animations
+    db_.exec("ALTER TABLE jobs ADD COLUMN frames TEXT NOT NULL DEFAULT ''");
   db_.exec("PRAGMA user_version=" + std::to_string(schema_version));
   tx.commit();
 }

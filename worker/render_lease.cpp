@@ -27,7 +27,7 @@ constexpr double kAskAheadSeconds = 0.02;
 }  // namespace
 
 void WorkerDaemon::render(const Claimed& lease) {
-  const Renderer& renderer = renderer_for(lease.scene_digest);
+  const Renderer& renderer = renderer_for(lease.scene_digest, lease.frame);
   uploading_lease_ = lease.lease_id;  // uploads_ is idle between leases
   heartbeat_->begin(lease.lease_id);
   LeaseProgress progress;

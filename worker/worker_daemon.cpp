@@ -30,6 +30,9 @@ std::string host_name() {
 }
 
 constexpr std::size_t kMaxCachedScenes = 2;
+// Renderers kept of one animated scene: the frame a lease is of, the one before (whose
+// tiles may come back after a lost lease) and the next.
+constexpr std::size_t kFramesKept = 3;
 
 // A batch lasts about this long: long enough that the round trips between batches cost
 // well under 1%, short enough that a higher-priority job waits little for a worker.
@@ -200,7 +203,7 @@ std::optional<WorkerDaemon::Claimed> WorkerDaemon::claim() {
   }
   if (!lease || !*lease) return std::nullopt;
   const protocol::Lease& l = **lease;
-  return Claimed{l.id, l.job_id, l.scene_digest, tiles_of(l)};
+  return Claimed{l.id, l.job_id, l.scene_digest, l.frame, tiles_of(l)};
 }
 
 std::optional<std::vector<ClaimedTile>> WorkerDaemon::extend(const std::string& lease_id,
@@ -227,8 +230,8 @@ AssetCache& WorkerDaemon::asset_cache() {
   return *assets_;
 }
 
-const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
-  if (auto it = renderers_.find(digest); it != renderers_.end()) return *it->second;
+WorkerDaemon::HeldScene& WorkerDaemon::held_scene(const std::string& digest) {
+  if (auto it = scenes_.find(digest); it != scenes_.end()) return it->second;
   std::optional<std::string> scene;
   try {
     scene = with_retry("scene", [&] { return control_.scene(digest); });
@@ -236,13 +239,13 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
     throw std::runtime_error("cannot fetch scene " + digest + ": " + e.what());
   }
   if (!scene) throw std::runtime_error("cannot fetch scene " + digest);
-  if (renderers_.size() >= kMaxCachedScenes) renderers_.erase(renderers_.begin());
+  if (scenes_.size() >= kMaxCachedScenes) scenes_.erase(scenes_.begin());
+  HeldScene held;
   // The scene's assets come from the cache, or from the coordinator into it, as the
-  // parser meets them.
-  std::set<std::string> used;
-  const AssetSceneFiles files(
-      [&](const std::string& sha256) -> std::optional<std::filesystem::path> {
-        used.insert(sha256);
+  // parser meets them. The set lives in the map's node, which never moves.
+  held.files = std::make_unique<AssetSceneFiles>(
+      [this, digest](const std::string& sha256) -> std::optional<std::filesystem::path> {
+        scenes_.at(digest).used_assets.insert(sha256);
         try {
           return asset_cache().get(sha256, [&](const std::filesystem::path& into) {
             const auto fetched = with_retry("asset", [&] {
@@ -256,11 +259,58 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest) {
           throw;
         }
       });
-  // The coordinator validated the scene against its own limits, which may be above the
-  // defaults: here it is only rebuilt.
-  auto renderer = std::make_unique<Renderer>(parse_scene_text(*scene, Limits::none(), {}, &files));
-  if (!used.empty()) asset_cache().trim(used);
-  return *renderers_.emplace(digest, std::move(renderer)).first->second;
+  HeldScene& entry = scenes_.emplace(digest, std::move(held)).first->second;
+  try {
+    // The coordinator validated the scene against its own limits, which may be above the
+    // defaults: here it is only rebuilt.
+    entry.frames = std::make_unique<SceneFrames>(std::move(*scene), Limits::none(), nullptr,
+                                                 entry.files.get());
+  } catch (...) {
+    scenes_.erase(digest);
+    throw;
+  }
+  return entry;
+}
+
+const Renderer& WorkerDaemon::renderer_for(const std::string& digest, int frame) {
+  HeldScene& held = held_scene(digest);
+  if (auto it = held.renderers.find(frame); it != held.renderers.end()) return *it->second;
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<Renderer> renderer;
+  int shared_with = -1;  // the frame whose geometry it shares, if any
+  if (held.renderers.empty()) {
+    // The first frame asked for: built whole, from the scene as read.
+    Scene first = held.frames->take_first();
+    renderer = std::make_unique<Renderer>(
+        first.frame == frame ? std::move(first) : held.frames->at(frame, std::move(first)));
+    if (!held.used_assets.empty()) asset_cache().trim(held.used_assets);
+  } else {
+    // From the nearest frame held, whose geometry it shares when the objects stand still.
+    const auto nearest = std::min_element(
+        held.renderers.begin(), held.renderers.end(), [&](const auto& a, const auto& b) {
+          return std::abs(std::int64_t{a.first} - frame) < std::abs(std::int64_t{b.first} - frame);
+        });
+    const Renderer& from = *nearest->second;
+    renderer = std::make_unique<Renderer>(held.frames->at(frame, from.scene()), from);
+    if (renderer->shares_geometry_with(from)) shared_with = nearest->first;
+  }
+  const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  // Said once per frame: whether a frame's objects cost a BVH shows here.
+  if (shared_with >= 0)
+    spdlog::info("scene {} frame {}: ready in {:.3f} s, sharing the geometry of frame {}",
+                 digest.substr(0, 12), frame, took.count(), shared_with);
+  else
+    spdlog::info("scene {} frame {}: built in {:.3f} s", digest.substr(0, 12), frame, took.count());
+  const Renderer& made = *held.renderers.emplace(frame, std::move(renderer)).first->second;
+  // The frame furthest from this one goes first: frames go out in order.
+  while (held.renderers.size() > kFramesKept) {
+    const auto furthest = std::max_element(
+        held.renderers.begin(), held.renderers.end(), [&](const auto& a, const auto& b) {
+          return std::abs(std::int64_t{a.first} - frame) < std::abs(std::int64_t{b.first} - frame);
+        });
+    held.renderers.erase(furthest);
+  }
+  return made;
 }
 
 bool WorkerDaemon::upload(const std::string& lease_id, const std::vector<FinishedTile>& tiles) {

@@ -9,12 +9,15 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 
 #include <tbb/task_arena.h>
 
+#include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
 #include "common/protocol/limits.hpp"
+#include "common/scene_frames.hpp"
 #include "worker/asset_cache.hpp"
 #include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
@@ -57,7 +60,17 @@ class WorkerDaemon {
     std::string lease_id;
     std::string job_id;
     std::string scene_digest;
+    int frame = 0;                   // the scene's frame every tile is of
     std::vector<ClaimedTile> tiles;  // in the order to render them
+  };
+  // One scene as this worker holds it: its frames' reader, and a Renderer for each of the
+  // few frames it rendered last, each made from another so that a frame whose objects
+  // did not move shares their Embree scene and textures.
+  struct HeldScene {
+    std::set<std::string> used_assets;       // what its mesh files and textures came from
+    std::unique_ptr<AssetSceneFiles> files;  // read again for a frame whose objects move
+    std::unique_ptr<SceneFrames> frames;
+    std::map<int, std::unique_ptr<Renderer>> renderers;  // by frame
   };
 
   // Calls `attempt` until it succeeds or stop is requested, backing off (capped) while
@@ -67,7 +80,8 @@ class WorkerDaemon {
   void report_reachable(bool reachable, const char* what, const std::string& error);
   bool register_self();
   std::optional<Claimed> claim();
-  const Renderer& renderer_for(const std::string& digest);
+  const Renderer& renderer_for(const std::string& digest, int frame);
+  HeldScene& held_scene(const std::string& digest);
   AssetCache& asset_cache();  // made on first use
   // What the threads rendering one lease share (render_lease.cpp).
   struct LeaseProgress {
@@ -133,7 +147,7 @@ class WorkerDaemon {
   std::atomic<bool> unreachable_reported_{false};
   std::atomic<std::uint64_t> tiles_rendered_{0};  // for the log line at exit
   // Scenes by content digest; a worker usually renders many tiles of one job in a row.
-  std::map<std::string, std::unique_ptr<Renderer>> renderers_;
+  std::map<std::string, HeldScene> scenes_;
   std::unique_ptr<AssetCache> assets_;
   std::unique_ptr<tbb::task_arena> arena_;  // made once: a new arena per tile costs a lot
 };

@@ -59,7 +59,8 @@ nlohmann::json job_body(const LoadOptions& o) {
       {{"version", 1},
        {"image", {{"width", o.width}, {"height", o.height}}},
        {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40}}},
-       {"render", {{"samples_per_pixel", 1}, {"max_depth", 1}, {"tile_size", o.tile_size}}}}});
+       {"render", {{"samples_per_pixel", 1}, {"max_depth", 1}, {"tile_size", o.tile_size}}}},
+      std::nullopt});
 }
 
 class LoadRun {

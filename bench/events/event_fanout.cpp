@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
   load::ServerProcess server(argv[1], argv[2], {"--log-level", "warn"});
   const std::string url = "http://127.0.0.1:" + std::to_string(server.port());
   CoordinatorClient api(url, "", std::chrono::seconds(60));
-  const protocol::JobStatus job = api.submit({"fanout", 50, scene_of(tiles)});
+  const protocol::JobStatus job = api.submit({"fanout", 50, scene_of(tiles), std::nullopt});
   const int total = job.tiles.total;
   const std::int64_t rss_before = load::process_status_kib(server.pid(), "VmRSS");
 

@@ -153,9 +153,11 @@ void CoordinatorClient::remove_worker(std::string_view worker_id) {
   call("POST", fill(route::worker_remove, worker_id));
 }
 
-std::string CoordinatorClient::image(std::string_view id, const ImageFormat& format, bool partial) {
-  HttpResult result = call("GET", protocol::image_target(id, format, partial));
-  // A proxy's page answered with 200 must not be saved as the image.
+namespace {
+
+// An image's body, once its type is the format's: a proxy's page answered with 200 must
+// not be saved as the image.
+std::string image_body(HttpResult result, const ImageFormat& format) {
   const auto type = result.headers.find("content-type");
   if (type == result.headers.end() || !type->second.starts_with(format.content_type))
     throw protocol::ProtocolError(
@@ -163,6 +165,21 @@ std::string CoordinatorClient::image(std::string_view id, const ImageFormat& for
                 (type == result.headers.end() ? std::string("untyped") : type->second) + ", not " +
                 std::string(format.content_type));
   return std::move(result.body);
+}
+
+}  // namespace
+
+std::string CoordinatorClient::image(std::string_view id, const ImageFormat& format, bool partial) {
+  return image_body(call("GET", protocol::image_target(id, format, partial)), format);
+}
+
+protocol::FrameList CoordinatorClient::frames(std::string_view id) {
+  return read_body<protocol::FrameList>(call("GET", fill(route::job_frames, id)).body);
+}
+
+std::string CoordinatorClient::frame_image(std::string_view id, int frame,
+                                           const ImageFormat& format, bool partial) {
+  return image_body(call("GET", protocol::frame_image_target(id, frame, format, partial)), format);
 }
 
 protocol::WorkerList CoordinatorClient::workers() {

@@ -76,6 +76,10 @@ class CoordinatorClient {
   protocol::Worker drain(std::string_view worker_id, bool draining);
   void remove_worker(std::string_view worker_id);
   std::string image(std::string_view id, const ImageFormat& format, bool partial);
+  // Every frame of the job, and one frame's image (404 for a frame it does not render,
+  // 409 not_ready for one not done unless `partial`).
+  protocol::FrameList frames(std::string_view id);
+  std::string frame_image(std::string_view id, int frame, const ImageFormat& format, bool partial);
   protocol::WorkerList workers();
   // Follows a stream of server-sent events (route::events, or a job's): `on_open` once it
   // is open, then `on_event` for each event, until either returns false (or the stream

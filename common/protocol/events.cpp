@@ -15,6 +15,7 @@ json or_null(const std::optional<T>& value) {
 TileStatus TileStatus::read(const FieldReader& body) {
   TileStatus tile;
   tile.index = static_cast<int>(body.integer("index", 0));
+  tile.frame = static_cast<int>(body.integer("frame", 0));
   tile.x = static_cast<int>(body.integer("x", 0));
   tile.y = static_cast<int>(body.integer("y", 0));
   tile.width = static_cast<int>(body.integer("width", 1));
@@ -31,6 +32,7 @@ TileStatus TileStatus::read(const FieldReader& body) {
 
 json to_json(const TileStatus& tile) {
   return {{"index", tile.index},
+          {"frame", tile.frame},
           {"x", tile.x},
           {"y", tile.y},
           {"width", tile.width},

@@ -38,7 +38,8 @@ inline constexpr NameTable<TileView, 4> kTileViewNames{{
 // One tile of a job (`TileStatus`): an item of GET /v1/jobs/{id}/tiles, and the data of a
 // "tile" event, which carries the pixels of a tile done.
 struct TileStatus {
-  int index = 0;
+  int index = 0;  // of the job's tiles: frame after frame, each frame's tiles alike
+  int frame = 0;  // the scene's frame it is of
   int x = 0;
   int y = 0;
   int width = 0;

@@ -17,9 +17,16 @@ int int_of(const FieldReader& body, std::string_view key) {
 
 // Everything but the scene, whose presence is checked.
 JobSubmission read_settings(const FieldReader& body) {
-  body.only({"name", "priority", "scene"});
+  body.only({"name", "priority", "frames", "scene"});
   JobSubmission submission;
   if (body.has("name")) submission.name = read_name(body, "name");
+  // Its syntax is checked against the scene's range by the coordinator, which names both.
+  if (body.has("frames")) {
+    submission.frames = body.string("frames");
+    if (submission.frames->size() > JobSubmission::kMaxFramesBytes)
+      body.fail("frames", "must be at most " + std::to_string(JobSubmission::kMaxFramesBytes) +
+                              " bytes, got " + std::to_string(submission.frames->size()));
+  }
   if (const auto priority = body.optional_integer("priority", 0, 100))
     submission.priority = static_cast<int>(*priority);
   body.object("scene");  // the scene parser reads what is inside
@@ -73,7 +80,9 @@ JobSubmission JobSubmission::read(const FieldReader& body) {
 }
 
 json to_json(const JobSubmission& s) {
-  return {{"name", s.name}, {"priority", s.priority}, {"scene", s.scene}};
+  json body = {{"name", s.name}, {"priority", s.priority}, {"scene", s.scene}};
+  if (s.frames) body["frames"] = *s.frames;
+  return body;
 }
 
 JobHealth JobHealth::read(const FieldReader& body) {
@@ -114,6 +123,14 @@ JobStatus JobStatus::read(const FieldReader& body) {
   job.health = JobHealth::read(body.object("health"));
   const FieldReader stats = body.object("stats");
   job.stats = {stats.count("rays"), stats.number("rays_per_s")};
+  const FieldReader frames = body.object("frames");
+  job.frames.list = frames.string("list");
+  job.frames.total = static_cast<int>(frames.integer("total", 1, std::numeric_limits<int>::max()));
+  job.frames.done = int_of(frames, "done");
+  job.frames.failed = int_of(frames, "failed");
+  job.frames.failed_list = frames.string("failed_list");
+  if (const auto current = frames.nullable_integer("current"))
+    job.frames.current = static_cast<int>(*current);
   return job;
 }
 
@@ -135,7 +152,46 @@ json to_json(const JobStatus& job) {
       {"eta_s", job.eta_s ? json(*job.eta_s) : json(nullptr)},
       {"error", string_or_null(job.error)},
       {"health", to_json(job.health)},
-      {"stats", {{"rays", job.stats.rays}, {"rays_per_s", job.stats.rays_per_s}}}};
+      {"stats", {{"rays", job.stats.rays}, {"rays_per_s", job.stats.rays_per_s}}},
+      {"frames",
+       {{"list", job.frames.list},
+        {"total", job.frames.total},
+        {"done", job.frames.done},
+        {"failed", job.frames.failed},
+        {"failed_list", job.frames.failed_list},
+        {"current", job.frames.current ? json(*job.frames.current) : json(nullptr)}}}};
+}
+
+FrameStatus FrameStatus::read(const FieldReader& body) {
+  FrameStatus frame;
+  frame.frame = int_of(body, "frame");
+  const auto state = value_in(kFrameStateNames, body.string("state"));
+  if (!state) body.fail("state", "must be " + names_of(kFrameStateNames));
+  frame.state = *state;
+  const FieldReader tiles = body.object("tiles");
+  frame.tiles = {int_of(tiles, "total"), int_of(tiles, "done"), int_of(tiles, "rendering")};
+  frame.error = body.nullable_string("error");
+  return frame;
+}
+
+json to_json(const FrameStatus& frame) {
+  return {{"frame", frame.frame},
+          {"state", name_in(kFrameStateNames, frame.state)},
+          {"tiles",
+           {{"total", frame.tiles.total},
+            {"done", frame.tiles.done},
+            {"rendering", frame.tiles.rendering}}},
+          {"error", string_or_null(frame.error)}};
+}
+
+FrameList FrameList::read(const FieldReader& body) {
+  return {read_array<FrameStatus>(body, "frames", &FrameStatus::read)};
+}
+
+json to_json(const FrameList& list) {
+  json frames = json::array();
+  for (const FrameStatus& frame : list.frames) frames.push_back(to_json(frame));
+  return {{"frames", std::move(frames)}};
 }
 
 JobList JobList::read(const FieldReader& body) {

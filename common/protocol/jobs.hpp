@@ -11,6 +11,7 @@
 
 #include "common/protocol/field_reader.hpp"
 #include "common/protocol/job_state.hpp"
+#include "common/protocol/names.hpp"
 
 namespace tessera::protocol {
 
@@ -23,6 +24,10 @@ struct JobSubmission {
   std::string name = "job";
   int priority = 50;
   nlohmann::json scene;  // checked by the scene parser, which names the scene's own errors
+  // The frames of an animated scene to render, as render farms write them ("1-100x2",
+  // common/frame_list.hpp); every frame of its range when left out.
+  std::optional<std::string> frames;
+  static constexpr std::size_t kMaxFramesBytes = 4096;
 
   // Moves the scene out of `body` rather than copying it: a scene may be tens of megabytes.
   static JobSubmission take(nlohmann::json& body);
@@ -61,6 +66,17 @@ struct JobStatus {
     std::uint64_t rays = 0;
     double rays_per_s = 0;
   };
+  // The frames it renders: a still is the one frame 0.
+  struct Frames {
+    std::string list;  // as a frame list ("1-48"), the order they go out in
+    int total = 1;
+    int done = 0;
+    int failed = 0;
+    std::string failed_list;  // the failed ones as a frame list; "" when none
+    // The first frame neither done nor failed: the one the farm finishes next; none when
+    // every frame is.
+    std::optional<int> current;
+  };
   std::string id;
   std::string name;
   JobState state = JobState::queued;
@@ -77,10 +93,40 @@ struct JobStatus {
   std::optional<std::string> error;
   JobHealth health;
   Stats stats;
+  Frames frames;
 
   static JobStatus read(const FieldReader& body);
 };
 nlohmann::json to_json(const JobStatus& job);
+
+// A frame's state: pending (no tile done or under lease), rendering, done (its image is
+// whole), failed (a tile failed for good; its job goes on with the other frames).
+enum class FrameState { pending, rendering, done, failed };
+inline constexpr NameTable<FrameState, 4> kFrameStateNames{{
+    {FrameState::pending, "pending"},
+    {FrameState::rendering, "rendering"},
+    {FrameState::done, "done"},
+    {FrameState::failed, "failed"},
+}};
+
+// One frame of a job (`FrameStatus`): an item of GET /v1/jobs/{id}/frames.
+struct FrameStatus {
+  int frame = 0;
+  FrameState state = FrameState::pending;
+  JobStatus::Tiles tiles;
+  std::optional<std::string> error;  // failed: why
+
+  static FrameStatus read(const FieldReader& body);
+};
+nlohmann::json to_json(const FrameStatus& frame);
+
+// GET /v1/jobs/{id}/frames: every frame of the job, in the order they go out.
+struct FrameList {
+  std::vector<FrameStatus> frames;
+
+  static FrameList read(const FieldReader& body);
+};
+nlohmann::json to_json(const FrameList& list);
 
 // GET /v1/jobs.
 struct JobList {

@@ -19,6 +19,7 @@ Lease Lease::read(const FieldReader& body) {
   lease.id = body.string("id");
   lease.job_id = body.string("job_id");
   lease.scene_digest = body.string("scene_digest");
+  lease.frame = whole(body, "frame");
   lease.tiles = read_array<LeaseTile>(body, "tiles", [](const FieldReader& tile) {
     return LeaseTile{whole(tile, "index"), whole(tile, "x"), whole(tile, "y"), whole(tile, "width"),
                      whole(tile, "height")};
@@ -32,11 +33,9 @@ json to_json(const Lease& lease) {
   for (const LeaseTile& t : lease.tiles)
     tiles.push_back(
         {{"index", t.index}, {"x", t.x}, {"y", t.y}, {"width", t.width}, {"height", t.height}});
-  return {{"id", lease.id},
-          {"job_id", lease.job_id},
-          {"scene_digest", lease.scene_digest},
-          {"tiles", std::move(tiles)},
-          {"expires_in_s", lease.expires_in_s}};
+  return {
+      {"id", lease.id},       {"job_id", lease.job_id},    {"scene_digest", lease.scene_digest},
+      {"frame", lease.frame}, {"tiles", std::move(tiles)}, {"expires_in_s", lease.expires_in_s}};
 }
 
 TileFailure TileFailure::read(const FieldReader& body) {

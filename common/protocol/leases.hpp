@@ -29,6 +29,7 @@ struct Lease {
   std::string id;
   std::string job_id;
   std::string scene_digest;
+  int frame = 0;                 // the scene's frame the tiles are of; 0 for a still
   std::vector<LeaseTile> tiles;  // in the order to render them
   double expires_in_s = 0;
 

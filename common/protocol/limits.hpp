@@ -19,7 +19,9 @@ namespace tessera {
 // build could misread a coordinator of another: version 2 states the limits below at
 // registration; version 1 left them to constants written on each side. Version 3 gives
 // each worker a secret at registration that its later calls send (kWorkerSecretHeader).
-inline constexpr int kWorkerProtocolVersion = 3;
+// Version 4 names the frame a lease's tiles belong to (an older worker would render every
+// frame of an animation as its first).
+inline constexpr int kWorkerProtocolVersion = 4;
 
 struct ProtocolLimits {
   // Tiles one result (PUT /v1/leases/{id}/result) may name in X-Tessera-Tiles.

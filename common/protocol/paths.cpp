@@ -76,6 +76,15 @@ std::string image_target(std::string_view id, const ImageFormat& format, bool pa
   return target;
 }
 
+std::string frame_image_target(std::string_view id, int frame, const ImageFormat& format,
+                               bool partial) {
+  const std::string frames = fill(route::job_frames, id);
+  std::string target =
+      frames + "/" + std::to_string(frame) + "/image?" + with(query::format, format.name);
+  if (partial) target += "&" + with(query::partial, "1");
+  return target;
+}
+
 std::string claim_target(std::string_view worker, double wait_s, int max_tiles) {
   return fill(route::worker_claim, worker) + "?" + with(query::wait_s, decimal(wait_s)) + "&" +
          with(query::max_tiles, std::to_string(max_tiles));

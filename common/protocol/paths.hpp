@@ -24,6 +24,9 @@ inline constexpr std::string_view job_pause = "/v1/jobs/{id}/pause";
 inline constexpr std::string_view job_resume = "/v1/jobs/{id}/resume";
 inline constexpr std::string_view job_retry = "/v1/jobs/{id}/retry";
 inline constexpr std::string_view job_tiles = "/v1/jobs/{id}/tiles";
+// An animation's frames, and each frame's image (a still's one frame is frame 0).
+inline constexpr std::string_view job_frames = "/v1/jobs/{id}/frames";
+inline constexpr std::string_view job_frame_image = "/v1/jobs/{id}/frames/{frame}/image";
 // Server-sent events: the farm's, and one job's.
 inline constexpr std::string_view events = "/v1/events";
 inline constexpr std::string_view job_events = "/v1/jobs/{id}/events";
@@ -53,12 +56,12 @@ inline constexpr std::string_view ui_script = "/ui/app.js";
 inline constexpr std::string_view ui_style = "/ui/app.css";
 // Every one of them, for the contract test.
 inline constexpr std::string_view all[] = {
-    healthz,       readyz,  metrics,         events,       job_events,   job_tiles,
-    jobs,          job,     job_image,       job_cancel,   job_pause,    job_resume,
-    job_retry,     workers, worker,          worker_claim, worker_drain, worker_undrain,
-    worker_remove, scene,   lease_heartbeat, lease_extend, lease_result, lease_fail,
-    lease_release, asset,   scene_asset,     ui_page,      ui_job,       ui_workers,
-    ui_script,     ui_style};
+    healthz,      readyz,          metrics,       events,  job_events,      job_tiles,
+    job_frames,   job_frame_image, jobs,          job,     job_image,       job_cancel,
+    job_pause,    job_resume,      job_retry,     workers, worker,          worker_claim,
+    worker_drain, worker_undrain,  worker_remove, scene,   lease_heartbeat, lease_extend,
+    lease_result, lease_fail,      lease_release, asset,   scene_asset,     ui_page,
+    ui_job,       ui_workers,      ui_script,     ui_style};
 }  // namespace route
 
 // The names of the routes' query parameters.
@@ -84,6 +87,9 @@ std::string jobs_target(std::optional<JobState> state, int limit);
 // The jobs whose id begins with `prefix` (at most `limit`).
 std::string jobs_with_prefix_target(std::string_view prefix, int limit);
 std::string image_target(std::string_view id, const ImageFormat& format, bool partial);
+// The image of one frame of the job.
+std::string frame_image_target(std::string_view id, int frame, const ImageFormat& format,
+                               bool partial);
 std::string claim_target(std::string_view worker, double wait_s, int max_tiles);
 std::string extend_target(std::string_view lease, int max_tiles);
 

@@ -13,6 +13,13 @@ const JOB_STATES = ['queued', 'running', 'paused', 'completed', 'failed', 'cance
 const FINISHED = new Set(['completed', 'failed', 'canceled']);
 const MAX_ZOOM = 64; // screen pixels per image pixel at the most
 const POLL_MS = 3000; // how often a view reloads where the coordinator serves no events
+const DEFAULT_FPS = 24; // the flipbook's pace: the job's status does not carry the scene's fps
+const FRAMES_REFRESH_MS = 1000; // GET /frames at most this often while frames change ...
+const FRAMES_REFRESH_MAX_MS = 10000; // ... and up to this for long animations (1 ms a frame)
+const FRAME_IMAGE_FETCHES = 2; // frame images fetched at once for the strip and the flipbook
+const FRAME_IMAGE_RETRY_MS = 3000; // before a frame image that could not be fetched is asked for again
+const FRAME_IMAGE_ATTEMPTS = 3; // tries at a frame image before it waits to be asked for again
+const MAX_STRIP_FRAMES = 100000; // a frame list longer than this waits for GET /frames
 
 // ---------------------------------------------------------------------------------------
 // The DOM, without markup
@@ -753,14 +760,136 @@ function heatColour(t, alpha = 1) {
   return `hsla(${hue}, 90%, 50%, ${alpha})`;
 }
 
-function fileName(job, extension) {
+// What a download is saved as. One frame of an animation says which, so that the frames of
+// a sequence sort and do not overwrite each other; "-partial" while the image is not whole.
+function fileName(job, extension, { frame = null, whole = job.state === 'completed' } = {}) {
   const base = String(job.name || job.id).replace(/[^A-Za-z0-9._-]+/g, '_').replace(/^[._]+/, '').slice(0, 80) || job.id;
-  return `${base}${job.state === 'completed' ? '' : '-partial'}.${extension}`;
+  const which = frame === null ? '' : `-frame${String(frame).padStart(4, '0')}`;
+  return `${base}${which}${whole ? '' : '-partial'}.${extension}`;
+}
+
+// A frame list as the API writes it ("1-48", "1-100x2", "1,5,10-20"): its frames in the
+// order the farm renders them (increasing, each once), so that the strip can be drawn before
+// GET /frames answers; null where it cannot be read, and the strip waits for that answer.
+function parseFrameList(text) {
+  const frames = new Set();
+  for (const part of String(text ?? '').split(',')) {
+    const match = /^\s*(\d+)\s*(?:-\s*(\d+)\s*(?:x\s*(\d+)\s*)?)?$/.exec(part);
+    if (!match) return null;
+    const first = Number(match[1]);
+    const last = match[2] === undefined ? first : Number(match[2]);
+    const step = match[3] === undefined ? 1 : Number(match[3]);
+    if (last < first || step < 1) return null;
+    for (let frame = first; frame <= last; frame += step) {
+      frames.add(frame);
+      if (frames.size > MAX_STRIP_FRAMES) return null;
+    }
+  }
+  return [...frames].sort((a, b) => a - b);
+}
+
+// The done frames' images of one job. Each is fetched once (through fetch(), since an
+// <img src> could not send the token, and shown from a blob: URL, which the page's CSP
+// allows) and decoded ahead, so that the strip's thumbnail and the flipbook are the same
+// image and the flipbook never waits on the network mid-loop. A few at a time: a long
+// animation must not flood the coordinator, and frames asked for `soon` (in view, or next
+// in the flipbook) go first.
+class FrameImages {
+  constructor(jobId, onReady) {
+    this.jobId = jobId;
+    this.onReady = onReady;
+    this.entries = new Map(); // frame -> {frame, state: queued|loading|ready|failed, url, img, failedAt, attempts}
+    this.queue = [];
+    this.active = 0;
+    this.closed = false;
+  }
+
+  entry(frame) {
+    return this.entries.get(frame);
+  }
+
+  want(frame, soon = false) {
+    if (this.closed) return;
+    let entry = this.entries.get(frame);
+    if (entry && entry.state === 'failed' && Date.now() - entry.failedAt > FRAME_IMAGE_RETRY_MS) {
+      this.entries.delete(frame);
+      entry = undefined;
+    }
+    if (entry) {
+      if (soon && entry.state === 'queued') {
+        this.queue.splice(this.queue.indexOf(entry), 1);
+        this.queue.unshift(entry);
+      }
+      return;
+    }
+    entry = { frame, state: 'queued', url: '', img: null, failedAt: 0, attempts: 0 };
+    this.entries.set(frame, entry);
+    if (soon) this.queue.unshift(entry);
+    else this.queue.push(entry);
+    this.pump();
+  }
+
+  pump() {
+    while (!this.closed && this.active < FRAME_IMAGE_FETCHES && this.queue.length > 0) {
+      const entry = this.queue.shift();
+      this.active += 1;
+      this.load(entry).finally(() => {
+        this.active -= 1;
+        this.pump();
+      });
+    }
+  }
+
+  async load(entry) {
+    entry.state = 'loading';
+    try {
+      const response = await fetch(jobPath(this.jobId, `/frames/${entry.frame}/image?format=png`), { headers: withAuth(), cache: 'no-store' });
+      await checked(response);
+      const blob = await response.blob();
+      if (this.closed) return;
+      entry.url = URL.createObjectURL(blob);
+      const img = new Image();
+      img.src = entry.url;
+      await img.decode();
+      if (this.closed) return;
+      entry.img = img;
+      entry.state = 'ready';
+      this.onReady(entry);
+    } catch (error) {
+      entry.state = 'failed';
+      entry.failedAt = Date.now();
+      if (entry.url) URL.revokeObjectURL(entry.url);
+      entry.url = '';
+      if (this.closed) return;
+      console.debug('frame image', entry.frame, error);
+      // Tried again by itself a few times (a 409 where the frame list ran ahead of the image,
+      // a coordinator restarting), since nothing else may ask for it again once the job is
+      // over; never where the token or the frame itself is wrong.
+      const hopeless = error instanceof ApiError && [400, 401, 403, 404].includes(error.status);
+      entry.attempts = (entry.attempts ?? 0) + 1;
+      if (hopeless || entry.attempts >= FRAME_IMAGE_ATTEMPTS) return;
+      setTimeout(() => {
+        if (this.closed || this.entries.get(entry.frame) !== entry || entry.state !== 'failed') return;
+        entry.state = 'queued';
+        this.queue.push(entry);
+        this.pump();
+      }, FRAME_IMAGE_RETRY_MS * entry.attempts);
+    }
+  }
+
+  close() {
+    this.closed = true;
+    this.queue = [];
+    for (const entry of this.entries.values()) if (entry.url) URL.revokeObjectURL(entry.url);
+    this.entries.clear();
+  }
 }
 
 function jobView(main, id) {
   let job = null;
-  let tiles = []; // by index: {index, x, y, width, height, state, worker, worker_name, render_ms}
+  // By index, over every frame: {index, frame, x, y, width, height, state, worker,
+  // worker_name, render_ms}.
+  let tiles = [];
   let tilesKnown = false;
   // Until the tile list is read, tile events wait here; until the image is drawn, pixels do.
   let tilesLoading = true;
@@ -776,6 +905,29 @@ function jobView(main, id) {
   let panY = 0;
   let fitted = false;
   const view = { gone: false };
+  // An animation (more than one frame) is shown one frame at a time, `shownFrame`: the one
+  // being rendered while `following`, else the one picked in the strip or the flipbook's.
+  // Its frames share the image's place, so the tiles of the others are neither painted nor
+  // outlined. A still is the one frame 0, and none of this shows.
+  let animated = false;
+  let shownFrame = 0;
+  let following = true;
+  let frameOrder = [];
+  const framePosition = new Map(); // frame -> its place in frameOrder
+  const frameInfo = new Map(); // frame -> its FrameStatus, from GET /frames
+  const cells = new Map(); // frame -> {button, thumb, bar, img, state}: its cell in the strip
+  const visibleCells = new Set(); // frames whose cell is in or near the strip's view
+  let shownCell = null;
+  let shownTiles = null; // the tiles of shownFrame; null when they must be picked out again
+  let framesKey = null;
+  let framesTimer = 0;
+  let framesAt = 0;
+  let framesBusy = false;
+  let framesAgain = false;
+  let playing = false;
+  let playRequest = 0;
+  let lastStep = 0;
+  const frameImages = new FrameImages(id, (entry) => frameImageReady(entry));
 
   // --- the page ---
   const title = h('h1', { class: 'job-title', text: id });
@@ -798,6 +950,18 @@ function jobView(main, id) {
   const legendMax = h('span', {});
   const legend = h('div', { class: 'legend', hidden: true }, 'Render time: 0 ms', legendBar, legendMax);
   const context = image.getContext('2d');
+  const playButton = h('button', { type: 'button', text: 'Play', id: 'flip-play', 'aria-pressed': 'false', disabled: true, title: 'Play the done frames in order, looping' });
+  const fpsInput = h('input', { type: 'number', id: 'flip-fps', class: 'fps', min: 1, max: 240, step: 'any', value: DEFAULT_FPS, 'aria-label': 'Frames per second' });
+  const followButton = h('button', { type: 'button', text: 'Follow', id: 'frame-follow', 'aria-pressed': 'true', title: 'Show the frame being rendered, and move on with the render' });
+  const shownLabel = h('span', { class: 'frame-shown', id: 'frame-shown' });
+  const frameCounts = h('span', { class: 'frame-counts', id: 'frame-counts' });
+  const strip = h('div', { class: 'frame-strip', id: 'frame-strip', role: 'group', 'aria-label': 'Frames' });
+  const framesPanel = h('section', { class: 'frames', id: 'frames', hidden: true, 'aria-label': 'Frames' },
+    h('div', { class: 'job-tools frames-bar' },
+      h('span', { class: 'group' }, playButton, h('label', { class: 'fps-label' }, fpsInput, 'fps')),
+      h('span', { class: 'group' }, followButton, shownLabel),
+      h('span', { class: 'group' }, frameCounts)),
+    strip);
 
   append(main, [
     h('div', { class: 'job-head' },
@@ -815,6 +979,7 @@ function jobView(main, id) {
       h('span', { class: 'group' }, 'Download', pngButton, exrButton),
       actions,
       h('label', { class: 'group' }, 'Priority', priority)),
+    framesPanel,
     viewer,
     legend,
     counts,
@@ -832,15 +997,18 @@ function jobView(main, id) {
       fill(actions, jobButtons(job, { applied: applyJob, deleted: () => navigate('/') }));
     }
     syncPriority(priority, job);
+    const frames = job.frames;
+    if (!animated && frames && frames.total > 1) startFrames(frames);
     const parts = [
       ['Tiles', `${formatCount(job.tiles.done)} / ${formatCount(job.tiles.total)} (${Math.floor(job.progress * 100)}%)`],
+      animated ? ['Frames', `${formatCount(frames.done)} / ${formatCount(frames.total)}`] : null,
       ['Rendering', formatCount(job.tiles.rendering)],
       ['Elapsed', formatDuration(job.elapsed_s)],
       ['ETA', FINISHED.has(job.state) || job.state === 'paused' ? '—' : formatDuration(job.eta_s)],
       ['Rays/s', formatRate(job.stats?.rays_per_s)],
       ['Size', `${job.width} × ${job.height}`],
       ['Submitted', formatAgo(job.created_at)],
-    ];
+    ].filter(Boolean);
     const health = job.health ?? {};
     const troubles = [];
     if (health.tile_failures) troubles.push(`${health.tile_failures} tile failures`);
@@ -849,6 +1017,7 @@ function jobView(main, id) {
     fill(status,
       ...parts.map(([label, value]) => h('span', {}, `${label} `, h('b', { text: value }))),
       troubles.length ? h('span', { class: 'error', text: troubles.join(', ') }) : null,
+      animated && frames.failed ? h('span', { class: 'error', text: `Failed frames: ${frames.failed_list}` }) : null,
       health.last_problem ? h('span', { class: 'error', text: health.last_problem }) : null,
       job.error ? h('span', { class: 'error', text: `Error: ${job.error}` }) : null,
     );
@@ -861,31 +1030,342 @@ function jobView(main, id) {
       fit();
       fitted = true;
     }
+    if (animated) {
+      showFrameCounts();
+      // The job's counts move with every tile; the frame list is asked for again only when
+      // a frame is done, failed or begun, since it grows with the frames.
+      const key = `${frames.done}/${frames.failed}/${frames.current}/${job.state}`;
+      if (framesKey !== null && key !== framesKey) loadFramesSoon();
+      framesKey = key;
+      if (following) follow();
+    }
     if (!tilesKnown) showCounts();
     // The final image once the job ends: every tile, whatever events were missed.
     if (was && !FINISHED.has(was.state) && FINISHED.has(job.state)) {
-      loadImage();
+      if (!playing) loadImage();
       if (tilesKnown) loadTiles();
     }
   }
 
+  // --- frames: the strip, the frame shown and the flipbook ---
+  function startFrames(frames) {
+    animated = true;
+    framesPanel.hidden = false;
+    pngButton.title = 'Download the frame shown (what is rendered of it so far)';
+    exrButton.title = 'Download the frame shown as linear floats (what is rendered of it so far)';
+    const order = parseFrameList(frames.list);
+    if (order) buildStrip(order);
+    shownFrame = frames.current ?? order?.[0] ?? 0;
+    shownTiles = null;
+    markShown();
+  }
+
+  function buildStrip(order) {
+    frameOrder = order;
+    framePosition.clear();
+    order.forEach((frame, at) => framePosition.set(frame, at));
+    cellObserver.disconnect();
+    visibleCells.clear();
+    cells.clear();
+    shownCell = null;
+    const aspect = `${Math.max(1, job.width)} / ${Math.max(1, job.height)}`;
+    strip.replaceChildren(...order.map((frame) => {
+      const thumb = h('span', { class: 'thumb' });
+      thumb.style.aspectRatio = aspect;
+      const bar = h('span', {});
+      const button = h('button', { type: 'button', class: 'frame-cell pending', dataset: { frame: String(frame), state: 'pending' }, title: `Frame ${frame}: pending` },
+        thumb, h('span', { class: 'frame-bar' }, bar), h('span', { class: 'frame-no', text: frame }));
+      cells.set(frame, { button, thumb, bar, img: null, state: 'pending', title: '' });
+      cellObserver.observe(button);
+      return button;
+    }));
+    for (const frame of order) updateCell(frame);
+    markShown();
+  }
+
+  function updateCell(frame) {
+    const cell = cells.get(frame);
+    if (!cell) return;
+    const info = frameInfo.get(frame);
+    const state = info?.state ?? 'pending';
+    if (cell.state !== state) {
+      cell.button.classList.replace(cell.state, state);
+      cell.button.dataset.state = state;
+      cell.state = state;
+    }
+    const counted = info?.tiles;
+    cell.bar.style.width = counted && counted.total > 0 ? `${(100 * counted.done) / counted.total}%` : '0%';
+    const title = [
+      `Frame ${frame}: ${state}`,
+      counted ? `${formatCount(counted.done)} of ${formatCount(counted.total)} tiles done` : null,
+      info?.error ?? null,
+    ].filter(Boolean).join('\n');
+    if (cell.title !== title) {
+      cell.button.title = title;
+      cell.title = title;
+    }
+    if (state === 'done') {
+      const entry = frameImages.entry(frame);
+      if (entry?.state === 'ready') showThumbnail(cell, entry);
+      else if (visibleCells.has(frame)) frameImages.want(frame, true);
+      else if (playing) frameImages.want(frame);
+    } else if (cell.img) {
+      cell.img.remove();
+      cell.img = null;
+    }
+  }
+
+  function showThumbnail(cell, entry) {
+    if (cell.img && cell.img.src === entry.url) return;
+    cell.img = h('img', { src: entry.url, alt: '', draggable: false });
+    cell.thumb.replaceChildren(cell.img);
+  }
+
+  function frameImageReady(entry) {
+    if (view.gone) return;
+    const cell = cells.get(entry.frame);
+    if (cell && cell.state === 'done') showThumbnail(cell, entry);
+  }
+
+  // Thumbnails are fetched as their cells scroll into the strip's view (and a little ahead):
+  // a strip of thousands of frames fetches only what is looked at.
+  const cellObserver = new IntersectionObserver((seen) => {
+    for (const sighting of seen) {
+      const frame = Number(sighting.target.dataset.frame);
+      if (!sighting.isIntersecting) {
+        visibleCells.delete(frame);
+        continue;
+      }
+      visibleCells.add(frame);
+      if (frameInfo.get(frame)?.state === 'done') frameImages.want(frame, true);
+    }
+  }, { root: strip, rootMargin: '0px 50%' });
+
+  function markShown() {
+    setText(shownLabel, `Frame ${shownFrame}`);
+    shownLabel.dataset.frame = String(shownFrame);
+    const cell = cells.get(shownFrame) ?? null;
+    if (shownCell && shownCell !== cell) shownCell.button.removeAttribute('aria-current');
+    if (cell) {
+      cell.button.setAttribute('aria-current', 'true');
+      reveal(cell.button);
+    }
+    shownCell = cell;
+  }
+
+  // Scrolls the strip alone: scrollIntoView() would scroll the page too, away from the image.
+  function reveal(button) {
+    const left = button.offsetLeft;
+    const right = left + button.offsetWidth;
+    if (left < strip.scrollLeft) strip.scrollLeft = Math.max(0, left - 8);
+    else if (right > strip.scrollLeft + strip.clientWidth) strip.scrollLeft = right - strip.clientWidth + 8;
+  }
+
+  function showFrameCounts() {
+    const frames = job.frames;
+    fill(frameCounts,
+      `${formatCount(frames.done)} of ${formatCount(frames.total)} frames done`,
+      frames.failed ? h('span', { class: 'error', text: `, ${formatCount(frames.failed)} failed` }) : null);
+    playButton.disabled = !playing && frames.done === 0;
+  }
+
+  function applyFrames(list) {
+    const order = list.map((info) => info.frame);
+    if (order.length !== frameOrder.length || order.some((frame, at) => frame !== frameOrder[at])) buildStrip(order);
+    frameInfo.clear();
+    for (const info of list) frameInfo.set(info.frame, info);
+    for (const frame of frameOrder) updateCell(frame);
+    if (!tilesKnown) showCounts();
+  }
+
+  function loadFramesSoon() {
+    if (framesTimer || view.gone) return;
+    // Longer apart for longer animations: the list is one entry a frame.
+    const every = Math.min(FRAMES_REFRESH_MAX_MS, Math.max(FRAMES_REFRESH_MS, frameOrder.length));
+    framesTimer = setTimeout(() => {
+      framesTimer = 0;
+      loadFrames();
+    }, Math.max(0, framesAt + every - Date.now()));
+  }
+
+  async function loadFrames() {
+    if (framesBusy) {
+      framesAgain = true;
+      return;
+    }
+    framesBusy = true;
+    framesAt = Date.now();
+    try {
+      const list = await api('GET', jobPath(id, '/frames'));
+      if (!view.gone) applyFrames(list.frames ?? []);
+    } catch (error) {
+      if (!view.gone && error.status !== 404) reportError('The frames', error);
+    } finally {
+      framesBusy = false;
+      if (framesAgain && !view.gone) {
+        framesAgain = false;
+        loadFramesSoon();
+      }
+    }
+  }
+
+  // The frame shown while following: the first not yet done (frames.current), or, once
+  // none is left, the last one followed, so that the end of a render leaves it in view.
+  function follow() {
+    const current = job?.frames?.current;
+    if (current !== null && current !== undefined) showFrame(current);
+  }
+
+  function showFrame(frame) {
+    if (frame === shownFrame) return;
+    shownFrame = frame;
+    shownTiles = null;
+    markShown();
+    const entry = frameImages.entry(frame);
+    if (entry?.state === 'ready' && frameInfo.get(frame)?.state === 'done') paintFrame(entry);
+    else loadImage();
+    showCounts();
+    drawOverlaySoon();
+  }
+
+  // A done frame already fetched is drawn at once: the flipbook keeps its pace with no
+  // request per frame.
+  function paintFrame(entry) {
+    imageSerial += 1;
+    context.clearRect(0, 0, image.width, image.height);
+    context.drawImage(entry.img, 0, 0);
+    image.dataset.frame = String(entry.frame);
+    imageLoading = false;
+    const queued = pixelQueue;
+    pixelQueue = [];
+    for (const event of queued) drawPixels(event);
+  }
+
+  const doneFrames = () => frameOrder.filter((frame) => frameInfo.get(frame)?.state === 'done');
+
+  function fps() {
+    const value = Number(fpsInput.value);
+    return Number.isFinite(value) && value > 0 && value <= 1000 ? value : DEFAULT_FPS;
+  }
+
+  function setPlaying(on) {
+    if (on === playing) return;
+    playing = on;
+    playButton.setAttribute('aria-pressed', String(on));
+    setText(playButton, on ? 'Pause' : 'Play');
+    if (on) {
+      setFollowing(false);
+      // Every done frame fetched ahead, the next ones to be shown first.
+      const done = doneFrames();
+      const at = done.findIndex((frame) => framePosition.get(frame) > (framePosition.get(shownFrame) ?? -1));
+      const start = at < 0 ? 0 : at;
+      for (let k = 0; k < done.length; k += 1) frameImages.want(done[(start + k) % done.length]);
+      lastStep = performance.now();
+      playRequest = requestAnimationFrame(tick);
+    } else {
+      cancelAnimationFrame(playRequest);
+      playRequest = 0;
+    }
+    if (job) showFrameCounts();
+  }
+
+  function setFollowing(on) {
+    following = on;
+    followButton.setAttribute('aria-pressed', String(on));
+    if (on) {
+      setPlaying(false);
+      follow();
+    }
+  }
+
+  function tick(now) {
+    playRequest = requestAnimationFrame(tick);
+    const period = 1000 / fps();
+    if (now - lastStep < period) return;
+    // After a stall (a hidden tab, a busy machine) it goes on from now, not in a burst.
+    lastStep = now - lastStep > 4 * period ? now : lastStep + period;
+    stepFlipbook();
+  }
+
+  // The next done frame after the one shown, round to the first again. One whose image is
+  // still on its way holds the flipbook where it is (passing it would stutter through the
+  // first loop); one that could not be fetched is passed over.
+  function stepFlipbook() {
+    const done = doneFrames();
+    if (done.length === 0) return;
+    const position = framePosition.get(shownFrame) ?? -1;
+    let at = done.findIndex((frame) => framePosition.get(frame) > position);
+    if (at < 0) at = 0;
+    for (let k = 0; k < done.length; k += 1) {
+      const frame = done[(at + k) % done.length];
+      const entry = frameImages.entry(frame);
+      if (entry?.state === 'ready') {
+        showFrame(frame);
+        return;
+      }
+      if (entry?.state === 'failed') {
+        frameImages.want(frame);
+        continue;
+      }
+      frameImages.want(frame, true);
+      return;
+    }
+  }
+
+  function pick(frame) {
+    setPlaying(false);
+    setFollowing(false);
+    showFrame(frame);
+  }
+
+  playButton.addEventListener('click', () => setPlaying(!playing));
+  followButton.addEventListener('click', () => setFollowing(true));
+  strip.addEventListener('click', (event) => {
+    const button = event.target.closest?.('.frame-cell');
+    if (button) pick(Number(button.dataset.frame));
+  });
+  strip.addEventListener('keydown', (event) => {
+    const moves = { ArrowLeft: -1, ArrowRight: 1, Home: -Infinity, End: Infinity };
+    if (!(event.key in moves) || frameOrder.length === 0) return;
+    event.preventDefault();
+    const from = framePosition.get(shownFrame) ?? 0;
+    const to = Math.min(frameOrder.length - 1, Math.max(0, from + moves[event.key]));
+    pick(frameOrder[to]);
+    cells.get(frameOrder[to])?.button.focus();
+  });
+
   // --- tiles ---
+  // The tiles the viewer shows: an animation's of the frame shown only.
+  function tilesShown() {
+    if (!animated) return tiles;
+    shownTiles ??= tiles.filter((tile) => tile && tile.frame === shownFrame);
+    return shownTiles;
+  }
+
   function showCounts() {
     const by = { pending: 0, rendering: 0, done: 0, failed: 0 };
     const workers = new Map();
-    for (const tile of tiles) {
+    const shown = tilesShown();
+    for (const tile of shown) {
       if (!tile) continue;
       by[tile.state] = (by[tile.state] ?? 0) + 1;
       if (tile.state === 'rendering' && tile.worker) workers.set(tile.worker, tile.worker_name || tile.worker);
     }
-    const done = tilesKnown ? by.done : (job?.tiles.done ?? 0);
+    const info = animated ? frameInfo.get(shownFrame) : null;
+    const prefix = animated ? `Frame ${shownFrame}: ` : '';
+    let done = by.done;
+    if (!tilesKnown) done = animated ? (info?.tiles.done ?? 0) : (job?.tiles.done ?? 0);
     counts.dataset.done = String(done);
+    if (animated) counts.dataset.frame = String(shownFrame);
     if (!tilesKnown) {
-      setText(counts, job ? `${formatCount(done)} of ${formatCount(job.tiles.total)} tiles done` : '');
+      const total = animated ? info?.tiles.total : job?.tiles.total;
+      setText(counts, job && total !== undefined ? `${prefix}${formatCount(done)} of ${formatCount(total)} tiles done` : '');
       return;
     }
+    const total = animated ? shown.length : tiles.length;
+    counts.dataset.total = String(total);
     fill(counts,
-      `${formatCount(tiles.length)} tiles: ${formatCount(by.done)} done, ${formatCount(by.rendering)} rendering, `
+      `${prefix}${formatCount(total)} tiles: ${formatCount(by.done)} done, ${formatCount(by.rendering)} rendering, `
         + `${formatCount(by.pending)} pending, ${formatCount(by.failed)} failed`,
       ...[...workers].map(([worker, name]) => {
         const swatch = h('span', { class: 'swatch rendering' });
@@ -900,13 +1380,15 @@ function jobView(main, id) {
     // Done is final: an older event seen again (after a reload) must not undo it.
     if (old && old.state === 'done' && event.state !== 'done') return;
     tiles[event.index] = {
-      index: event.index, x: event.x, y: event.y, width: event.width, height: event.height,
+      index: event.index, frame: event.frame ?? 0, x: event.x, y: event.y, width: event.width, height: event.height,
       state: event.state, worker: event.worker ?? null, worker_name: event.worker_name ?? null,
       render_ms: event.render_ms ?? null,
     };
+    if ((event.frame ?? 0) === shownFrame) shownTiles = null;
   }
 
   function drawPixels(event) {
+    if (animated && event.frame !== shownFrame) return;
     const { x, y, width, height } = event;
     if (!(width > 0 && height > 0) || x + width > image.width || y + height > image.height) return;
     let bytes;
@@ -932,10 +1414,20 @@ function jobView(main, id) {
     if (!Number.isInteger(event.index) || event.index < 0) return;
     if (tilesLoading) tileQueue.push(event);
     else applyTileState(event);
+    const ofShown = !animated || event.frame === shownFrame;
+    if (animated) {
+      // A frame begins with its first tile out: the strip says so before the list is read again.
+      const info = frameInfo.get(event.frame);
+      if (info && info.state === 'pending' && event.state === 'rendering') {
+        frameInfo.set(event.frame, { ...info, state: 'rendering' });
+        updateCell(event.frame);
+      }
+    }
+    if (!ofShown) return;
     if (event.pixels) {
       if (imageLoading) pixelQueue.push(event);
       else drawPixels(event);
-    } else if (event.state === 'done') {
+    } else if (event.state === 'done' && !playing) {
       // Done, but without its pixels: they come with the next image read.
       clearTimeout(refreshTimer);
       refreshTimer = setTimeout(loadImage, 1000);
@@ -951,6 +1443,7 @@ function jobView(main, id) {
       if (view.gone) return;
       tiles = [];
       for (const tile of list.tiles ?? []) tiles[tile.index] = tile;
+      shownTiles = null;
       tilesKnown = true;
     } catch (error) {
       if (view.gone) return;
@@ -967,13 +1460,16 @@ function jobView(main, id) {
     }
   }
 
-  // The image so far, drawn whole; pixels of tile events that came meanwhile go on top.
+  // The image so far (an animation's: the frame shown), drawn whole; pixels of tile events
+  // that came meanwhile go on top.
   let imageSerial = 0;
   async function loadImage() {
     const serial = ++imageSerial;
+    const frame = shownFrame;
     imageLoading = true;
     try {
-      const response = await fetch(jobPath(id, '/image?format=png&partial=1'), { headers: withAuth(), cache: 'no-store' });
+      const target = animated ? `/frames/${frame}/image?format=png&partial=1` : '/image?format=png&partial=1';
+      const response = await fetch(jobPath(id, target), { headers: withAuth(), cache: 'no-store' });
       await checked(response);
       const bitmap = await createImageBitmap(await response.blob());
       if (view.gone || serial !== imageSerial) {
@@ -983,6 +1479,7 @@ function jobView(main, id) {
       context.clearRect(0, 0, image.width, image.height);
       context.drawImage(bitmap, 0, 0);
       bitmap.close();
+      if (animated) image.dataset.frame = String(frame);
     } catch (error) {
       if (!view.gone && error.status !== 409) reportError('The image', error);
     } finally {
@@ -1013,7 +1510,7 @@ function jobView(main, id) {
       return;
     }
     if (view.gone || serial !== loadSerial) return;
-    await Promise.all([loadTiles(), loadImage()]);
+    await Promise.all([loadTiles(), loadImage(), animated ? loadFrames() : null]);
   }
 
   // --- zoom, pan and the overlay ---
@@ -1074,12 +1571,13 @@ function jobView(main, id) {
     o.clearRect(0, 0, width, height);
     const rect = (tile) => [panX + tile.x * zoom, panY + tile.y * zoom, tile.width * zoom, tile.height * zoom];
     const visible = ([x, y, w, hgt]) => x + w >= 0 && y + hgt >= 0 && x <= width && y <= height;
+    const shown = tilesShown();
     if (showHeat) {
       let slowest = 0;
-      for (const tile of tiles) if (tile?.state === 'done' && tile.render_ms > slowest) slowest = tile.render_ms;
+      for (const tile of shown) if (tile?.state === 'done' && tile.render_ms > slowest) slowest = tile.render_ms;
       setText(legendMax, `${formatCount(Math.round(slowest))} ms`);
       if (slowest > 0) {
-        for (const tile of tiles) {
+        for (const tile of shown) {
           if (tile?.state !== 'done' || tile.render_ms === null || tile.render_ms === undefined) continue;
           const r = rect(tile);
           if (!visible(r)) continue;
@@ -1089,7 +1587,7 @@ function jobView(main, id) {
       }
     }
     if (showTiles) {
-      for (const tile of tiles) {
+      for (const tile of shown) {
         if (!tile || tile.state === 'done') continue;
         const [x, y, w, hgt] = rect(tile);
         if (!visible([x, y, w, hgt])) continue;
@@ -1136,11 +1634,17 @@ function jobView(main, id) {
   drawLegend();
 
   // Downloads go through fetch(), with the token in a header, and are saved from a blob.
+  // An animation's: the frame shown.
   const download = (button, format) => act(button, `The ${format.toUpperCase()} image`, async () => {
-    const response = await fetch(jobPath(id, `/image?format=${format}&partial=1`), { headers: withAuth(), cache: 'no-store' });
+    const frame = animated ? shownFrame : null;
+    const target = frame === null ? `/image?format=${format}&partial=1` : `/frames/${frame}/image?format=${format}&partial=1`;
+    const response = await fetch(jobPath(id, target), { headers: withAuth(), cache: 'no-store' });
     await checked(response);
     const url = URL.createObjectURL(await response.blob());
-    const link = h('a', { href: url, download: fileName(job ?? { id, state: '' }, format), hidden: true });
+    const name = frame === null
+      ? fileName(job ?? { id, state: '' }, format)
+      : fileName(job, format, { frame, whole: frameInfo.get(frame)?.state === 'done' });
+    const link = h('a', { href: url, download: name, hidden: true });
     document.body.append(link);
     link.click();
     link.remove();
@@ -1176,12 +1680,12 @@ function jobView(main, id) {
     const cy = event.clientY - box.top;
     const ix = (cx - panX) / zoom;
     const iy = (cy - panY) / zoom;
-    const tile = tiles.find((t) => t && ix >= t.x && ix < t.x + t.width && iy >= t.y && iy < t.y + t.height);
+    const tile = tilesShown().find((t) => t && ix >= t.x && ix < t.x + t.width && iy >= t.y && iy < t.y + t.height);
     if (!tile) {
       tip.hidden = true;
       return;
     }
-    const lines = [`Tile ${tile.index} at ${tile.x}, ${tile.y} (${tile.width} × ${tile.height})`, tile.state];
+    const lines = [`${animated ? `Frame ${tile.frame}, tile` : 'Tile'} ${tile.index} at ${tile.x}, ${tile.y} (${tile.width} × ${tile.height})`, tile.state];
     if (tile.worker_name || tile.worker) lines.push(`worker ${tile.worker_name || tile.worker}`);
     if (tile.render_ms !== null && tile.render_ms !== undefined) lines.push(`${formatCount(Math.round(tile.render_ms))} ms`);
     setText(tip, lines.join('\n'));
@@ -1240,9 +1744,14 @@ function jobView(main, id) {
       clearInterval(clock);
       resized.disconnect();
       if (overlayFrame) cancelAnimationFrame(overlayFrame);
+      cancelAnimationFrame(playRequest);
+      clearTimeout(framesTimer);
+      cellObserver.disconnect();
+      frameImages.close();
     },
   };
 }
+
 
 // ---------------------------------------------------------------------------------------
 // The workers view: /workers

@@ -7,8 +7,12 @@
 //   5. a job named like markup is shown as text (no element made, no dialog);
 //   6. no request leaves the coordinator's origin;
 //   7. a coordinator with tokens: the page asks for the API token, shows nothing until it
-//      has it, keeps it in sessionStorage only (never in a URL or a cookie).
-// Screenshots go to OUT_DIR (dashboard-jobs.png, dashboard-job.png, dashboard-workers.png).
+//      has it, keeps it in sessionStorage only (never in a URL or a cookie);
+//   8. an animation's page: its frame strip has a cell per frame, which turn done and show
+//      thumbnails; a frame clicked is shown; the flipbook plays the frames; the tile counts
+//      are of the frame shown. A still's page shows none of it.
+// Screenshots go to OUT_DIR (dashboard-jobs.png, dashboard-job.png, dashboard-workers.png,
+// dashboard-frames.png).
 //
 // Usage: node dashboard_test.mjs TESSERA_SERVER TESSERA_CLI OUT_DIR
 // Exits 77 (skipped) where playwright-core (tests/tools, npm ci) or /usr/bin/chromium is
@@ -138,6 +142,16 @@ function showcase(width, height, samples) {
   return scene;
 }
 
+// examples/showcase.json as an animation of `frames` frames at `width` x `height` in 8-pixel
+// tiles, its camera moving to the side, so that each frame differs.
+function animation(width, height, frames, samples) {
+  const scene = showcase(width, height, samples);
+  scene.render.tile_size = 8;
+  scene.animation = { frames: [1, frames], fps: 24 };
+  scene.camera.eye = { keys: [[1, [0, 0, 5]], [frames, [1, 0, 5]]] };
+  return scene;
+}
+
 async function submit(server, name, scene, { priority, token } = {}) {
   const body = { name, scene };
   if (priority !== undefined) body.priority = priority;
@@ -158,6 +172,8 @@ const doneAtLeast = (page, count, timeoutMs) =>
 // 320x240 at 256 samples takes one thread about 8 s alone, 11 s beside the browser (on a
 // 2-core machine); the tile steps need some seconds (at least 5) to see it render.
 const SAMPLES = 256;
+// 32x24 at 1024 samples: about a second a frame here, long enough to see the page follow it.
+const ANIMATION_SAMPLES = 1024;
 const XSS_NAME = '<img src=x onerror=alert(1)>';
 const API_TOKEN = 'dashboard-api-token-0123456789abcdef';
 const WORKER_TOKEN = 'dashboard-worker-token-fedcba9876543210';
@@ -214,6 +230,7 @@ async function main() {
   const canvas = page.locator('#image');
   await canvas.waitFor();
   await doneAtLeast(page, 1, 30000);
+  check(await page.locator('#frames').isHidden(), 'a still\'s page shows the frame strip');
   const first = await doneTiles(page);
   const firstShot = await canvas.screenshot();
   const status1 = await api(open, 'GET', `/v1/jobs/${job.id}`);
@@ -270,6 +287,75 @@ async function main() {
   await sleep(500); // an onerror would have fired by now
   check(dialogs.length === 0, `a dialog opened: ${dialogs.join('; ')}`);
   log('5. a name of markup is shown as text, and no dialog opened');
+
+  // 8. An animation: its frame strip and its flipbook. It is paused as soon as it is
+  // submitted, and resumed once its page is up, so that the page sees it render.
+  const FRAMES = 4;
+  const TILES_PER_FRAME = 12; // 32 x 24 in 8-pixel tiles
+  const anim = await submit(open, 'animation', animation(32, 24, FRAMES, ANIMATION_SAMPLES));
+  await api(open, 'POST', `/v1/jobs/${anim.id}/pause`);
+  await page.goto(`${origin}/jobs/${anim.id}`);
+  await page.locator('#frames').waitFor({ state: 'visible', timeout: 15000 });
+  await pageUntil(page, `${FRAMES} cells in the frame strip`, (n) => document.querySelectorAll('#frame-strip .frame-cell').length === n, FRAMES, 15000);
+  const cellFrames = await page.locator('#frame-strip .frame-cell').evaluateAll((cells) => cells.map((cell) => cell.dataset.frame));
+  check(cellFrames.join(',') === '1,2,3,4', `the strip's cells are of frames ${cellFrames.join(',')}, not 1 to 4`);
+  // While it renders, the page follows the frame being rendered and counts its tiles only.
+  await api(open, 'POST', `/v1/jobs/${anim.id}/resume`);
+  const followed = new Set();
+  const wrongCounts = [];
+  let sawRendering = false;
+  await until(`the ${FRAMES} frames done in the strip`, async () => {
+    const seen = await page.evaluate(() => ({
+      shown: document.querySelector('#frame-shown')?.dataset.frame,
+      counted: document.querySelector('#tile-counts')?.dataset.frame,
+      total: document.querySelector('#tile-counts')?.dataset.total,
+      rendering: document.querySelectorAll('#frame-strip .frame-cell.rendering').length,
+      done: document.querySelectorAll('#frame-strip .frame-cell.done').length,
+    }));
+    if (seen.done < FRAMES) followed.add(seen.shown);
+    if (seen.total !== undefined && (seen.total !== String(TILES_PER_FRAME) || seen.counted !== seen.shown)) wrongCounts.push(`${seen.total} tiles of frame ${seen.counted}, frame ${seen.shown} shown`);
+    sawRendering ||= seen.rendering > 0;
+    return seen.done === FRAMES;
+  }, 90000, 20);
+  check(wrongCounts.length === 0, `the tile counts were not those of the frame shown: ${wrongCounts.slice(0, 3).join('; ')}`);
+  check(followed.size >= 2, `the page did not follow the render from frame to frame (it showed ${[...followed].join(', ')})`);
+  log(`8. an animation's page followed its render through frames ${[...followed].sort().join(', ')}${sawRendering ? ', a cell rendering in the strip' : ''}`);
+  await pageUntil(page, 'a thumbnail to load', () => [...document.querySelectorAll('#frame-strip .frame-cell img')]
+    .some((img) => img.complete && img.naturalWidth > 0), null, 15000);
+  const animStatus = await api(open, 'GET', `/v1/jobs/${anim.id}`);
+  check(animStatus.frames?.total === FRAMES && animStatus.tiles.total === FRAMES * TILES_PER_FRAME,
+    `the job has ${animStatus.frames?.total} frames and ${animStatus.tiles.total} tiles`);
+  log(`   its strip shows its ${FRAMES} frames, done, with thumbnails`);
+  // A frame clicked is shown, its own tiles only; the camera moved, so frames 1 and 4 differ.
+  const showsFrame = (frame) => pageUntil(page, `frame ${frame} on the canvas`, (f) => document.querySelector('#image')?.dataset.frame === f
+    && document.querySelector('#frame-shown')?.dataset.frame === f, String(frame), 15000);
+  await page.click('#frame-strip .frame-cell[data-frame="1"]');
+  await showsFrame(1);
+  await pageUntil(page, 'the tile counts of frame 1', (n) => document.querySelector('#tile-counts')?.dataset.frame === '1'
+    && document.querySelector('#tile-counts')?.dataset.total === n, String(TILES_PER_FRAME), 15000);
+  const frame1Shot = await canvas.screenshot();
+  await page.click('#frame-strip .frame-cell[data-frame="4"]');
+  await showsFrame(4);
+  const frame4Shot = await canvas.screenshot();
+  check(!frame1Shot.equals(frame4Shot), 'frames 1 and 4 look the same on the canvas');
+  check((await page.locator('#tile-counts').getAttribute('data-total')) === String(TILES_PER_FRAME),
+    'the tile counts are not of one frame');
+  log('   a frame clicked in the strip is shown, with its own tiles only');
+  // The flipbook plays every frame in turn, and stops where it is paused.
+  await page.fill('#flip-fps', '12');
+  await page.click('#flip-play');
+  const shownFrames = new Set();
+  await until('the flipbook to show every frame', async () => {
+    shownFrames.add(await page.evaluate(() => document.querySelector('#frame-shown')?.dataset.frame));
+    return shownFrames.size >= FRAMES;
+  }, 15000, 10);
+  await page.screenshot({ path: path.join(outDir, 'dashboard-frames.png') });
+  await page.click('#flip-play');
+  check((await page.locator('#flip-play').getAttribute('aria-pressed')) === 'false', 'the flipbook does not say it is paused');
+  const pausedAt = await page.locator('#frame-shown').getAttribute('data-frame');
+  await sleep(400);
+  check((await page.locator('#frame-shown').getAttribute('data-frame')) === pausedAt, 'the flipbook went on after its pause');
+  log(`   the flipbook played frames ${[...shownFrames].sort().join(', ')} and paused on ${pausedAt}`);
 
   // The jobs and the workers, for the record.
   await page.goto(`${origin}/`);

@@ -11,7 +11,7 @@ if ! command -v shellcheck >/dev/null; then
   exit 77
 fi
 
-scripts=(.ci/run bench/run bench/farm bench/memory)
+scripts=(.ci/run bench/run bench/farm bench/farm_frames bench/memory)
 while IFS= read -r -d '' script; do
   scripts+=("$script")
 done < <(find deploy tests/deploy tests/fuzz -type f \( -name '*.sh' -o -name '*.sbatch' \) -print0 | sort -z)

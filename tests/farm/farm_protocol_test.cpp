@@ -570,21 +570,52 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
 }
 
-TEST(FarmProtocol, AnimatedScenesAreCheckedWholeThenRefusedAsNotYetSupported) {
+TEST(FarmProtocol, AnimatedScenesAreCheckedWholeAndTheirFrameListsToo) {
   Farm farm("proto-animation", 0, {"--max-frames", "100"});
   HttpClient http = farm.http(10s);
-  const auto submit = [&](const json& scene) {
-    return http.request("POST", "/v1/jobs", json{{"name", "anim"}, {"scene", scene}}.dump());
+  const auto submit = [&](const json& scene, std::optional<std::string> frames = std::nullopt) {
+    json body{{"name", "anim"}, {"scene", scene}};
+    if (frames) body["frames"] = *frames;
+    return http.request("POST", "/v1/jobs", body.dump());
   };
   json scene = test::showcase(16, 16, 1, 16);
   scene["animation"] = {{"frames", {1, 20}}};
   scene["camera"]["eye"] = {{"keys", {{1, {0, 2, 8}}, {20, {4, 2, 6}}}}};
   const HttpResult animated = submit(scene);
-  ASSERT_TRUE(is_error(animated, 422, "animation_not_supported")) << animated.body;
-  EXPECT_EQ(json::parse(animated.body)["error"]["path"], "/scene/animation");
+  ASSERT_EQ(animated.status, 201) << animated.body;
+  const json job = json::parse(animated.body);
+  EXPECT_EQ(job["frames"]["list"], "1-20");
+  EXPECT_EQ(job["frames"]["total"], 20);
+  EXPECT_EQ(job["tiles"]["total"], 20) << "one 16-pixel tile a frame";
+  EXPECT_EQ(job["frames"]["current"], 1);
+  const HttpResult some = submit(scene, "2-20x6,7");
+  ASSERT_EQ(some.status, 201) << some.body;
+  EXPECT_EQ(json::parse(some.body)["frames"]["list"], "2,7,8-20x6");
 
-  // Before that, every frame of every track is checked, objects too, each kept apart as
-  // the coordinator reads them: a scale that passes through zero at frame 11.
+  // A frame list is read against the scene's range, its errors at /frames.
+  for (const std::string bad : {"0-5", "1-x", "", "21", "5-3"}) {
+    const HttpResult refused = submit(scene, bad);
+    ASSERT_TRUE(is_error(refused, 400, "invalid_request")) << bad << ": " << refused.body;
+    EXPECT_EQ(json::parse(refused.body)["error"]["path"], "/frames") << bad;
+  }
+  // A still is frame 0 only.
+  EXPECT_EQ(submit(test::showcase(16, 16, 1, 16), "0").status, 201);
+  const HttpResult still = submit(test::showcase(16, 16, 1, 16), "3");
+  ASSERT_TRUE(is_error(still, 400, "invalid_request")) << still.body;
+  EXPECT_NE(json::parse(still.body)["error"]["message"].get<std::string>().find("no \"animation\""),
+            std::string::npos)
+      << still.body;
+  // An animation holds no more tiles than the largest still: 100 frames of 62,500 tiles.
+  json huge = scene;
+  huge["image"] = {{"width", 2000}, {"height", 2000}};
+  huge["render"]["tile_size"] = 8;
+  huge["animation"]["frames"] = {1, 100};
+  const HttpResult too_many = submit(huge);
+  ASSERT_TRUE(is_error(too_many, 422, "over_limit")) << too_many.body;
+  EXPECT_EQ(json::parse(too_many.body)["error"]["limit"], "max_job_tiles");
+
+  // Every frame of every track is checked, objects too, each kept apart as the
+  // coordinator reads them: a scale that passes through zero at frame 11.
   json flat = scene;
   flat["animation"]["frames"] = {1, 21};
   flat["objects"][0]["transform"] = json::array({{{"scale", {{"keys", {{1, 1}, {21, -1}}}}}}});

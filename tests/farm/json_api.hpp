@@ -20,7 +20,7 @@ class JsonApi {
   }
 
   nlohmann::json submit(const std::string& name, int priority, const nlohmann::json& scene) {
-    return protocol::to_json(client_.submit({name, priority, scene}));
+    return protocol::to_json(client_.submit({name, priority, scene, std::nullopt}));
   }
   nlohmann::json job(const std::string& id, double wait_s = 0) {
     return protocol::to_json(client_.job(id, wait_s));

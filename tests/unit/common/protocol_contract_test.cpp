@@ -183,8 +183,11 @@ JobStatus full_job() {
   job.error = "none";
   job.health.last_problem = "none";
   job.stats = {1000, 2.5};
+  job.frames = {"1-4", 4, 1, 1, "3", 2};
   return job;
 }
+
+FrameStatus full_frame() { return {3, FrameState::failed, {4, 1, 0}, "tile 2 failed"}; }
 
 Worker full_worker() {
   Worker worker{
@@ -196,7 +199,7 @@ Worker full_worker() {
 }
 
 TileStatus full_tile() {
-  TileStatus tile{3, 16, 32, 16, 8, TileView::done, "w-1", "a", 12.5, "AAAA"};
+  TileStatus tile{3, 1, 16, 32, 16, 8, TileView::done, "w-1", "a", 12.5, "AAAA"};
   return tile;
 }
 
@@ -211,7 +214,7 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   const OpenApi api;
   check(api, api.schema("Error"),
         Error{"over_limit", "too many", "/scene/objects", "max_objects", 10});
-  check(api, api.schema("JobSubmission"), JobSubmission{"a", 60, json{{"version", 1}}});
+  check(api, api.schema("JobSubmission"), JobSubmission{"a", 60, json{{"version", 1}}, "1-48x2"});
   check(api, api.schema("JobStatus"), full_job());
   check(api, api.request("/v1/jobs/{id}", "patch"), JobChange{70});
   check(api, api.response("/v1/jobs", "get", "200"), JobList{{full_job()}});
@@ -220,13 +223,15 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   check(api, api.request("/v1/workers", "post"), WorkerRegistration{"a", "h", 4});
   check(api, api.schema("Registration"),
         Registration{"w-1", "0123abcd", 5, 30, kWorkerProtocolVersion, {}});
-  check(api, api.schema("Lease"), Lease{"l-1", "j-1", "abc", {{3, 0, 8, 8, 8}}, 29.5});
+  check(api, api.schema("Lease"), Lease{"l-1", "j-1", "abc", 7, {{3, 0, 8, 8, 8}}, 29.5});
   check(api, api.request("/v1/leases/{id}/fail", "post"), TileFailure{3, "broke"});
   check(api, api.response("/v1/leases/{id}/result", "put", "200"), ResultAnswer{});
   check(api, api.response("/healthz", "get", "200"), Health{});
   check(api, api.response("/readyz", "get", "200"), Ready{});
   check(api, api.schema("AssetStored"), AssetStored{"sha256:" + std::string(64, 'a'), true});
   check(api, api.schema("TileStatus"), full_tile());
+  check(api, api.schema("FrameStatus"), full_frame());
+  check(api, api.response("/v1/jobs/{id}/frames", "get", "200"), FrameList{{full_frame()}});
   check(api, api.response("/v1/jobs/{id}/tiles", "get", "200"), TileList{{full_tile()}});
   check(api, event_data(api, "/v1/events", "worker"),
         WorkerEvent{WorkerChange::joined, full_worker()});
@@ -251,6 +256,9 @@ TEST(ProtocolContract, EnumsAreTheSchemasEnums) {
   std::set<std::string> tile_views;
   for (const auto& [view, name] : kTileViewNames) tile_views.insert(std::string(name));
   EXPECT_EQ(tile_views, names(api.schema("TileStatus")["properties"]["state"]["enum"]));
+  std::set<std::string> frame_states;
+  for (const auto& [state, name] : kFrameStateNames) frame_states.insert(std::string(name));
+  EXPECT_EQ(frame_states, names(api.schema("FrameStatus")["properties"]["state"]["enum"]));
   std::set<std::string> changes;
   for (const auto& [change, name] : kWorkerChangeNames) changes.insert(std::string(name));
   EXPECT_EQ(changes,
@@ -297,6 +305,8 @@ TEST(ProtocolContract, EveryRouteIsThePathsOfTheFile) {
 TEST(ProtocolContract, IdsArePercentEncodedIntoTheirSegment) {
   EXPECT_EQ(fill(route::job, "j-1"), "/v1/jobs/j-1");
   EXPECT_EQ(fill(route::job_cancel, "../x y"), "/v1/jobs/..%2Fx%20y/cancel");
+  EXPECT_EQ(frame_image_target("../x", 12, *image_format_named("exr"), true),
+            "/v1/jobs/..%2Fx/frames/12/image?format=exr&partial=1");
   EXPECT_EQ(claim_target("w 1", 10, 4), "/v1/workers/w%201/claim?wait_s=10&max_tiles=4");
   EXPECT_EQ(job_target("j", 0.5), "/v1/jobs/j?wait_s=0.5");
   EXPECT_EQ(jobs_target(JobState::failed, 20), "/v1/jobs?limit=20&state=failed");
@@ -311,7 +321,8 @@ TEST(ProtocolContract, AReaderSaysWhereAndWhat) {
     EXPECT_EQ(e.message(), "must be a string, got integer");
   }
   try {
-    read_body<Lease>(R"({"id": "l", "job_id": "j", "scene_digest": "d", "expires_in_s": 1,
+    read_body<Lease>(
+        R"({"id": "l", "job_id": "j", "scene_digest": "d", "frame": 0, "expires_in_s": 1,
                          "tiles": [{"index": 0, "x": 0, "y": 0, "width": 8, "height": 8}, {}]})");
     FAIL() << "read";
   } catch (const ProtocolError& e) {

@@ -21,7 +21,7 @@ class BlockingScheduler {
 
   const SchedulerConfig& config() const { return scheduler().config(); }
   JobStatus submit(const std::string& name, int priority, const Scene& scene,
-                   const std::string& scene_json) {
+                   const std::string& scene_json, std::vector<int> frames = {}) {
     std::promise<JobStatus> submitted;
     scheduler().submit(
         name, priority, scene, scene_json,
@@ -30,7 +30,8 @@ class BlockingScheduler {
             submitted.set_value(*job);
           else
             submitted.set_exception(std::make_exception_ptr(std::runtime_error(error)));
-        });
+        },
+        std::move(frames));
     return submitted.get_future().get();
   }
   std::optional<JobStatus> job(const std::string& id) const { return scheduler().job(id); }
@@ -68,6 +69,18 @@ class BlockingScheduler {
   }
   std::optional<std::filesystem::path> image_file(const std::string& id) const {
     return scheduler().image_file(id);
+  }
+  std::shared_ptr<const Image> assemble_frame(const std::string& id, int frame) const {
+    std::promise<std::shared_ptr<const Image>> image;
+    scheduler().assemble_frame(
+        id, frame, [&](std::shared_ptr<const Image> assembled) { image.set_value(assembled); });
+    return image.get_future().get();
+  }
+  std::optional<std::filesystem::path> frame_image_file(const std::string& id, int frame) const {
+    return scheduler().frame_image_file(id, frame);
+  }
+  std::optional<std::vector<FrameInfo>> frames(const std::string& id) const {
+    return scheduler().frames(id);
   }
   void wait_for_images() { scheduler().wait_for_images(); }
 

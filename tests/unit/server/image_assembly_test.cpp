@@ -46,8 +46,11 @@ class ImageAssemblyTest : public ::testing::Test {
     thread_ = std::make_unique<StoreThread>(*store_);
     images_ = std::make_unique<ImageAssembly>(
         dir_, *thread_, [this](const std::string&, const std::string& error) { failed_ = error; });
-    frame_ = std::make_shared<Frame>(Frame{kSize, kSize, split_into_tiles(kSize, kSize, kTile)});
-    for (const TileRect& rect : frame_->tiles) tiles_.push_back(pixels_of(rect));
+    auto rects =
+        std::make_shared<const std::vector<TileRect>>(split_into_tiles(kSize, kSize, kTile));
+    frame_ = std::make_shared<Frame>(
+        Frame{kSize, kSize, rects, "j-1", 0, static_cast<int>(rects->size())});
+    for (const TileRect& rect : *frame_->tiles) tiles_.push_back(pixels_of(rect));
     JobRow row;
     row.id = "j-1";
     row.state = "running";
@@ -91,7 +94,7 @@ class ImageAssemblyTest : public ::testing::Test {
   }
   Image expected(int tiles) const {
     Image image(kSize, kSize);
-    for (int i = 0; i < tiles; ++i) image.paste(frame_->tiles[i], tiles_[i]);
+    for (int i = 0; i < tiles; ++i) image.paste((*frame_->tiles)[i], tiles_[i]);
     return image;
   }
 
@@ -105,7 +108,7 @@ class ImageAssemblyTest : public ::testing::Test {
 };
 
 TEST_F(ImageAssemblyTest, TilesBeforeAndAfterTheCanvasAllReachTheImageFile) {
-  const int count = static_cast<int>(frame_->tiles.size());
+  const int count = static_cast<int>(frame_->tiles->size());
   // The first tiles ask for the canvas; those stored while it is made come from the store.
   for (int i = 0; i < count / 2; ++i) deliver(i);
   images_->wait_for_images();  // the canvas is in place
@@ -119,7 +122,7 @@ TEST_F(ImageAssemblyTest, TilesBeforeAndAfterTheCanvasAllReachTheImageFile) {
 }
 
 TEST_F(ImageAssemblyTest, AJobCompletedByItsFirstTilesIsWrittenFromTheStore) {
-  for (int i = 0; i < static_cast<int>(frame_->tiles.size()); ++i) deliver(i, true);
+  for (int i = 0; i < static_cast<int>(frame_->tiles->size()); ++i) deliver(i, true);
   images_->completed("j-1");
   images_->wait_for_images();
   ASSERT_TRUE(images_->image_file("j-1"));

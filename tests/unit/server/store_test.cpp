@@ -31,8 +31,15 @@ JobRow job_row(const std::string& id, const std::string& digest) {
   return job;
 }
 
+// Version 7 had no animations: every job was a still.
+void make_version_7(SqliteDb& db) {
+  db.exec("ALTER TABLE jobs DROP COLUMN frames");
+  db.exec("PRAGMA user_version=7");
+}
+
 // Version 6 could not drain workers.
 void make_version_6(SqliteDb& db) {
+  make_version_7(db);
   db.exec("ALTER TABLE workers DROP COLUMN draining");
   db.exec("PRAGMA user_version=6");
 }
@@ -184,7 +191,7 @@ TEST_F(StoreTest, CreatesTheDirectoryAndAWalDatabaseWithASchemaVersion) {
   EXPECT_TRUE(std::filesystem::is_directory(dir_ / "pixels"));
   SqliteDb db(dir_ / "tessera.db");
   EXPECT_EQ(db.query_text("PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "7");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "8");
 }
 
 TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
@@ -203,7 +210,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
 void expect_upgraded(Store& store, const std::filesystem::path& db_file,
                      const std::vector<float>& pixels, bool with_failure) {
   SqliteDb db(db_file);
-  EXPECT_EQ(db.query_text("PRAGMA user_version"), "7");
+  EXPECT_EQ(db.query_text("PRAGMA user_version"), "8");
   EXPECT_EQ(
       db.query_text("SELECT count(*) FROM sqlite_schema WHERE name IN ('tiles', 'tile_pixels')"),
       "0");
@@ -284,7 +291,7 @@ TEST_F(StoreTest, UpgradesAVersion4DatabaseReadingEachJobsOutputTransferFromItsS
     make_version_4(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   std::map<std::string, std::string> transfers;
   for (const JobRow& job : store_->load().jobs) transfers[job.id] = job.output_transfer;
   EXPECT_EQ(transfers, (std::map<std::string, std::string>{
@@ -301,7 +308,7 @@ TEST_F(StoreTest, UpgradesAVersion5DatabaseWhoseWorkersHadNoSecrets) {
     make_version_5(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   const StoredState state = store_->load();
   ASSERT_EQ(state.workers.size(), 1u);
   EXPECT_EQ(state.workers[0].name, "box");
@@ -318,13 +325,53 @@ TEST_F(StoreTest, UpgradesAVersion6DatabaseWhoseWorkersWereNeverDrained) {
     make_version_6(db);
   }
   store_ = std::make_unique<Store>(dir_);
-  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "7");
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   const StoredState state = store_->load();
   ASSERT_EQ(state.workers.size(), 1u);
   EXPECT_EQ(state.workers[0].secret_sha256, "digest");
   EXPECT_FALSE(state.workers[0].draining);
   store_->upsert_worker({"w-1", "box", "10.0.0.2", 4, "idle", 3, 1000, "digest", true});
   EXPECT_TRUE(store_->load().workers[0].draining);
+}
+
+// A job of a version 7 store is a still: its frames are "".
+TEST_F(StoreTest, UpgradesAVersion7DatabaseWhoseJobsWereStills) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  store_.reset();
+  {
+    SqliteDb db(dir_ / "tessera.db");
+    make_version_7(db);
+  }
+  store_ = std::make_unique<Store>(dir_);
+  EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
+  ASSERT_EQ(store_->load().jobs.size(), 1u);
+  EXPECT_EQ(store_->load().jobs[0].frames, "");
+}
+
+TEST_F(StoreTest, AJobKeepsItsFrames) {
+  JobRow job = square_job("j-1", "d1");
+  job.frames = "1-48x2,99";
+  store_->insert_job(job, "{}");
+  reopen();
+  ASSERT_EQ(store_->load().jobs.size(), 1u);
+  EXPECT_EQ(store_->load().jobs[0].frames, "1-48x2,99");
+}
+
+// One frame of an animation is read without the others' pixels: a result none of whose
+// tiles is wanted is skipped whole.
+TEST_F(StoreTest, ResultsOfUnwantedTilesAreNotRead) {
+  store_->insert_job(square_job("j-1", "d1"), "{}");
+  const std::vector<float> first = numbered_pixels(20 * 20 * 3, 1.0f);
+  const std::vector<float> second = numbered_pixels(20 * 20 * 3, 2.0f);
+  const std::span<const float> a(first), b(second);
+  store_->insert_result({0, "j-1", "l-1", "w-1", {0}, {1}}, {&a, 1});
+  store_->insert_result({0, "j-1", "l-2", "w-1", {3}, {1}}, {&b, 1});
+  std::map<int, float> seen;
+  store_->for_each_tile_pixels(
+      "j-1", [](int) { return std::size_t{20 * 20 * 3}; },
+      [&](int index, std::span<const float> pixels) { seen[index] = pixels[0]; },
+      [](int index) { return index == 3; });
+  EXPECT_EQ(seen, (std::map<int, float>{{3, second[0]}}));
 }
 
 TEST_F(StoreTest, AJobKeepsItsOutputTransfer) {
