@@ -16,7 +16,8 @@ void write(const std::string& path, const ImageFileContent& content) {
   if (content.kind == ImageFileKind::exr) type = OIIO::TypeDesc::FLOAT;
   if (content.kind == ImageFileKind::tif) type = OIIO::TypeDesc::UINT16;
   OIIO::ImageSpec spec(content.width, content.height, 3, type);
-  if (content.kind == ImageFileKind::exr) spec.attribute("compression", "zip");
+  if (content.kind == ImageFileKind::exr)
+    spec.attribute("compression", content.exr_compression == ExrCompression::rle ? "rle" : "zip");
   spec.attribute("oiio:ColorSpace", content.srgb ? "sRGB" : "Linear");
   if (content.kind == ImageFileKind::jpg) spec.attribute("Compression", "jpeg:95");
   auto out = OIIO::ImageOutput::create(path);

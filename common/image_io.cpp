@@ -136,7 +136,8 @@ bool image_file_needs_module(const std::filesystem::path& path) {
 
 bool image_file_module_loaded() { return ImageFileLoader::instance().opened(); }
 
-EncodedImage::EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer)
+EncodedImage::EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer,
+                           ExrCompression exr_compression)
     : path_(std::move(path)) {
   const ImageFileKind kind = kind_of(path_);
   if (kind == ImageFileKind::unknown)
@@ -146,6 +147,7 @@ EncodedImage::EncodedImage(const Image& image, std::filesystem::path path, Outpu
   content_.width = image.width();
   content_.height = image.height();
   content_.srgb = kind != ImageFileKind::exr && transfer == OutputTransfer::srgb;
+  content_.exr_compression = exr_compression;
   if (kind == ImageFileKind::exr) {
     content_.pixels = image.pixels().data();
   } else if (kind == ImageFileKind::tif) {
@@ -178,8 +180,9 @@ void write_image(const EncodedImage& encoded) {
   std::filesystem::rename(temp, path);
 }
 
-void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer) {
-  write_image(EncodedImage(image, path, transfer));
+void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer,
+                 ExrCompression exr_compression) {
+  write_image(EncodedImage(image, path, transfer, exr_compression));
 }
 
 Image read_image(const std::filesystem::path& path) {

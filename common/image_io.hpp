@@ -18,7 +18,8 @@ namespace tessera {
 // .exr: linear float, unclamped. .png, .jpg/.jpeg: 8-bit; .tif/.tiff: 16-bit; those are
 // clamped to [0,1] and sRGB-encoded unless `transfer` is linear. The file appears
 // atomically: it is written beside the target and renamed into place.
-void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer);
+void write_image(const Image& image, const std::filesystem::path& path, OutputTransfer transfer,
+                 ExrCompression exr_compression = ExrCompression::zip);
 
 // The first half of write_image(): an image turned into what the file at `path` will hold
 // (codes for .png, .jpg and .tif; for .exr the image's own floats, so that the image must
@@ -27,7 +28,8 @@ void write_image(const Image& image, const std::filesystem::path& path, OutputTr
 // for an unknown extension.
 class EncodedImage {
  public:
-  EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer);
+  EncodedImage(const Image& image, std::filesystem::path path, OutputTransfer transfer,
+               ExrCompression exr_compression = ExrCompression::zip);
 
   const std::filesystem::path& path() const { return path_; }
   const ImageFileContent& content() const { return content_; }

@@ -16,7 +16,9 @@ std::filesystem::path ImageFiles::path(const std::string& job_id) const {
 }
 
 void ImageFiles::write(const std::string& job_id, const Image& image) const {
-  write_image(image, path(job_id), OutputTransfer::linear);
+  // RLE: the coordinator writes a file per frame, often on the cores its workers render
+  // on, and ZIP took six times as long (ExrCompression).
+  write_image(image, path(job_id), OutputTransfer::linear, ExrCompression::rle);
 }
 
 void ImageFiles::remove(const std::string& job_id) const {

@@ -1,4 +1,5 @@
-// The finished images, beside the SQLite store: data_dir/images/JOB.exr, linear float,
+// The finished images, beside the SQLite store: data_dir/images/JOB.exr (an animation's
+// frames JOB.fN.exr), linear float, RLE-compressed,
 // written once a job completes and sent as they are. Files only, no database state, so
 // its calls may run beside the store's.
 #pragma once
