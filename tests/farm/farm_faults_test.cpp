@@ -22,18 +22,6 @@ using test::Farm;
 // Short leases, so that a lost worker's tiles come back within a test's patience.
 const std::vector<std::string> quick_leases{"--lease-timeout", "1", "--heartbeat-interval", "0.2"};
 
-// What a worker said it rendered in its last log line ("... after rendering N tiles").
-int tiles_rendered_by(const fs::path& log) {
-  const std::string text = test::read_text(log);
-  std::smatch match;
-  static const std::regex line("after rendering ([0-9]+) tiles");
-  int count = -1;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator();
-       ++it)
-    count = std::stoi((*it)[1]);
-  return count;
-}
-
 // Waits until the worker of that name is rendering, having delivered `delivered` tiles.
 ::testing::AssertionResult rendering_after(Farm& farm, const std::string& name, int delivered) {
   const bool seen = test::eventually(
@@ -128,22 +116,8 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
 TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAgain) {
   const fs::path dir = test::fresh_dir("fault-kill-server");
   const json scene = test::showcase(320, 240, 24, 32);  // 80 tiles, ~1.4 s for one thread
-  auto start_server = [&](const std::string& listen, const std::string& log) {
-    fs::remove(dir / "port");
-    auto server = std::make_unique<test::Process>(
-        TESSERA_SERVER_BIN,
-        std::vector<std::string>{"--listen", listen, "--data-dir", (dir / "data").string(),
-                                 "--local-workers", "0", "--port-file", (dir / "port").string(),
-                                 "--log-level", "info"},
-        dir / log);
-    EXPECT_TRUE(test::eventually(
-        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s));
-    int port = 0;
-    std::ifstream(dir / "port") >> port;
-    return std::pair{std::move(server), port};
-  };
 
-  auto [server, port] = start_server("127.0.0.1:0", "first.log");
+  auto [server, port] = test::start_coordinator(dir, "127.0.0.1:0", "first.log");
   const std::string url = "http://127.0.0.1:" + std::to_string(port);
   test::JsonApi api(url);
   const std::string id = api.submit("resume", 50, scene)["id"];
@@ -159,7 +133,7 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   ASSERT_TRUE(server->wait_for(10s).has_value());
   // Read from the store, as the next coordinator will: every tile acknowledged is there.
   const int acknowledged = [&] {
-    auto [probe, probe_port] = start_server("127.0.0.1:0", "probe.log");
+    auto [probe, probe_port] = test::start_coordinator(dir, "127.0.0.1:0", "probe.log");
     test::JsonApi probe_api("http://127.0.0.1:" + std::to_string(probe_port));
     const int done = probe_api.job(id)["tiles"]["done"];
     probe->signal(SIGKILL);
@@ -170,7 +144,8 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   ASSERT_LT(acknowledged, 80) << "the job finished before the kill: make it bigger";
 
   // The same address again: the worker, which kept retrying, finds it by itself.
-  auto [again, again_port] = start_server("127.0.0.1:" + std::to_string(port), "second.log");
+  auto [again, again_port] =
+      test::start_coordinator(dir, "127.0.0.1:" + std::to_string(port), "second.log");
   ASSERT_EQ(again_port, port);
   const json done = [&] {
     json job;
@@ -192,7 +167,7 @@ TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAg
   // ones done before the crash included, and none of the canceled job's.
   worker->signal(SIGTERM);
   ASSERT_TRUE(worker->wait_for(20s).has_value());
-  EXPECT_EQ(tiles_rendered_by(dir / "survivor.log"), 80) << "see " << (dir / "survivor.log");
+  EXPECT_EQ(test::tiles_rendered_by(dir / "survivor.log"), 80) << "see " << (dir / "survivor.log");
   again->signal(SIGTERM);
   again->wait_for(20s);
 }

@@ -14,9 +14,11 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -153,6 +155,39 @@ inline std::vector<pid_t> children_of(pid_t parent) {
     if (ppid == parent && state != 'Z') children.push_back(std::stoi(name));
   }
   return children;
+}
+
+// What a worker said it rendered in its last log line ("... after rendering N tiles");
+// -1 when it said nothing of the kind.
+inline int tiles_rendered_by(const farm_fs::path& log) {
+  const std::string text = read_text(log);
+  static const std::regex line("after rendering ([0-9]+) tiles");
+  int count = -1;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator();
+       ++it)
+    count = std::stoi((*it)[1]);
+  return count;
+}
+
+// A coordinator without local workers on `dir`'s data directory, listening on `listen`
+// (an ephemeral port, or the port of one before it: a test kills it and starts another on
+// the same store and address), logging to `log` in `dir`; with the port it took.
+inline std::pair<std::unique_ptr<Process>, int> start_coordinator(const farm_fs::path& dir,
+                                                                  const std::string& listen,
+                                                                  const std::string& log) {
+  using namespace std::chrono_literals;
+  farm_fs::remove(dir / "port");
+  auto server = std::make_unique<Process>(
+      TESSERA_SERVER_BIN,
+      std::vector<std::string>{"--listen", listen, "--data-dir", (dir / "data").string(),
+                               "--local-workers", "0", "--port-file", (dir / "port").string(),
+                               "--log-level", "info"},
+      dir / log);
+  EXPECT_TRUE(eventually(
+      [&] { return farm_fs::exists(dir / "port") && farm_fs::file_size(dir / "port") > 0; }, 20s));
+  int port = 0;
+  std::ifstream(dir / "port") >> port;
+  return {std::move(server), port};
 }
 
 // The showcase scene at a size, sampling and tile size small enough for a test.

@@ -121,36 +121,11 @@ TEST(FarmFrames, AFrameIsServedAsSoonAsItIsDoneAndItsRoutesSayWhatIsWrong) {
   EXPECT_EQ(status_of("/v1/jobs/" + still + "/frames/1/image"), 404);
 }
 
-// What a worker said it rendered in its last log line ("... after rendering N tiles").
-int tiles_rendered_by(const fs::path& log) {
-  const std::string text = test::read_text(log);
-  static const std::regex line("after rendering ([0-9]+) tiles");
-  int count = -1;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), line); it != std::sregex_iterator();
-       ++it)
-    count = std::stoi((*it)[1]);
-  return count;
-}
-
 TEST(FarmFrames, ACoordinatorKilledMidAnimationLosesNoFinishedFrameNorDeliveredTile) {
   const fs::path dir = test::fresh_dir("frames-kill-server");
   const json scene = turntable(160, 120, 8, 40);  // 12 tiles a frame
   constexpr int kFrames = 24;
-  auto start_server = [&](const std::string& listen, const std::string& log) {
-    fs::remove(dir / "port");
-    auto server = std::make_unique<test::Process>(
-        TESSERA_SERVER_BIN,
-        std::vector<std::string>{"--listen", listen, "--data-dir", (dir / "data").string(),
-                                 "--local-workers", "0", "--port-file", (dir / "port").string(),
-                                 "--log-level", "info"},
-        dir / log);
-    EXPECT_TRUE(test::eventually(
-        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s));
-    int port = 0;
-    std::ifstream(dir / "port") >> port;
-    return std::pair{std::move(server), port};
-  };
-  auto [server, port] = start_server("127.0.0.1:0", "first.log");
+  auto [server, port] = test::start_coordinator(dir, "127.0.0.1:0", "first.log");
   const std::string url = "http://127.0.0.1:" + std::to_string(port);
   test::JsonApi api(url);
   const std::string id = submit_frames(api, "orbit", scene, "1-" + std::to_string(kFrames));
@@ -170,7 +145,8 @@ TEST(FarmFrames, ACoordinatorKilledMidAnimationLosesNoFinishedFrameNorDeliveredT
   ASSERT_TRUE(server->wait_for(10s).has_value());
   ASSERT_GE(before.size(), 3u);
 
-  auto [again, again_port] = start_server("127.0.0.1:" + std::to_string(port), "second.log");
+  auto [again, again_port] =
+      test::start_coordinator(dir, "127.0.0.1:" + std::to_string(port), "second.log");
   ASSERT_EQ(again_port, port);
   // Every frame served before is done still, its image the very same file.
   const json resumed = api.job(id);
@@ -195,7 +171,7 @@ TEST(FarmFrames, ACoordinatorKilledMidAnimationLosesNoFinishedFrameNorDeliveredT
   // No tile was rendered twice: the one worker rendered exactly the job's tiles.
   worker->signal(SIGTERM);
   ASSERT_TRUE(worker->wait_for(20s).has_value());
-  EXPECT_EQ(tiles_rendered_by(dir / "survivor.log"), kFrames * 12)
+  EXPECT_EQ(test::tiles_rendered_by(dir / "survivor.log"), kFrames * 12)
       << "see " << (dir / "survivor.log");
   // Only the camera moves: the worker built the BVH once and every later frame shared it.
   const std::string log = test::read_text(dir / "survivor.log");

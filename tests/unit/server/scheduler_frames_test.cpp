@@ -213,6 +213,33 @@ TEST_F(SchedulerFramesTest, ACanceledAnimationKeepsItsFramesDone) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "images" / (job.id + ".f1.exr")));
 }
 
+// Priority works across frames as across a still's tiles: a job of higher priority takes
+// the next claim, and an animation's extension stops while one waits.
+TEST_F(SchedulerFramesTest, PriorityAndPauseWorkAcrossFrames) {
+  const std::string w = worker();
+  const JobStatus low = submit_frames({1, 2, 3});
+  const auto first = s().claim(w, 2);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->job_id, low.id);
+  const JobStatus high =
+      s().submit("urgent", 90, scene_of(kSize, kSize, kTile), "{\"urgent\": 1}", {7, 8});
+  const auto more = s().extend(first->id, 10);
+  ASSERT_TRUE(more);
+  EXPECT_TRUE(more->tiles.empty()) << "the animation's lease grew past a job of higher priority";
+  ASSERT_EQ(deliver(*first, 1.0f), ResultOutcome::accepted);
+  const auto next = s().claim(w, 100);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->job_id, high.id);
+  EXPECT_EQ(next->frame, 7);
+  ASSERT_EQ(deliver(*next, 7.0f), ResultOutcome::accepted);
+  // Paused, the urgent job gives way, and the animation takes up where it was.
+  ASSERT_EQ(s().pause(high.id).result, ControlOutcome::Result::done);
+  const auto back = s().claim(w, 100);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->job_id, low.id);
+  EXPECT_EQ(back->frame, 1) << "the rest of frame 1 first";
+}
+
 TEST_F(SchedulerFramesTest, AStillIsOneFrameZeroWithItsImageWhereItWas) {
   const std::string w = worker();
   const JobStatus job = submit(kSize, kSize, kTile);
