@@ -229,23 +229,22 @@ void Scheduler::scene_json(const std::string& digest,
 void Scheduler::assemble(const std::string& id,
                          std::function<void(std::shared_ptr<const Image>)> then) const {
   // An animation's image is its first frame's.
-  std::optional<int> first;
-  {
-    std::lock_guard lock(mutex_);
-    if (const JobEntry* job = find_job(id)) first = job->status.frames->numbers.front();
-  }
+  const std::optional<int> first = first_frame(id);
   if (!first) return then(nullptr);
   assemble_frame(id, *first, std::move(then));
 }
 
 std::optional<std::filesystem::path> Scheduler::image_file(const std::string& id) const {
-  std::optional<int> first;
-  {
-    std::lock_guard lock(mutex_);
-    if (const JobEntry* job = find_job(id)) first = job->status.frames->numbers.front();
-  }
+  const std::optional<int> first = first_frame(id);
   if (!first) return std::nullopt;
   return frame_image_file(id, *first);
+}
+
+std::optional<int> Scheduler::first_frame(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  const JobEntry* job = find_job(id);
+  if (!job) return std::nullopt;
+  return job->status.frames->numbers.front();
 }
 
 void Scheduler::assemble_frame(const std::string& id, int frame,
@@ -300,9 +299,7 @@ FrameInfo Scheduler::frame_info(const JobEntry& job, int slot) const {
     for (int index = first; index < first + job.tiles_per_frame; ++index) {
       const TileSlot& tile = job.tiles[index];
       if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
-      info.error = "tile " + std::to_string(index - first) + " at (" + std::to_string(tile.rect.x) +
-                   ", " + std::to_string(tile.rect.y) + ") failed " +
-                   std::to_string(tile.attempts) + " times; the last error: " + tile.last_error;
+      info.error = spent_tile_error(index - first, tile);
       break;
     }
   } else if (info.tiles_rendering > 0 || info.tiles_done > 0) {

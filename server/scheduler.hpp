@@ -272,6 +272,8 @@ class Scheduler {
   // job be retried.
   void set_frame_pending(JobEntry& job, int slot, bool pending);
   FrameInfo frame_info(const JobEntry& job, int slot) const;
+  // The first frame of the job `id` (a still's 0); nothing when there is no such job.
+  std::optional<int> first_frame(const std::string& id) const;
   // The slot of the scene's frame `frame` in the job; nothing when it does not render it.
   static std::optional<int> slot_of_frame(const JobEntry& job, int frame);
   // Why a job of failed frames failed: the frames failed so far and `more` (staged now),

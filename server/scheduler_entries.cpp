@@ -130,6 +130,12 @@ std::string image_key(const JobEntry& job, int slot) {
          std::to_string(job.status.frames->numbers[slot]);
 }
 
+std::string spent_tile_error(int index, const TileSlot& tile) {
+  return "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
+         std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
+         " times; the last error: " + tile.last_error;
+}
+
 std::string job_of_image(const std::string& key) {
   const std::size_t mark = key.rfind(kFrameKeyMark);
   return mark == std::string::npos ? key : key.substr(0, mark);

@@ -123,6 +123,10 @@ std::vector<std::shared_ptr<const Frame>> frames_of(const JobEntry& job);
 // What a frame's image is known by: a still's (or a one-frame job's) by the job's id, an
 // animation's frames by the id and the frame number ("j-....f12").
 std::string image_key(const JobEntry& job, int slot);
+// Why a tile that spent its attempts failed, `index` counted in its frame: "tile 4 at
+// (32, 32) failed 3 times; the last error: ...". A still's job error, an animation's
+// frame's.
+std::string spent_tile_error(int index, const TileSlot& tile);
 // The job id of an image key, and the frame slot it names in `job` (nothing for a key
 // that is not one of the job's).
 std::string job_of_image(const std::string& key);

@@ -25,10 +25,7 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
                tile.attempts, config_.max_tile_attempts, error);
   if (tile.attempts < config_.max_tile_attempts) return;
   if (job.frame_count() == 1) {
-    stage_job_failure(change, job,
-                      "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) +
-                          ", " + std::to_string(tile.rect.y) + ") failed " +
-                          std::to_string(tile.attempts) + " times; the last error: " + error);
+    stage_job_failure(change, job, spent_tile_error(index, tile));
     return;
   }
   // An animation loses the frame, not the job: the frame's other tiles are withdrawn (its
