@@ -70,6 +70,14 @@ bool Animation::changes(TrackTarget target) const {
                      [&](const Track& track) { return track.target == target; });
 }
 
-bool Animation::changes_objects() const { return changes(TrackTarget::object); }
+bool Animation::changes_objects() const {
+  // A material that begins or ceases to let light through changes how its shapes are
+  // registered: their geometry is built again, from the scene read whole.
+  return std::any_of(tracks.begin(), tracks.end(), [](const Track& track) {
+    return track.target == TrackTarget::object ||
+           (track.target == TrackTarget::named_material &&
+            std::string_view(track.pointer).ends_with("/transmission"));
+  });
+}
 
 }  // namespace tessera

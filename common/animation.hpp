@@ -60,7 +60,7 @@ struct Animation {
   std::int64_t frame_count() const { return std::int64_t{last} - first + 1; }
   bool contains(int frame) const { return frame >= first && frame <= last; }
   // Whether the objects must be read again for another frame: a track in an object's
-  // transform or inline material.
+  // transform or inline material, or in a named material's transmission.
   bool changes_objects() const;
   bool changes(TrackTarget target) const;
 };

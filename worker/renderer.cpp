@@ -216,24 +216,38 @@ bool same_objects(const Scene& next, const Scene& previous) {
 
 }  // namespace
 
-Renderer::Built::Built(Scene& scene, const RendererOptions& options)
-    : geometry(scene, device, OpaquePlanes::outside_embree, options.compact_above,
-               options.keep_meshes ? nullptr : &scene),
-      textures(scene) {}
+Renderer::Built::Built(Scene& scene, std::shared_ptr<const Common> shared,
+                       const RendererOptions& options, const SceneGeometry* previous)
+    : common(std::move(shared)),
+      geometry(scene, common->device, OpaquePlanes::outside_embree, options.compact_above,
+               options.keep_meshes ? nullptr : &scene, previous) {}
 
 Renderer::Renderer(Scene scene, const RendererOptions& options)
     : scene_(std::move(scene)),
-      built_(std::make_shared<const Built>(scene_, options)),
-      tracer_(scene_, built_->geometry, &built_->textures),
+      built_(
+          std::make_shared<const Built>(scene_, std::make_shared<const Common>(scene_), options)),
+      tracer_(scene_, built_->geometry, &built_->common->textures),
       camera_(scene_.camera, scene_.width, scene_.height) {}
 
 Renderer::Renderer(Scene scene, const Renderer& previous, const RendererOptions& options)
     : scene_(std::move(scene)),
       built_(same_objects(scene_, previous.scene_)
                  ? previous.built_
-                 : std::make_shared<const Built>(scene_, options)),
-      tracer_(scene_, built_->geometry, &built_->textures),
+                 : std::make_shared<const Built>(
+                       scene_, previous.built_->common, options,
+                       scene_.objects.size() == previous.scene_.objects.size()
+                           ? &previous.built_->geometry
+                           : nullptr)),
+      tracer_(scene_, built_->geometry, &built_->common->textures),
       camera_(scene_.camera, scene_.width, scene_.height) {}
+
+bool Renderer::shares_meshes_with(const Renderer& other) const {
+  for (std::uint32_t i = 0; i < scene_.objects.size(); ++i) {
+    const MeshBvh* mine = geometry().mesh_bvh(i);
+    if (mine != nullptr && mine == other.geometry().mesh_bvh(i)) return true;
+  }
+  return false;
+}
 
 RayCounts Renderer::render_tile(const TileRect& tile, std::span<float> out) const {
   if (out.size() != tile.pixel_count() * 3)

@@ -29,14 +29,18 @@ class TESSERA_TRACER_API Renderer {
   explicit Renderer(Scene scene, const RendererOptions& options = {});
   // Another frame of `previous`'s animated scene. When the objects are the same (no track
   // lies in them, and each is as transmissive as before) it shares `previous`'s Embree
-  // scene and textures, building nothing: a camera, a light or a colour that moves costs
-  // no BVH. Otherwise it builds its own.
+  // scene, building nothing: a camera, a light or a colour that moves costs no BVH.
+  // Otherwise it builds a BVH of its own over its objects, in which each mesh of its own
+  // BVH (MeshBvh) is placed again with the frame's transform: moving a big mesh costs no
+  // rebuild of it either. The textures are always shared.
   Renderer(Scene scene, const Renderer& previous, const RendererOptions& options = {});
 
   const Scene& scene() const { return scene_; }
   const SceneGeometry& geometry() const { return built_->geometry; }
   // Whether this renderer uses the geometry `other` built (or built it for `other`).
   bool shares_geometry_with(const Renderer& other) const { return built_ == other.built_; }
+  // Whether this renderer's geometry places a mesh BVH (MeshBvh) that `other` holds too.
+  bool shares_meshes_with(const Renderer& other) const;
   const PinholeCamera& camera() const { return camera_; }
   const Tracer& tracer() const { return tracer_; }
 
@@ -48,12 +52,19 @@ class TESSERA_TRACER_API Renderer {
   RayCounts render_tile(const TileRect& tile, std::span<float> out, std::size_t row_stride) const;
 
  private:
+  // What every frame of an animation shares: Embree's device, on which the meshes' own
+  // BVHs are built, and the decoded textures.
+  struct Common {
+    explicit Common(const Scene& scene) : textures(scene) {}
+    EmbreeDevice device;
+    SceneTextures textures;
+  };
   // What a frame of an animation may share with the next.
   struct Built {
-    Built(Scene& scene, const RendererOptions& options);
-    EmbreeDevice device;
+    Built(Scene& scene, std::shared_ptr<const Common> common, const RendererOptions& options,
+          const SceneGeometry* previous = nullptr);
+    std::shared_ptr<const Common> common;  // first, so that it outlives the geometry
     SceneGeometry geometry;
-    SceneTextures textures;
   };
 
   Scene scene_;

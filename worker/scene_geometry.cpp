@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "worker/analytic_shapes.hpp"
+#include "worker/mesh_bvh.hpp"
 
 namespace tessera {
 namespace {
@@ -19,11 +20,10 @@ struct TriangleHit {
   double t, u, v;
 };
 
-// Möller–Trumbore in double: recomputes the hit Embree found, from the ray's floats.
+// Möller–Trumbore in double: recomputes the hit Embree found, from the ray's floats (or,
+// on a placed mesh, from them taken into object space).
 std::optional<TriangleHit> intersect_triangle(const Vec3& v0, const Vec3& v1, const Vec3& v2,
-                                              const Ray& ray) {
-  const Vec3 o(ray.origin);
-  const Vec3 d(ray.direction);
+                                              const Vec3& o, const Vec3& d) {
   const Vec3 e1 = v1 - v0;
   const Vec3 e2 = v2 - v0;
   const Vec3 p = glm::cross(d, e2);
@@ -167,15 +167,16 @@ void finish_plane_hit(const Ray& ray, const PlaneSet& set, unsigned index, doubl
 }
 
 // No callback computed a triangle's hit: Embree's t, u and v stand in only where the
-// recomputation finds the ray parallel to the triangle.
-void finish_triangle_hit(const Ray& ray, const TriangleMesh& mesh, unsigned index, float t, float u,
-                         float v, SurfaceHit& hit) {
+// recomputation finds the ray parallel to the triangle. `o` and `d`: the ray in the mesh's
+// space. The hit is left in that space.
+void finish_triangle_hit(const Vec3& o, const Vec3& d, const TriangleMesh& mesh, unsigned index,
+                         float t, float u, float v, SurfaceHit& hit) {
   glm::vec3 corners[3];
   mesh_corners(mesh, index, corners);
   const Vec3 v0(corners[0]);
   const Vec3 v1(corners[1]);
   const Vec3 v2(corners[2]);
-  const TriangleHit th = intersect_triangle(v0, v1, v2, ray).value_or(TriangleHit{t, u, v});
+  const TriangleHit th = intersect_triangle(v0, v1, v2, o, d).value_or(TriangleHit{t, u, v});
   hit.t = th.t;
   // Barycentric reconstruction keeps the point on the triangle's own plane.
   hit.position = (1.0 - th.u - th.v) * v0 + th.u * v1 + th.v * v2;
@@ -194,6 +195,25 @@ void finish_triangle_hit(const Ray& ray, const TriangleMesh& mesh, unsigned inde
         (1.0 - th.u - th.v) * Vec3(normals[0]) + th.u * Vec3(normals[1]) + th.v * Vec3(normals[2]);
     if (glm::dot(n, n) > 0.0) hit.shading_normal = glm::normalize(n);
   }
+}
+
+// A hit on a placed mesh: rebuilt in object space, on the triangle Embree found there, then
+// placed in the world. Interpolating the shading normal before the transform or after it
+// points it alike: the normal matrix is linear.
+void finish_placed_mesh_hit(const Ray& ray, const PlacedMesh& placed, unsigned index, float t,
+                            float u, float v, SurfaceHit& hit) {
+  if (placed.identity) {
+    finish_triangle_hit(Vec3(ray.origin), Vec3(ray.direction), *placed.mesh, index, t, u, v, hit);
+    return;
+  }
+  const Vec3 o(placed.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
+  const Vec3 d = glm::dmat3(placed.world_to_object) * Vec3(ray.direction);
+  finish_triangle_hit(o, d, *placed.mesh, index, t, u, v, hit);
+  hit.position = Vec3(placed.object_to_world * glm::dvec4(hit.position, 1.0));
+  const bool flat = hit.shading_normal == hit.normal;
+  hit.normal = glm::normalize(placed.normal_matrix * hit.normal);
+  hit.shading_normal =
+      flat ? hit.normal : glm::normalize(placed.normal_matrix * hit.shading_normal);
 }
 
 }  // namespace
@@ -229,9 +249,12 @@ std::optional<SurfaceHit> SceneGeometry::intersect(const Ray& ray, float t_max,
   rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_.get(), &context.embree, &rayhit);
   std::optional<SurfaceHit> hit;
-  if (rayhit.hit.geomID != RTC_INVALID_GEOMETRY_ID)
-    finish_hit(ray, rayhit.hit.geomID, rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u,
-               rayhit.hit.v, context.t[0], hit.emplace());
+  // A hit inside a placed mesh names the instance first (see GeometryRecord).
+  const unsigned geometry =
+      rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rayhit.hit.instID[0] : rayhit.hit.geomID;
+  if (geometry != RTC_INVALID_GEOMETRY_ID)
+    finish_hit(ray, geometry, rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u, rayhit.hit.v,
+               context.t[0], hit.emplace());
   else if (plane >= 0)
     finish_hit(ray, opaque_planes_geometry_, static_cast<unsigned>(plane), rayhit.ray.tfar, 0.0f,
                0.0f, plane_t, hit.emplace());
@@ -273,7 +296,11 @@ void SceneGeometry::finish_hit(const Ray& ray, unsigned geometry, unsigned primi
       finish_plane_hit(ray, plane_sets_[record.index], primitive, exact_t, hit);
       break;
     case Kind::triangles:
-      finish_triangle_hit(ray, meshes_[record.index], primitive, t, u, v, hit);
+      finish_triangle_hit(Vec3(ray.origin), Vec3(ray.direction), meshes_[record.index], primitive,
+                          t, u, v, hit);
+      break;
+    case Kind::placed_mesh:
+      finish_placed_mesh_hit(ray, placed_meshes_[record.index], primitive, t, u, v, hit);
       break;
     case Kind::cylinder:
       finish_cylinder_hit(ray, *cylinders_[record.index], primitive, exact_t, hit);

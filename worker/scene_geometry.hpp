@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <utility>
@@ -154,6 +155,21 @@ inline void mesh_corners(const TriangleMesh& mesh, std::size_t t, glm::vec3 (&ou
   }
 }
 
+class MeshBvh;  // mesh_bvh.hpp
+
+// A mesh's own BVH (a MeshBvh) as one frame places it: an Embree instance of it, and the
+// transform that instance applies, for hits to be rebuilt in object space and then placed.
+struct PlacedMesh {
+  std::shared_ptr<const MeshBvh> bvh;
+  const TriangleMesh* mesh;  // the bvh's, in object space
+  Mat4 object_to_world{1.0};
+  Mat4 world_to_object{1.0};
+  glm::dmat3 normal_matrix{1.0};  // the inverse transpose, which keeps outward normals outward
+  // The transform is exactly the identity: the hit is rebuilt with no product at all, as it
+  // would be on the same triangles in world space.
+  bool identity = true;
+};
+
 // A triangle list as the scene holds it, in object space, and the transform that places it.
 struct ObjectTriangles {
   std::span<const Vec3> positions;
@@ -230,13 +246,24 @@ enum class OpaquePlanes { outside_embree, also_in_embree };
 class SceneGeometry {
  public:
   // `compact_above`: see kCompactMeshTriangles (the tests set it to 0, to compare).
-  // `release`, where given, is `scene` itself: the arrays of each mesh whose material has no
-  // texture (which would read its uvs and corners) are freed as soon as Embree holds them,
-  // before the BVH is built, so that a big mesh is never held twice at the peak.
+  // `release`, where given, is `scene` itself: the arrays of each mesh of its own BVH whose
+  // material has no texture (which would read its uvs and corners) are freed as soon as
+  // Embree holds them, so that a big mesh is never held twice at the peak.
+  // `previous`, where given, is another frame of the same scene built on the same device:
+  // each of its meshes' own BVHs (MeshBvh) is placed again here, with this frame's
+  // transform, rather than built again. A frame's meshes are always those of the others.
   TESSERA_TRACER_API SceneGeometry(const Scene& scene, const EmbreeDevice& device,
                                    OpaquePlanes opaque_planes = OpaquePlanes::outside_embree,
                                    std::size_t compact_above = kCompactMeshTriangles,
-                                   Scene* release = nullptr);
+                                   Scene* release = nullptr,
+                                   const SceneGeometry* previous = nullptr);
+
+  // The own BVH of the object's mesh, for a test to see which frames share it; null for an
+  // object that is no mesh, or a mesh that has not been placed (mesh_bvh.hpp) in this
+  // frame or one before it.
+  const MeshBvh* mesh_bvh(std::uint32_t object) const {
+    return object < mesh_bvhs_.size() ? mesh_bvhs_[object].get() : nullptr;
+  }
 
   // The closest hit with 0 < t < t_max, if any.
   TESSERA_TRACER_API std::optional<SurfaceHit> intersect(const Ray& ray, float t_max,
@@ -278,13 +305,23 @@ class SceneGeometry {
                                    unsigned mask, bool (&blocked)[kPacketSize]) const;
 
  private:
-  enum class Kind : std::uint8_t { sphere, box, plane, triangles, cylinder, cone };
+  // `triangles`: a mesh or a triangle in world space, in the scene's BVH; `placed_mesh`: a
+  // mesh's own BVH placed by an instance.
+  enum class Kind : std::uint8_t { sphere, box, plane, triangles, cylinder, cone, placed_mesh };
   struct GeometryRecord {
     Kind kind;
     std::uint32_t index;   // into the vector of its kind (for planes: which PlaneSet)
     std::uint32_t object;  // into Scene::objects (for planes: see the PlaneSet)
   };
 
+  // How Embree is to trace a packet of shadow rays: as coherent rays, as all packets are,
+  // but in a scene with placed meshes, whose instances Embree 3.13's coherent traversal of
+  // shadow packets was seen to loop on forever, next to two analytic shapes
+  // (AnimationDeterminism.TexturesAreSharedWithTheGeometry, the textured globe).
+  RTCIntersectContextFlags occlusion_flags() const {
+    return placed_meshes_.empty() ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                  : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  }
   // Both of the above: `t_max` null for unbounded rays. Its steps follow, each on all lanes
   // (scene_geometry_packet.cpp).
   void intersect(const RayPacket& packet, const float (*t_max)[kPacketSize], unsigned mask,
@@ -314,6 +351,9 @@ class SceneGeometry {
   // Fills Embree's buffers straight from the scene's arrays, placed in world space.
   void add_triangles(const ObjectTriangles& triangles, const Mat4& transform, std::uint32_t object,
                      unsigned mask, std::size_t compact_above);
+  // An instance of `bvh`, placed by `transform`.
+  void add_placed_mesh(std::shared_ptr<const MeshBvh> bvh, const Mat4& transform,
+                       std::uint32_t object, unsigned mask);
   void add_analytic_shape(Kind kind, std::uint32_t index, std::uint32_t object, unsigned mask);
   // Lower and upper corners of the box around any record's shape but a plane's.
   std::pair<glm::vec3, glm::vec3> geometry_bounds(const GeometryRecord& record) const;
@@ -326,7 +366,9 @@ class SceneGeometry {
 
   const EmbreeDevice& device_;
   EmbreeScene scene_;
-  std::vector<GeometryRecord> records_;  // by Embree geometry id
+  // By Embree geometry id in scene_: a hit inside a placed mesh is named by its instance's
+  // (instID[0]), the geomID being the mesh's in its own BVH.
+  std::vector<GeometryRecord> records_;
   // The box around each transmissive object (everything for a plane), or past
   // kListedTransmissive of them, one box around them all, for no object (kNoObject).
   struct TransmissiveBounds {
@@ -352,6 +394,8 @@ class SceneGeometry {
   // id with OpaquePlanes::also_in_embree).
   unsigned opaque_planes_geometry_ = RTC_INVALID_GEOMETRY_ID;
   std::vector<TriangleMesh> meshes_;
+  std::vector<PlacedMesh> placed_meshes_;
+  std::vector<std::shared_ptr<const MeshBvh>> mesh_bvhs_;  // by object; null for the others
 };
 
 namespace geometry_detail {

@@ -7,40 +7,73 @@
 #include <stdexcept>
 
 #include "worker/analytic_shapes.hpp"
+#include "worker/mesh_bvh.hpp"
 #include "worker/triangulate.hpp"
 
 namespace tessera {
 
+namespace {
+
+// The float nearest `x` on its side: `below` for a lower bound.
+float rounded_outward(double x, bool below) {
+  const auto f = static_cast<float>(x);
+  if (below ? static_cast<double>(f) > x : static_cast<double>(f) < x)
+    return std::nextafter(f, below ? -kInfinity : kInfinity);
+  return f;
+}
+
+}  // namespace
+
 SceneGeometry::SceneGeometry(const Scene& scene, const EmbreeDevice& device,
-                             OpaquePlanes opaque_planes, std::size_t compact_above, Scene* release)
+                             OpaquePlanes opaque_planes, std::size_t compact_above, Scene* release,
+                             const SceneGeometry* previous)
     : device_(device), scene_(device) {
   for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
     const Object& object = scene.objects[i];
     const bool transmissive = transmits(scene.materials[object.material]);
     const unsigned mask = transmissive ? kTransmissiveMask : kOpaqueSolidMask;
-    std::visit(
-        [&](const auto& shape) {
-          using T = std::decay_t<decltype(shape)>;
-          if constexpr (std::is_same_v<T, Sphere>)
-            add_sphere(shape, object.transform, i, mask);
-          else if constexpr (std::is_same_v<T, Box>)
-            add_box(shape, object.transform, i, mask);
-          else if constexpr (std::is_same_v<T, Plane>)
-            add_plane(shape, object.transform, i, transmissive);
-          else if constexpr (std::is_same_v<T, Cylinder>)
-            add_cylinder(shape, object.transform, i, mask);
-          else if constexpr (std::is_same_v<T, Cone>)
-            add_cone(shape, object.transform, i, mask);
-          else
-            add_triangles(triangles_of(shape), object.transform, i, mask, compact_above);
-        },
-        object.shape);
+    // A mesh of its own BVH, placed: as the frame before built it, or built here. The frame
+    // before's is kept even by a frame that does not place it, for the frames after.
+    std::shared_ptr<const MeshBvh> own;
+    if (previous != nullptr && i < previous->mesh_bvhs_.size()) own = previous->mesh_bvhs_[i];
+    const auto* mesh = std::get_if<Mesh>(&object.shape);
+    const bool placed = mesh != nullptr && object.transform != Mat4(1.0) &&
+                        (own != nullptr || mesh->triangles.size() >= kInstancedMeshTriangles);
+    if (placed && own == nullptr)
+      own = std::make_shared<const MeshBvh>(device_, triangles_of(*mesh), compact_above);
+    if (own != nullptr) {
+      if (mesh_bvhs_.size() <= i) mesh_bvhs_.resize(i + 1);
+      mesh_bvhs_[i] = own;
+    }
+    if (placed) {
+      add_placed_mesh(std::move(own), object.transform, i, mask);
+    } else {
+      std::visit(
+          [&](const auto& shape) {
+            using T = std::decay_t<decltype(shape)>;
+            if constexpr (std::is_same_v<T, Sphere>)
+              add_sphere(shape, object.transform, i, mask);
+            else if constexpr (std::is_same_v<T, Box>)
+              add_box(shape, object.transform, i, mask);
+            else if constexpr (std::is_same_v<T, Plane>)
+              add_plane(shape, object.transform, i, transmissive);
+            else if constexpr (std::is_same_v<T, Cylinder>)
+              add_cylinder(shape, object.transform, i, mask);
+            else if constexpr (std::is_same_v<T, Cone>)
+              add_cone(shape, object.transform, i, mask);
+            else
+              add_triangles(triangles_of(shape), object.transform, i, mask, compact_above);
+          },
+          object.shape);
+    }
+    // A later frame that builds its geometry again (its objects moved, or a material's
+    // transmission is keyframed) reads the whole scene again (Animation::changes_objects()).
     if (release != nullptr && !scene.materials[object.material].textured()) {
-      if (auto* mesh = std::get_if<Mesh>(&release->objects[i].shape)) {
-        std::vector<Vec3>().swap(mesh->positions);
-        std::vector<std::array<std::uint32_t, 3>>().swap(mesh->triangles);
-        std::vector<Vec3>().swap(mesh->normals);
-        std::vector<Uv>().swap(mesh->uvs);
+      if (auto* released = std::get_if<Mesh>(&release->objects[i].shape)) {
+        std::vector<Vec3>().swap(released->positions);
+        std::vector<std::array<std::uint32_t, 3>>().swap(released->triangles);
+        std::vector<Vec3>().swap(released->normals);
+        std::vector<Uv>().swap(released->uvs);
       }
     }
     convex_.push_back(std::holds_alternative<Sphere>(object.shape) ||
@@ -212,72 +245,69 @@ void SceneGeometry::add_plane(const Plane& plane, const Mat4& transform, std::ui
 
 void SceneGeometry::add_triangles(const ObjectTriangles& triangles, const Mat4& transform,
                                   std::uint32_t object, unsigned mask, std::size_t compact_above) {
-  RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetGeometryMask(geometry, mask);
-  const std::size_t vertex_count = triangles.positions.size();
-  const std::size_t triangle_count = triangles.triangles.size();
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertex_count));
-  auto* indices = static_cast<std::uint32_t*>(
-      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                              3 * sizeof(std::uint32_t), triangle_count));
-  device_.check("allocating a triangle mesh");
-  // Each point in world space in double, then rounded once to the floats Embree intersects.
-  for (std::size_t i = 0; i < vertex_count; ++i) {
-    const Vec3 p(transform * glm::dvec4(triangles.positions[i], 1.0));
-    for (int k = 0; k < 3; ++k) vertices[3 * i + k] = static_cast<float>(p[k]);
-  }
-  // A mirroring transform turns counter-clockwise into clockwise: two corners trade places.
-  const glm::dmat3 linear(transform);
-  const bool mirrors = glm::determinant(linear) < 0.0;
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    const auto& tri = triangles.triangles[t];
-    indices[3 * t] = tri[0];
-    indices[3 * t + 1] = mirrors ? tri[2] : tri[1];
-    indices[3 * t + 2] = mirrors ? tri[1] : tri[2];
-  }
-  std::vector<glm::vec3> normals;
-  if (!triangles.normals.empty()) {
-    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(linear));
-    normals.reserve(vertex_count);
-    for (const Vec3& n : triangles.normals) normals.emplace_back(glm::normalize(normal_matrix * n));
-  }
-  rtcCommitGeometry(geometry);
-  const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
-  rtcReleaseGeometry(geometry);  // the scene holds it, and so its buffers, from here on
+  TriangleGeometry built = new_triangle_geometry(device_, triangles, transform, compact_above);
+  rtcSetGeometryMask(built.geometry, mask);
+  rtcCommitGeometry(built.geometry);
+  const unsigned id = rtcAttachGeometry(scene_.get(), built.geometry);
+  rtcReleaseGeometry(built.geometry);  // the scene holds it, and so its buffers, from here on
   device_.check("adding a triangle mesh");
   if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
-
-  TriangleMesh mesh;
-  mesh.triangle_count = triangle_count;
-  const auto corner = [&](std::size_t t, int k) {
-    const float* p = vertices + 3 * static_cast<std::size_t>(indices[3 * t + k]);
-    return glm::vec3(p[0], p[1], p[2]);
-  };
-  if (triangle_count > compact_above) {
-    mesh.vertices = vertices;
-    mesh.indices = indices;
-    mesh.vertex_normals = std::move(normals);
-  } else {
-    mesh.triangles.resize(triangle_count);
-    if (!normals.empty()) mesh.normals.resize(triangle_count);
-    for (std::size_t t = 0; t < triangle_count; ++t) {
-      for (int k = 0; k < 3; ++k) mesh.triangles[t].corners[k] = corner(t, k);
-      if (normals.empty()) continue;
-      for (int k = 0; k < 3; ++k) mesh.normals[t].corners[k] = normals[indices[3 * t + k]];
-    }
-    // From the stored floats, in a pass of its own: in the loop above, GCC 12's vectoriser
-    // was seen to use the doubles the floats were rounded from (a different normal, and
-    // other pixels, than finish_hit() computed from the floats).
-    for (MeshTriangle& triangle : mesh.triangles)
-      triangle.normal =
-          triangle_normal(triangle.corners[0], triangle.corners[1], triangle.corners[2]);
-  }
-  meshes_.push_back(std::move(mesh));
+  meshes_.push_back(std::move(built.mesh));
   records_.push_back({Kind::triangles, static_cast<std::uint32_t>(meshes_.size() - 1), object});
 }
 
+void SceneGeometry::add_placed_mesh(std::shared_ptr<const MeshBvh> bvh, const Mat4& transform,
+                                    std::uint32_t object, unsigned mask) {
+  RTCGeometry instance = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(instance, bvh->scene());
+  rtcSetGeometryTimeStepCount(instance, 1);
+  // Embree finds which triangle a ray meets through the float transform; the hit itself is
+  // rebuilt from the double one (finish_hit()).
+  float columns[12];
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 3; ++r) columns[3 * c + r] = static_cast<float>(transform[c][r]);
+  rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, columns);
+  rtcSetGeometryMask(instance, mask);
+  rtcCommitGeometry(instance);
+  const unsigned id = rtcAttachGeometry(scene_.get(), instance);
+  rtcReleaseGeometry(instance);
+  device_.check("placing a mesh");
+  if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
+
+  PlacedMesh placed;
+  placed.mesh = &bvh->mesh();
+  placed.identity = transform == Mat4(1.0);
+  placed.object_to_world = transform;
+  placed.world_to_object = glm::inverse(transform);
+  placed.normal_matrix = glm::transpose(glm::dmat3(placed.world_to_object));
+  placed.bvh = bvh;
+  placed_meshes_.push_back(std::move(placed));
+  records_.push_back(
+      {Kind::placed_mesh, static_cast<std::uint32_t>(placed_meshes_.size() - 1), object});
+}
+
 std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(const GeometryRecord& record) const {
+  if (record.kind == Kind::placed_mesh) {
+    // The box of the mesh's object-space box, its corners placed in double and then
+    // rounded outwards.
+    const PlacedMesh& placed = placed_meshes_[record.index];
+    const glm::vec3& a = placed.bvh->lo();
+    const glm::vec3& b = placed.bvh->hi();
+    Vec3 lo(kInfinity);
+    Vec3 hi(-kInfinity);
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? b.x : a.x, (corner & 2) ? b.y : a.y, (corner & 4) ? b.z : a.z);
+      const Vec3 q(placed.object_to_world * glm::dvec4(p, 1.0));
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    glm::vec3 flo, fhi;
+    for (int k = 0; k < 3; ++k) {
+      flo[k] = rounded_outward(lo[k], true);
+      fhi[k] = rounded_outward(hi[k], false);
+    }
+    return {flo, fhi};
+  }
   if (record.kind != Kind::triangles) {
     RTCBounds bounds{};
     RTCBoundsFunctionArguments args{};
@@ -298,19 +328,7 @@ std::pair<glm::vec3, glm::vec3> SceneGeometry::geometry_bounds(const GeometryRec
     return {{bounds.lower_x, bounds.lower_y, bounds.lower_z},
             {bounds.upper_x, bounds.upper_y, bounds.upper_z}};
   }
-  // A mesh: its corners are floats already, so their extremes bound it exactly.
-  glm::vec3 lo(kInfinity);
-  glm::vec3 hi(-kInfinity);
-  const TriangleMesh& mesh = meshes_[record.index];
-  for (std::size_t t = 0; t < mesh.triangle_count; ++t) {
-    glm::vec3 corners[3];
-    mesh_corners(mesh, t, corners);
-    for (const glm::vec3& p : corners) {
-      lo = glm::min(lo, p);
-      hi = glm::max(hi, p);
-    }
-  }
-  return {lo, hi};
+  return mesh_bounds(meshes_[record.index]);
 }
 
 }  // namespace tessera

@@ -121,7 +121,7 @@ void SceneGeometry::query_nearest(const RayPacket& packet, const float (*t_max)[
   HitContext& context = query.context;
   RTCRayHit16& rayhit = query.rayhit;
   rtcInitIntersectContext(&context.embree);
-  context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  context.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // see occlusion_flags()
   // Opaque planes are tested here, on all lanes at once (see OpaquePlanes); Embree then
   // looks only for something nearer than each lane's plane.
   const bool opaque_planes =
@@ -153,7 +153,11 @@ void SceneGeometry::identify_lanes(const RayPacket& packet, const PacketQuery& q
   // a sphere or a plane keep at zero: without branches, so that every lane is done at once.
   for (int i = 0; i < kPacketSize; ++i) {
     const bool by_plane = (hit16.geomID[i] == RTC_INVALID_GEOMETRY_ID) & (query.plane[i] >= 0);
-    lanes.geometry[i] = by_plane ? opaque_planes_geometry_ : hit16.geomID[i];
+    // A hit inside a placed mesh names the instance first (see GeometryRecord).
+    const unsigned instance = hit16.instID[0][i];
+    const unsigned embree =
+        instance != RTC_INVALID_GEOMETRY_ID ? instance : static_cast<unsigned>(hit16.geomID[i]);
+    lanes.geometry[i] = by_plane ? opaque_planes_geometry_ : embree;
     lanes.primitive[i] = by_plane ? static_cast<unsigned>(query.plane[i]) : hit16.primID[i];
     const bool hit = packet.active[i] & (lanes.geometry[i] != RTC_INVALID_GEOMETRY_ID);
     lanes.t[i] = !hit ? 0.0 : by_plane ? query.plane_t[i] : query.context.t[i];
@@ -185,12 +189,14 @@ void SceneGeometry::gather_shapes(PacketLanes& lanes, SurfaceHit (&hits)[kPacket
         lanes.normal[axis][i] = prepared.normal[axis];
       }
     } else {
-      if (record.kind != Kind::triangles) continue;
+      if (record.kind != Kind::triangles && record.kind != Kind::placed_mesh) continue;
       lanes.t[i] = 0.0;  // no callback's: finish_hit() recomputes a triangle's
       // A mesh's triangles are read back from memory Embree's traversal did not touch, and
       // a large mesh's are far out of cache: asking for all sixteen before finish_hit()
       // reads the first lets their misses overlap instead of coming one after another.
-      const TriangleMesh& mesh = meshes_[record.index];
+      const TriangleMesh& mesh = record.kind == Kind::triangles
+                                     ? meshes_[record.index]
+                                     : *placed_meshes_[record.index].mesh;
       if (mesh.compact()) {  // its corners are found through the indices, one step later
         __builtin_prefetch(mesh.indices + 3 * static_cast<std::size_t>(primitive));
         continue;
@@ -272,7 +278,7 @@ void SceneGeometry::occluded(const RayPacket& packet, const float (&t_max)[kPack
                              unsigned mask, bool (&blocked)[kPacketSize]) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  context.flags = occlusion_flags();
   alignas(64) int valid[kPacketSize];
   alignas(64) RTCRay16 rays;
   load_rays(packet, valid, rays);

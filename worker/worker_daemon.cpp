@@ -278,6 +278,7 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest, int frame)
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<Renderer> renderer;
   int shared_with = -1;  // the frame whose geometry it shares, if any
+  int placed_from = -1;  // else the frame whose meshes' BVHs it places again, if any
   if (held.renderers.empty()) {
     // The first frame asked for: built whole, from the scene as read.
     Scene first = held.frames->take_first();
@@ -292,13 +293,19 @@ const Renderer& WorkerDaemon::renderer_for(const std::string& digest, int frame)
         });
     const Renderer& from = *nearest->second;
     renderer = std::make_unique<Renderer>(held.frames->at(frame, from.scene()), from);
-    if (renderer->shares_geometry_with(from)) shared_with = nearest->first;
+    if (renderer->shares_geometry_with(from))
+      shared_with = nearest->first;
+    else if (renderer->shares_meshes_with(from))
+      placed_from = nearest->first;
   }
   const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
   // Said once per frame: whether a frame's objects cost a BVH shows here.
   if (shared_with >= 0)
     spdlog::info("scene {} frame {}: ready in {:.3f} s, sharing the geometry of frame {}",
                  digest.substr(0, 12), frame, took.count(), shared_with);
+  else if (placed_from >= 0)
+    spdlog::info("scene {} frame {}: built in {:.3f} s, placing the mesh BVHs of frame {}",
+                 digest.substr(0, 12), frame, took.count(), placed_from);
   else
     spdlog::info("scene {} frame {}: built in {:.3f} s", digest.substr(0, 12), frame, took.count());
   const Renderer& made = *held.renderers.emplace(frame, std::move(renderer)).first->second;
