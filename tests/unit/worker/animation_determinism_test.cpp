@@ -158,46 +158,19 @@ TEST(AnimationDeterminism, AMeshFileThatTurns) {
                     false, example(dir / "still_life.json"), &files);
 }
 
-// An inline torus around y of 2·rings·sides triangles, big enough for a BVH of its own
-// (kInstancedMeshTriangles), with smooth normals or flat.
-json torus(int rings, int sides, double major, double minor, bool smooth) {
-  constexpr double pi = 3.14159265358979323846;
-  json positions = json::array();
-  json normals = json::array();
-  json triangles = json::array();
-  for (int r = 0; r < rings; ++r) {
-    const double a = 2 * pi * r / rings;
-    for (int s = 0; s < sides; ++s) {
-      const double b = 2 * pi * s / sides;
-      const double out = major + minor * std::cos(b);
-      positions.push_back({out * std::cos(a), minor * std::sin(b), out * std::sin(a)});
-      normals.push_back({std::cos(b) * std::cos(a), std::sin(b), std::cos(b) * std::sin(a)});
-      const int next_r = (r + 1) % rings;
-      const int next_s = (s + 1) % sides;
-      const int v00 = r * sides + s, v01 = r * sides + next_s;
-      const int v10 = next_r * sides + s, v11 = next_r * sides + next_s;
-      triangles.push_back({v00, v01, v11});
-      triangles.push_back({v00, v11, v10});
-    }
-  }
-  json mesh = {{"type", "mesh"}, {"positions", positions}, {"triangles", triangles}};
-  if (smooth) mesh["normals"] = normals;
-  return mesh;
-}
-
 // The busy scene and three tori: a mirror that turns and moves (objects/8), a glass one,
 // flat and mirrored by a negative scale, that moves (9), and one that stands still with no
 // transform (10).
 json scene_with_meshes() {
   json document = test::busy_scene();
-  json mirror = torus(24, 12, 0.45, 0.15, true);
+  json mirror = test::torus(24, 12, 0.45, 0.15, true);
   mirror["material"] = "mirror";
   mirror["transform"] = {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 60}}}},
                          {{"translate", {0.4, 1.3, 1.2}}}};
-  json glass = torus(20, 10, 0.35, 0.12, false);
+  json glass = test::torus(20, 10, 0.35, 0.12, false);
   glass["material"] = "glass";
   glass["transform"] = {{{"scale", {-1, 0.8, 1}}}, {{"translate", {-0.6, 0.4, 2.4}}}};
-  json still = torus(16, 10, 0.3, 0.1, true);
+  json still = test::torus(16, 10, 0.3, 0.1, true);
   still["transform"] = json::array();
   document["objects"].push_back(mirror);
   document["objects"].push_back(glass);

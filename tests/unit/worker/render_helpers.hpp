@@ -1,6 +1,8 @@
 // Small helpers shared by the renderer tests.
 #pragma once
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "common/image.hpp"
@@ -84,6 +86,33 @@ inline json busy_scene() {
          {"transform",
           {{{"rotate", {{"axis", {1, 0, 0}}, {"degrees", 100}}}},
            {{"translate", {-1, 0.4, 1.6}}}}}}}}};
+}
+
+// An inline torus around y of 2·rings·sides triangles, big enough for a BVH of its own
+// (worker/mesh_bvh.hpp), with smooth normals or flat.
+inline json torus(int rings, int sides, double major, double minor, bool smooth) {
+  constexpr double pi = 3.14159265358979323846;
+  json positions = json::array();
+  json normals = json::array();
+  json triangles = json::array();
+  for (int r = 0; r < rings; ++r) {
+    const double a = 2 * pi * r / rings;
+    for (int s = 0; s < sides; ++s) {
+      const double b = 2 * pi * s / sides;
+      const double out = major + minor * std::cos(b);
+      positions.push_back({out * std::cos(a), minor * std::sin(b), out * std::sin(a)});
+      normals.push_back({std::cos(b) * std::cos(a), std::sin(b), std::cos(b) * std::sin(a)});
+      const int next_r = (r + 1) % rings;
+      const int next_s = (s + 1) % sides;
+      const int v00 = r * sides + s, v01 = r * sides + next_s;
+      const int v10 = next_r * sides + s, v11 = next_r * sides + next_s;
+      triangles.push_back({v00, v01, v11});
+      triangles.push_back({v00, v11, v10});
+    }
+  }
+  json mesh = {{"type", "mesh"}, {"positions", positions}, {"triangles", triangles}};
+  if (smooth) mesh["normals"] = normals;
+  return mesh;
 }
 
 inline Color render_pixel(const json& scene, int x = 0, int y = 0) {
