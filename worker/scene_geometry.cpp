@@ -202,10 +202,6 @@ void finish_triangle_hit(const Vec3& o, const Vec3& d, const TriangleMesh& mesh,
 // points it alike: the normal matrix is linear.
 void finish_placed_mesh_hit(const Ray& ray, const PlacedMesh& placed, unsigned index, float t,
                             float u, float v, SurfaceHit& hit) {
-  if (placed.identity) {
-    finish_triangle_hit(Vec3(ray.origin), Vec3(ray.direction), *placed.mesh, index, t, u, v, hit);
-    return;
-  }
   const Vec3 o(placed.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
   const Vec3 d = glm::dmat3(placed.world_to_object) * Vec3(ray.direction);
   finish_triangle_hit(o, d, *placed.mesh, index, t, u, v, hit);

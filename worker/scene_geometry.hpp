@@ -165,9 +165,6 @@ struct PlacedMesh {
   Mat4 object_to_world{1.0};
   Mat4 world_to_object{1.0};
   glm::dmat3 normal_matrix{1.0};  // the inverse transpose, which keeps outward normals outward
-  // The transform is exactly the identity: the hit is rebuilt with no product at all, as it
-  // would be on the same triangles in world space.
-  bool identity = true;
 };
 
 // A triangle list as the scene holds it, in object space, and the transform that places it.

@@ -276,7 +276,6 @@ void SceneGeometry::add_placed_mesh(std::shared_ptr<const MeshBvh> bvh, const Ma
 
   PlacedMesh placed;
   placed.mesh = &bvh->mesh();
-  placed.identity = transform == Mat4(1.0);
   placed.object_to_world = transform;
   placed.world_to_object = glm::inverse(transform);
   placed.normal_matrix = glm::transpose(glm::dmat3(placed.world_to_object));
