@@ -204,7 +204,7 @@ void finish_placed_mesh_hit(const Ray& ray, const PlacedMesh& placed, unsigned i
                             float u, float v, SurfaceHit& hit) {
   const Vec3 o(placed.world_to_object * glm::dvec4(Vec3(ray.origin), 1.0));
   const Vec3 d = glm::dmat3(placed.world_to_object) * Vec3(ray.direction);
-  finish_triangle_hit(o, d, *placed.mesh, index, t, u, v, hit);
+  finish_triangle_hit(o, d, placed.bvh->mesh(), index, t, u, v, hit);
   hit.position = Vec3(placed.object_to_world * glm::dvec4(hit.position, 1.0));
   const bool flat = hit.shading_normal == hit.normal;
   hit.normal = glm::normalize(placed.normal_matrix * hit.normal);

@@ -160,8 +160,7 @@ class MeshBvh;  // mesh_bvh.hpp
 // A mesh's own BVH (a MeshBvh) as one frame places it: an Embree instance of it, and the
 // transform that instance applies, for hits to be rebuilt in object space and then placed.
 struct PlacedMesh {
-  std::shared_ptr<const MeshBvh> bvh;
-  const TriangleMesh* mesh;  // the bvh's, in object space
+  std::shared_ptr<const MeshBvh> bvh;  // its mesh() is in object space
   Mat4 object_to_world{1.0};
   Mat4 world_to_object{1.0};
   glm::dmat3 normal_matrix{1.0};  // the inverse transpose, which keeps outward normals outward
@@ -243,9 +242,9 @@ enum class OpaquePlanes { outside_embree, also_in_embree };
 class SceneGeometry {
  public:
   // `compact_above`: see kCompactMeshTriangles (the tests set it to 0, to compare).
-  // `release`, where given, is `scene` itself: the arrays of each mesh of its own BVH whose
-  // material has no texture (which would read its uvs and corners) are freed as soon as
-  // Embree holds them, so that a big mesh is never held twice at the peak.
+  // `release`, where given, is `scene` itself: the arrays of each mesh whose material has no
+  // texture (which would read its uvs and corners) are freed as soon as Embree holds them,
+  // before the BVH is built, so that a big mesh is never held twice at the peak.
   // `previous`, where given, is another frame of the same scene built on the same device:
   // each of its meshes' own BVHs (MeshBvh) is placed again here, with this frame's
   // transform, rather than built again. A frame's meshes are always those of the others.

@@ -275,7 +275,6 @@ void SceneGeometry::add_placed_mesh(std::shared_ptr<const MeshBvh> bvh, const Ma
   if (id != records_.size()) throw std::logic_error("Embree geometry ids are not sequential");
 
   PlacedMesh placed;
-  placed.mesh = &bvh->mesh();
   placed.object_to_world = transform;
   placed.world_to_object = glm::inverse(transform);
   placed.normal_matrix = glm::transpose(glm::dmat3(placed.world_to_object));

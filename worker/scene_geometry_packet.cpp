@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "worker/analytic_shapes.hpp"
+#include "worker/mesh_bvh.hpp"
 #include "worker/scene_geometry.hpp"
 
 namespace tessera {
@@ -196,7 +197,7 @@ void SceneGeometry::gather_shapes(PacketLanes& lanes, SurfaceHit (&hits)[kPacket
       // reads the first lets their misses overlap instead of coming one after another.
       const TriangleMesh& mesh = record.kind == Kind::triangles
                                      ? meshes_[record.index]
-                                     : *placed_meshes_[record.index].mesh;
+                                     : placed_meshes_[record.index].bvh->mesh();
       if (mesh.compact()) {  // its corners are found through the indices, one step later
         __builtin_prefetch(mesh.indices + 3 * static_cast<std::size_t>(primitive));
         continue;
