@@ -1,11 +1,17 @@
 #include "server/image_assembly.hpp"
 
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
+
+#include "server/store_error.hpp"
 
 namespace tessera {
 
@@ -202,7 +208,15 @@ void ImageAssembly::install_canvas(Store& store, const std::string& key,
   }
   // On the store thread, unlocked: every tile durable so far is in the store, and every
   // later one is pasted by stored(), which runs on this thread too.
-  paste_stored(store, *canvas, *frame);
+  bool pasted = true;
+  try {
+    paste_stored(store, *canvas, *frame);
+  } catch (const std::exception& e) {
+    // No descriptor for the pixel file, say: the job goes on without a canvas, and its
+    // image is assembled from the store once it is done (write_image).
+    spdlog::warn("image {}: cannot read its stored tiles yet: {}", key, e.what());
+    pasted = false;
+  }
   std::lock_guard lock(mutex_);
   const auto it = jobs_.find(key);
   if (it == jobs_.end()) return;
@@ -211,7 +225,32 @@ void ImageAssembly::install_canvas(Store& store, const std::string& key,
   changed_.notify_all();  // the image thread may wait for it
   // A failed or canceled job's image comes from the store; a completed one's canvas is
   // taken by the image thread, which waited for it.
-  if (!job.ended) job.canvas = std::move(canvas);
+  if (!job.ended && pasted) job.canvas = std::move(canvas);
+}
+
+bool ImageAssembly::passing_shortage(const std::exception& error) const {
+  if (fault_of(error) == StoreFault::transient) return true;
+  // An image file's own write says only what OpenImageIO says: whether this process is
+  // out of descriptors is asked of the system again.
+  const int probe = ::open(files_.dir().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (probe >= 0) {
+    ::close(probe);
+    return false;
+  }
+  return fault_of_errno(errno) == StoreFault::transient;
+}
+
+bool ImageAssembly::wait_out_shortage(const std::string& key, const std::exception& error,
+                                      int attempt) {
+  if (attempt % 30 == 0)
+    spdlog::warn("image {}: {}; writing it again in a moment, nothing fails for it", key,
+                 error.what());
+  std::unique_lock lock(mutex_);
+  // 10 ms, doubling to about a second; a job removed meanwhile, or a coordinator that
+  // stops, ends it (the next start writes the images of frames done that lack one).
+  changed_.wait_for(lock, std::chrono::milliseconds(10) * (1 << std::min(attempt, 7)),
+                    [&] { return stopping_ || !jobs_.contains(key); });
+  return !stopping_ && jobs_.contains(key);
 }
 
 void ImageAssembly::write_image(const std::string& key, std::unique_lock<std::mutex>& lock) {
@@ -227,17 +266,25 @@ void ImageAssembly::write_image(const std::string& key, std::unique_lock<std::mu
   const std::shared_ptr<const Frame> frame = it->second.frame;
   lock.unlock();
   std::string error;
-  try {
-    if (!image)
-      store_.call([&](Store& store) {
-        auto assembled = std::make_shared<Image>(frame->width, frame->height);
-        paste_stored(store, *assembled, *frame);
-        image = std::move(assembled);
-      });
-    // Encoding takes a while and touches no shared state: workers and clients go on.
-    files_.write(key, *image);
-  } catch (const std::exception& e) {
-    error = e.what();
+  for (int attempt = 0;; ++attempt) {
+    try {
+      if (!image)
+        store_.call([&](Store& store) {
+          auto assembled = std::make_shared<Image>(frame->width, frame->height);
+          paste_stored(store, *assembled, *frame);
+          image = std::move(assembled);
+        });
+      // Encoding takes a while and touches no shared state: workers and clients go on.
+      files_.write(key, *image);
+      break;
+    } catch (const std::exception& e) {
+      // A shortage that passes (no descriptor left) fails no job: the image is written
+      // once it has passed. Until then downloads assemble it from the store.
+      if (!passing_shortage(e) || !wait_out_shortage(key, e, attempt)) {
+        error = e.what();
+        break;
+      }
+    }
   }
   lock.lock();
   it = jobs_.find(key);

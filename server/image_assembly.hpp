@@ -109,6 +109,11 @@ class ImageAssembly {
   void make_canvas(const std::string& key, std::unique_lock<std::mutex>& lock);
   void install_canvas(Store& store, const std::string& key, std::shared_ptr<Image> canvas);
   void write_image(const std::string& key, std::unique_lock<std::mutex>& lock);
+  // Whether `error` is a shortage that passes (no descriptor left), which fails nothing.
+  bool passing_shortage(const std::exception& error) const;
+  // Waits before the next try; false once the image is no longer wanted (its job removed,
+  // the coordinator stopping).
+  bool wait_out_shortage(const std::string& key, const std::exception& error, int attempt);
 
   ImageFiles files_;
   StoreThread& store_;

@@ -18,6 +18,7 @@ class ImageFiles {
   explicit ImageFiles(const std::filesystem::path& data_dir);
 
   std::filesystem::path path(const std::string& job_id) const;
+  const std::filesystem::path& dir() const { return dir_; }
   // Writes the job's file, atomically replaced: it appears whole or not at all.
   void write(const std::string& job_id, const Image& image) const;
   void remove(const std::string& job_id) const;

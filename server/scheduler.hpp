@@ -246,10 +246,19 @@ class Scheduler {
   Pending<T> pending(T value, StoreTicket before) const {
     return {std::move(value), last_write_, last_write_ > before};
   }
-  // The store refused a result (a full disk, say): the job fails with `error`, in the
-  // store if it still takes that much, in memory at least. A restart, with room again,
+  // A tile a change delivered: the job, the tile, the lease it came from.
+  struct Delivery {
+    std::string job_id;
+    int tile = 0;
+    std::string lease_id;
+  };
+  // The store refused a change (a full disk, say): the job fails with `error`, in the
+  // store if it still takes that much, in memory at least, and those of `undelivered`
+  // that are its tiles are pending again, as the store has them: a retry renders them
+  // again rather than completing without their pixels. A restart, with room again,
   // resumes the job from what was stored.
-  void fail_unstorable(JobEntry& job, const std::string& error);
+  void fail_unstorable(JobEntry& job, const std::string& error,
+                       const std::vector<Delivery>& undelivered);
   void apply_job(JobEntry& job, const JobStatus& next);
   void apply_tile(JobEntry& job, int index, TileSlot next);
   // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and

@@ -24,18 +24,23 @@ StoreTicket Scheduler::commit(StagedChange& change, const std::string& what) {
   bool finishes = false;
   for (const auto& [job, status] : change.jobs)
     finishes = finishes || (is_finished(status.state) && !is_finished(job->status.state));
+  std::vector<Delivery> delivered;
+  for (const auto& [key, tile] : change.tiles)
+    if (tile.state == TileState::done && key.first->tiles[key.second].state != TileState::done)
+      delivered.push_back({key.first->status.id, key.second, tile.result_lease_id});
   const Observed observed = observed_before(change);
   apply(change);
   const StoreTicket ticket = queue_write(std::move(work));
   tell_observer(observed, ticket);
-  store_thread_.after(ticket, [this, touched = std::move(touched), what](const std::string& error) {
+  store_thread_.after(ticket, [this, touched = std::move(touched), what,
+                               delivered = std::move(delivered)](const std::string& error) {
     if (error.empty()) return;
     // The store refused (a full disk, say). Every job the change was for fails and says
-    // why, rather than workers retrying it forever.
+    // why, rather than workers retrying it forever; what it delivered is not stored.
     std::lock_guard lock(mutex_);
     for (const std::string& id : touched)
       if (JobEntry* job = find_job(id))
-        fail_unstorable(*job, "cannot store " + what + ": " + error);
+        fail_unstorable(*job, "cannot store " + what + ": " + error, delivered);
     ++refusals_;
   });
   // Those waiting for a job to finish hear of it once it is durable.

@@ -105,12 +105,25 @@ void Scheduler::fail_stalled_locked(std::int64_t now, StagedChange& change) {
   }
 }
 
-void Scheduler::fail_unstorable(JobEntry& job, const std::string& error) {
+void Scheduler::fail_unstorable(JobEntry& job, const std::string& error,
+                                const std::vector<Delivery>& undelivered) {
   spdlog::error("job {}: {}", job.status.id, error);
-  if (job.status.state == JobState::failed || job.status.state == JobState::canceled) return;
   StagedChange change;
-  if (job.status.state == JobState::completed) {
-    // Its last tiles were refused after it was marked completed in memory.
+  for (const Delivery& delivery : undelivered) {
+    if (delivery.job_id != job.status.id) continue;
+    const TileSlot& was = job.tiles[delivery.tile];
+    if (was.state != TileState::done || was.result_lease_id != delivery.lease_id) continue;
+    change.job(job).rays -= was.rays;
+    TileSlot& tile = change.tile(job, delivery.tile);
+    tile.state = TileState::pending;
+    tile.result_lease_id.clear();
+    tile.rays = 0;
+    tile.render_us = 0;
+  }
+  if (job.status.state == JobState::failed || job.status.state == JobState::canceled) {
+    if (change.empty()) return;
+  } else if (job.status.state == JobState::completed) {  // Its last tiles were refused after it was
+                                                         // marked completed in memory.
     JobStatus& status = change.job(job);
     status.state = JobState::failed;
     status.error = error;

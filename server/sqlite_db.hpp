@@ -1,6 +1,7 @@
 // Thin RAII over the SQLite C API: a connection, its prepared statements (cached, so each
 // SQL text is compiled once) and savepoint transactions. Every failure becomes a
-// std::runtime_error naming the operation and carrying sqlite3_errmsg. Not thread-safe:
+// StoreError naming the operation, carrying sqlite3_errmsg and, for a failed file
+// operation, what the system said (a full disk is "the disk is full"). Not thread-safe:
 // the owner serializes access.
 #pragma once
 
@@ -12,6 +13,7 @@
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 #include "server/wal_checkpointer.hpp"
 
@@ -52,7 +54,7 @@ class Statement {
   void reset();
 
  private:
-  [[noreturn]] void fail(std::string_view what) const;
+  [[noreturn]] void fail(std::string_view what, int rc) const;
 
   sqlite3_stmt* stmt_ = nullptr;
   std::string sql_;
@@ -76,7 +78,9 @@ class StatementUse {
 
 class SqliteDb {
  public:
-  explicit SqliteDb(const std::filesystem::path& file);
+  // `setup` (pragmas) runs on every connection opened to `file`: this one, and any that
+  // reopen() makes.
+  explicit SqliteDb(const std::filesystem::path& file, std::vector<std::string> setup = {});
   ~SqliteDb();
   SqliteDb(const SqliteDb&) = delete;
   SqliteDb& operator=(const SqliteDb&) = delete;
@@ -95,17 +99,39 @@ class SqliteDb {
   // commit checkpoints as SQLite would, so that the WAL cannot grow without bound.
   void checkpoint_in_background();
 
+  // Whether SQLite holds a transaction open on this connection (it is not in autocommit).
+  // Outside a Transaction it never does: a failure that could leave one open ends it.
+  bool in_transaction() const;
+  // Closes the connection and opens it again, running `setup` again: what is left when
+  // even ROLLBACK does not end a transaction. Whatever that transaction held is gone.
+  void reopen();
+
  private:
+  friend class Transaction;
   static int on_wal_commit(void* self, sqlite3* db, const char* name, int pages);
+  void open();
+  void close();
+  // Ends whatever transaction SQLite still holds, after the outermost Transaction failed
+  // or was abandoned: ROLLBACK (which in WAL mode writes nothing, so a full disk cannot
+  // refuse it), or reopen() should even that leave it open.
+  void end_transaction() noexcept;
 
   sqlite3* db_ = nullptr;
   std::filesystem::path file_;
+  std::vector<std::string> setup_;
+  int depth_ = 0;  // Transactions open on it
   std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;
   std::unique_ptr<WalCheckpointer> checkpointer_;
 };
 
 // A SAVEPOINT: nests, so a Store operation that is atomic on its own can also be part of
 // a larger atomic change. Rolled back unless commit() is called.
+//
+// The outermost one is the transaction SQLite commits. After it ends, however it ends, the
+// connection is back in autocommit, checked: should its commit fail (a full disk refuses
+// the RELEASE), it is rolled back whole; should SQLite roll it back on its own (it may,
+// on SQLITE_FULL or an I/O error), every later statement of it fails rather than
+// committing alone.
 class Transaction {
  public:
   explicit Transaction(SqliteDb& db);
@@ -117,6 +143,7 @@ class Transaction {
 
  private:
   SqliteDb& db_;
+  bool outermost_;
   bool open_ = true;
 };
 

@@ -8,6 +8,7 @@
 #include <system_error>
 
 #include "server/packed_blobs.hpp"
+#include "server/store_error.hpp"
 
 namespace tessera {
 namespace {
@@ -24,20 +25,27 @@ constexpr int cache_kib = 32 * 1024;
 
 // Creates the directories before the database file is opened in them.
 std::filesystem::path prepare_data_dir(const std::filesystem::path& data_dir) {
-  std::filesystem::create_directories(data_dir / "pixels");
+  std::error_code error;
+  std::filesystem::create_directories(data_dir / "pixels", error);
+  if (error)
+    throw StoreError(fault_of_errno(error.value()), "store: cannot create " +
+                                                        (data_dir / "pixels").string() + ": " +
+                                                        errno_words(error.value()));
   return data_dir / "tessera.db";
+}
+
+// WAL lets readers (the sqlite3 tool, backups) work beside the writer; NORMAL sync in WAL
+// mode never corrupts, it may only lose the last commits on power loss. Run on every
+// connection the store opens, also one it opens again (SqliteDb::reopen).
+std::vector<std::string> connection_setup() {
+  return {"PRAGMA journal_mode=WAL", "PRAGMA synchronous=NORMAL", "PRAGMA foreign_keys=ON",
+          "PRAGMA cache_size=-" + std::to_string(cache_kib)};
 }
 
 }  // namespace
 
 Store::Store(const std::filesystem::path& data_dir)
-    : data_dir_(data_dir), db_(prepare_data_dir(data_dir)) {
-  // WAL lets readers (the sqlite3 tool, backups) work beside the writer; NORMAL sync in
-  // WAL mode never corrupts, it may only lose the last commits on power loss.
-  db_.exec("PRAGMA journal_mode=WAL");
-  db_.exec("PRAGMA synchronous=NORMAL");
-  db_.exec("PRAGMA foreign_keys=ON");
-  db_.exec("PRAGMA cache_size=-" + std::to_string(cache_kib));
+    : data_dir_(data_dir), db_(prepare_data_dir(data_dir), connection_setup()) {
   create_schema();
   db_.checkpoint_in_background();
 }

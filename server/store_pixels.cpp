@@ -15,6 +15,7 @@
 #include "server/packed_blobs.hpp"
 #include "server/prune_files.hpp"
 #include "server/store.hpp"
+#include "server/store_error.hpp"
 
 namespace tessera {
 
@@ -25,13 +26,9 @@ std::filesystem::path Store::pixel_path(const std::string& job_id) const {
 std::int64_t Store::append_pixels(const std::string& job_id,
                                   std::span<const std::span<const std::byte>> parts) {
   const std::filesystem::path path = pixel_path(job_id);
-  const auto fail = [&](const char* what, int error) -> std::runtime_error {
-    // SQLite says "database or disk is full" for its own; the same words for ours.
-    const std::string why = error == ENOSPC || error == EDQUOT
-                                ? "the disk is full (" + std::string(std::strerror(error)) + ")"
-                                : std::string(std::strerror(error));
-    return std::runtime_error("store: cannot " + std::string(what) + " " + path.string() + ": " +
-                              why);
+  const auto fail = [&](const char* what, int error) {
+    return StoreError(fault_of_errno(error), "store: cannot " + std::string(what) + " " +
+                                                 path.string() + ": " + errno_words(error));
   };
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) throw fail("open", errno);
@@ -92,7 +89,8 @@ void Store::for_each_tile_pixels(
     const auto bytes = static_cast<std::size_t>(s->column_int64(2));
     if (wanted && std::none_of(tiles.begin(), tiles.end(), wanted)) continue;
     if (fd < 0 && (fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC)) < 0)
-      throw std::runtime_error("store: cannot open " + path.string() + ": " + std::strerror(errno));
+      throw StoreError(fault_of_errno(errno),
+                       "store: cannot open " + path.string() + ": " + errno_words(errno));
     floats.resize(bytes / sizeof(float));
     std::size_t got = 0;
     while (got < floats.size() * sizeof(float)) {
@@ -101,8 +99,8 @@ void Store::for_each_tile_pixels(
                   floats.size() * sizeof(float) - got, at + static_cast<std::int64_t>(got));
       if (n < 0 && errno == EINTR) continue;
       if (n < 0)
-        throw std::runtime_error("store: cannot read " + path.string() + ": " +
-                                 std::strerror(errno));
+        throw StoreError(fault_of_errno(errno),
+                         "store: cannot read " + path.string() + ": " + errno_words(errno));
       if (n == 0) break;  // the file ends early: the check below names the tile
       got += static_cast<std::size_t>(n);
     }

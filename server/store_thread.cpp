@@ -1,10 +1,14 @@
 #include "server/store_thread.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <exception>
 #include <future>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
+
+#include "server/store_error.hpp"
 
 namespace tessera {
 namespace {
@@ -12,16 +16,9 @@ namespace {
 // Enough for any callback given right after its write was queued; older errors are
 // forgotten so that a long run of refusals (a disk that stays full) costs bounded memory.
 constexpr std::size_t kRefusalsKept = 4096;
-
-std::string error_of(const std::exception_ptr& error) {
-  try {
-    std::rethrow_exception(error);
-  } catch (const std::exception& e) {
-    return e.what();
-  } catch (...) {
-    return "unknown error";
-  }
-}
+// Tries of a write the store put off for a passing shortage, once the thread is stopping
+// (about 5 s in all); before that it tries for as long as the shortage lasts.
+constexpr int kAttemptsWhenStopping = 10;
 
 }  // namespace
 
@@ -138,37 +135,59 @@ void StoreThread::run() {
   }
 }
 
+bool StoreThread::wait_out(const std::exception& error, int attempt) {
+  {
+    // A coordinator that is stopping waits a few seconds, then refuses what it cannot store.
+    std::lock_guard lock(mutex_);
+    if (stopping_ && attempt >= kAttemptsWhenStopping) return false;
+  }
+  if (attempt % 60 == 0)
+    spdlog::warn("store: {}; writing again in a moment, nothing fails for it", error.what());
+  // 10 ms, doubling to about a second: a shortage of descriptors ends as connections
+  // close, a lock another process holds when it lets go. Meanwhile nothing later commits
+  // either, since writes are stored in the order they were queued.
+  std::this_thread::sleep_for(std::chrono::milliseconds(10) * (1 << std::min(attempt, 7)));
+  return true;
+}
+
+std::optional<std::string> StoreThread::write_together(std::vector<Item>& items, bool alone) {
+  for (int attempt = 0;; ++attempt) {
+    try {
+      Transaction tx = store_.transaction();
+      for (Item& item : items)
+        if (item.ticket != 0) item.work(store_);
+      tx.commit();
+      ++transactions_;
+      return std::nullopt;
+    } catch (const std::exception& e) {
+      if (fault_of(e) == StoreFault::transient && wait_out(e, attempt)) continue;
+      if (!alone) spdlog::debug("store: a group of writes failed ({}); each alone", e.what());
+      return std::string(e.what());
+    } catch (...) {
+      return std::string("unknown error");
+    }
+  }
+}
+
 std::map<StoreTicket, std::string> StoreThread::commit(std::vector<Item>& items) {
   std::map<StoreTicket, std::string> refused;
   std::size_t writes = 0;
   for (const Item& item : items) writes += item.ticket != 0;
   if (writes == 0) return refused;
-  try {
-    Transaction tx = store_.transaction();
-    for (Item& item : items)
-      if (item.ticket != 0) item.work(store_);
-    tx.commit();
-    ++transactions_;
+  const std::optional<std::string> error = write_together(items, writes == 1);
+  if (!error) return refused;
+  if (writes == 1) {
+    for (const Item& item : items)
+      if (item.ticket != 0) refused[item.ticket] = *error;
     return refused;
-  } catch (...) {
-    if (writes == 1) {
-      const std::string error = error_of(std::current_exception());
-      for (const Item& item : items)
-        if (item.ticket != 0) refused[item.ticket] = error;
-      return refused;
-    }
   }
   // One of them spoiled the group: each alone, so that only what the store refuses fails.
   for (Item& item : items) {
     if (item.ticket == 0) continue;
-    try {
-      Transaction tx = store_.transaction();
-      item.work(store_);
-      tx.commit();
-      ++transactions_;
-    } catch (...) {
-      refused[item.ticket] = error_of(std::current_exception());
-    }
+    std::vector<Item> one;
+    one.push_back({item.ticket, std::move(item.work)});
+    if (const std::optional<std::string> alone = write_together(one, true))
+      refused[item.ticket] = *alone;
   }
   return refused;
 }

@@ -5,7 +5,9 @@
 // one transaction (group commit): a thousand workers' uploads cost one fsync-free WAL
 // commit between them instead of one each, and nobody waits on the disk under a lock.
 // Should that transaction fail, each of its writes is tried again alone, so that one
-// change the store refuses (a full disk for one job's pixels) fails only itself.
+// change the store refuses (a full disk for one job's pixels) fails only itself. A write
+// put off by a shortage that passes (StoreFault::transient: no descriptor left, a lock
+// held by another process) is tried again until it passes, and refused for nothing.
 #pragma once
 
 #include <atomic>
@@ -15,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -67,6 +70,11 @@ class StoreThread {
   // Writes `items`' writes in one transaction, or each alone should that fail; returns the
   // refused ones' errors by ticket.
   std::map<StoreTicket, std::string> commit(std::vector<Item>& items);
+  // Writes them in one transaction, again and again while the store puts them off for a
+  // passing shortage; the error that refused them, if any.
+  std::optional<std::string> write_together(std::vector<Item>& items, bool alone);
+  // Waits before the next try after `error`; false once a stopping thread should give up.
+  bool wait_out(const std::exception& error, int attempt);
 
   Store& store_;
   mutable std::mutex mutex_;

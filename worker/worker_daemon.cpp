@@ -127,17 +127,31 @@ bool WorkerDaemon::register_self() {
   protocol::WorkerRegistration registration{options_.name, host_name(), options_.threads};
   std::optional<protocol::Registration> reply;
   try {
-    reply = with_retry("register", [&] { return control_.register_worker(registration); });
+    // A coordinator that could not store the registration (a full disk, a store busy
+    // elsewhere: 5xx) may next time: waited out as one out of reach, not the end.
+    auto backoff = 1s;
+    for (bool registered = false; !registered && !stop_;) {
+      try {
+        reply = with_retry("register", [&] { return control_.register_worker(registration); });
+        registered = true;
+      } catch (const ApiError& e) {
+        if (e.status() < 500) throw;
+        spdlog::warn("registration answered {}: {}; trying again in {} s", e.status(), e.what(),
+                     backoff.count());
+        for (auto slept = 0ms; slept < backoff && !stop_; slept += 50ms)
+          std::this_thread::sleep_for(50ms);
+        backoff = std::min<std::chrono::seconds>(backoff * 2, 30s);
+      }
+    }
   } catch (const HttpError& e) {  // TLS (with_retry() waits out everything else)
     spdlog::error("{}", e.what());
     incompatible_ = true;
     incompatible_code_ = 3;
     return false;
   } catch (const ApiError& e) {
+    // A refusal (another protocol, a wrong token) stands.
     spdlog::error("registration refused ({}): {}", e.status(), e.what());
-    // A refusal (another protocol, a wrong token) stands; a coordinator that could not
-    // answer (5xx) may next time.
-    if (e.status() < 500) incompatible_ = true;
+    incompatible_ = true;
     // http:// to a coordinator's TLS port: as a TLS failure, a server out of reach.
     if (e.code() == "tls_required") incompatible_code_ = 3;
     return false;

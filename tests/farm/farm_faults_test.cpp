@@ -8,6 +8,7 @@
 #include <regex>
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include "tests/farm/farm_fixture.hpp"
 
@@ -34,6 +35,34 @@ const std::vector<std::string> quick_leases{"--lease-timeout", "1", "--heartbeat
   if (seen) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure()
          << name << " never got to rendering after " << delivered << " tiles";
+}
+
+// Waits until the job has finished, and returns it as then answered.
+json farm_wait(test::JsonApi& api, const std::string& id) {
+  json job;
+  test::eventually(
+      [&] {
+        job = api.job(id);
+        return job["state"] == "completed" || job["state"] == "failed" ||
+               job["state"] == "canceled";
+      },
+      120s);
+  return job;
+}
+
+// Whether a second connection gets the database's write lock within a second: none does
+// while the coordinator holds a transaction open.
+bool another_writer_can_write(const fs::path& database) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+    sqlite3_close(db);
+    return false;
+  }
+  sqlite3_busy_timeout(db, 1000);
+  const bool locked = sqlite3_exec(db, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) == SQLITE_OK;
+  if (locked) sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  return locked;
 }
 
 TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
@@ -297,6 +326,121 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   server->signal(SIGTERM);
   const auto status = server->wait_for(30s);
   ASSERT_TRUE(status.has_value());
+}
+
+// The issue's reproduction: a data dir on a 20 MiB tmpfs fills while a job writes its
+// pixels; once the space is back, a retry of that job and a new job both complete, and a
+// restart finds both as they were answered. Before, the rollback of the failed change
+// left its transaction open: nothing was committed again, yet every answer said it was.
+TEST(FarmFaults, AFullDiskThenSpaceBackThenASubmitAndARestartKeepTheJob) {
+  const fs::path dir = test::fresh_dir("fault-disk-refill");
+  const fs::path data = dir / "data";
+  const test::SmallDisk disk(data, "20m");
+  if (!disk.mounted())
+    GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
+                 << (dir / "mount.log");
+  const auto start = [&](const std::string& log) {
+    fs::remove(dir / "port");
+    auto server = std::make_unique<test::Process>(
+        TESSERA_SERVER_BIN,
+        std::vector<std::string>{"--listen", "127.0.0.1:0", "--data-dir", data.string(),
+                                 "--local-workers", "1", "--worker-threads", "2", "--port-file",
+                                 (dir / "port").string(), "--log-level", "info"},
+        dir / log);
+    EXPECT_TRUE(test::eventually(
+        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s))
+        << test::read_text(dir / log);
+    int port = 0;
+    std::ifstream(dir / "port") >> port;
+    return std::make_pair(std::move(server), "http://127.0.0.1:" + std::to_string(port));
+  };
+  auto [server, url] = start("server.log");
+  test::JsonApi api(url);
+  // All but 1 MiB taken; the job's pixels need 3.5 MiB.
+  const fs::space_info space = fs::space(data);
+  {
+    std::ofstream filler(data / "filler", std::ios::binary);
+    const std::string block(1 << 20, 'x');
+    for (auto left = space.available; left > (2u << 20); left -= block.size())
+      filler.write(block.data(), static_cast<std::streamsize>(block.size()));
+  }
+  const json scene = test::showcase(640, 480, 1, 32);
+  const std::string failed = api.submit("fills the disk", 50, scene)["id"];
+  const json first = farm_wait(api, failed);
+  ASSERT_EQ(first["state"], "failed") << first.dump();
+  EXPECT_NE(first["error"].get<std::string>().find("the disk is full"), std::string::npos)
+      << first.dump();
+
+  fs::remove(data / "filler");
+  EXPECT_EQ(api.retry(failed)["state"], "running");
+  const std::string added = api.submit("after the space came back", 50, scene)["id"];
+  EXPECT_EQ(farm_wait(api, failed)["state"], "completed");
+  EXPECT_EQ(farm_wait(api, added)["state"], "completed");
+  const Image reference = test::render_image(scene, 2);
+  for (const std::string& id : {failed, added}) {
+    test::write_text(dir / (id + ".exr"), api.image(id, "exr", false));
+    EXPECT_TRUE(test::same_pixels(read_image(dir / (id + ".exr")), reference)) << id;
+  }
+  // The idle coordinator holds no write transaction: another writer gets the lock at once.
+  EXPECT_TRUE(another_writer_can_write(data / "tessera.db"));
+
+  server->signal(SIGTERM);
+  ASSERT_TRUE(server->wait_for(30s).has_value());
+  auto [again, again_url] = start("server-again.log");
+  test::JsonApi after(again_url);
+  for (const std::string& id : {failed, added}) {
+    const json job = after.job(id);
+    EXPECT_EQ(job["state"], "completed") << job.dump();
+    EXPECT_EQ(job["tiles"]["done"], job["tiles"]["total"]) << job.dump();
+    test::write_text(dir / (id + "-again.exr"), after.image(id, "exr", false));
+    EXPECT_TRUE(test::same_pixels(read_image(dir / (id + "-again.exr")), reference)) << id;
+  }
+  again->signal(SIGTERM);
+  EXPECT_TRUE(again->wait_for(30s).has_value());
+}
+
+// A coordinator that cannot start on a full disk says why in the words a person acts on,
+// both for a new data dir and for one whose database is already there.
+TEST(FarmFaults, AFullDiskAtStartUpIsNamedAsSuch) {
+  const fs::path dir = test::fresh_dir("fault-disk-start");
+  const fs::path disk_dir = dir / "disk";
+  const test::SmallDisk disk(disk_dir, "1m");
+  if (!disk.mounted())
+    GTEST_SKIP() << "needs root to mount a small tmpfs for the data dir (CI runs as root); see "
+                 << (dir / "mount.log");
+  const auto start_and_fail = [&](const fs::path& data, const std::string& log) {
+    test::Process server(TESSERA_SERVER_BIN,
+                         {"--listen", "127.0.0.1:0", "--data-dir", data.string(), "--local-workers",
+                          "0", "--log-level", "info"},
+                         dir / log);
+    const auto status = server.wait_for(20s);
+    EXPECT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) != 0)
+        << "started on a full disk";
+    return test::read_text(dir / log);
+  };
+  const auto fill = [&] {
+    std::ofstream filler(disk_dir / "filler", std::ios::binary | std::ios::app);
+    const std::string block(4096, 'x');
+    while (filler.write(block.data(), static_cast<std::streamsize>(block.size())) &&
+           filler.flush()) {
+    }
+  };
+  // A database made while there was room, then the disk filled: its WAL cannot be made.
+  {
+    test::Process server(TESSERA_SERVER_BIN,
+                         {"--listen", "127.0.0.1:0", "--data-dir", (disk_dir / "kept").string(),
+                          "--local-workers", "0", "--port-file", (dir / "port").string()},
+                         dir / "first.log");
+    ASSERT_TRUE(test::eventually([&] { return fs::exists(dir / "port"); }, 20s));
+    server.signal(SIGTERM);
+    ASSERT_TRUE(server.wait_for(20s).has_value());
+  }
+  fill();
+  const std::string fresh = start_and_fail(disk_dir / "fresh", "fresh.log");
+  EXPECT_NE(fresh.find("the disk is full"), std::string::npos) << fresh;
+  const std::string kept = start_and_fail(disk_dir / "kept", "kept.log");
+  EXPECT_NE(kept.find("the disk is full"), std::string::npos) << kept;
+  EXPECT_EQ(kept.find("disk I/O error\n"), std::string::npos) << kept;
 }
 
 TEST(FarmFaults, AWorkerThatKeepsFailingOnAJobIsKeptOffIt) {

@@ -87,5 +87,33 @@ TEST_F(SchedulerDurabilityTest, ALastResultTheStoreRefusesFailsTheJobBeforeAnyon
   EXPECT_NE(s().job(job)->error.find("cannot store"), std::string::npos) << s().job(job)->error;
 }
 
+TEST_F(SchedulerDurabilityTest,
+       TilesWhoseResultTheStoreRefusedArePendingAgainAndARetryRendersThem) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  const std::string job = submit(64, 32, 32).id;  // 2 tiles
+  const std::string w = worker();
+  std::filesystem::create_directories(store_->pixel_path(job).parent_path());
+  std::filesystem::create_symlink("/dev/full", store_->pixel_path(job));
+  const auto first = s().claim(w);
+  ASSERT_TRUE(first);
+  EXPECT_NE(deliver(*first), ResultOutcome::accepted);  // refused once stored
+  // Memory says what the store has: the job failed, and no tile is done, so that a retry
+  // renders them rather than completing the job without their pixels.
+  EXPECT_EQ(s().job(job)->state, JobState::failed);
+  EXPECT_EQ(s().job(job)->tiles_done, 0);
+  EXPECT_EQ(s().job(job)->rays, 0u);
+
+  std::filesystem::remove(store_->pixel_path(job));  // space back
+  EXPECT_EQ(s().retry(job).result, ControlOutcome::Result::done);
+  finish(job, w, 7.0f);
+  reopen();
+  const JobStatus after = *s().job(job);
+  EXPECT_EQ(after.state, JobState::completed);
+  EXPECT_EQ(after.tiles_done, 2);
+  int tiles = 0;
+  for (const ResultRow& row : store_->load().results) tiles += static_cast<int>(row.tiles.size());
+  EXPECT_EQ(tiles, 2);
+}
+
 }  // namespace
 }  // namespace tessera
