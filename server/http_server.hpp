@@ -60,6 +60,11 @@ struct HttpServerOptions {
   // body_budget_bytes (see BodyBudget); smaller ones, and chunked ones, are read at once.
   std::size_t budgeted_body_bytes = 64 * 1024;
   std::size_t body_budget_bytes = 64 << 20;
+  // Open connections, in all and from one peer address; 0: no limit. Past either, the
+  // connection that has waited longest for a request makes room for the new one, or the
+  // new one is answered 503 (connection_admission.hpp).
+  std::size_t max_connections = 0;
+  std::size_t max_connections_per_peer = 0;
   // Asked once a request's header is read and its route known, before any body is read:
   // the route's role and the Authorization header ("" when absent). An answer refuses the
   // request with it. Unset: everyone may call everything.

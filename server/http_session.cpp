@@ -20,6 +20,7 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
 
+#include "server/connection_admission.hpp"
 #include "server/http_errors.hpp"
 #include "server/http_metrics.hpp"
 #include "server/listener.hpp"
@@ -86,28 +87,36 @@ class BasicHttpSession : public HttpSession {
 
   ~BasicHttpSession() override {
     release_body_budget();
-    {
-      std::lock_guard lock(shared_->mutex);
-      shared_->sessions.erase(this);
-    }
+    forget_session(*shared_, this);
     --shared_->connection_count;
   }
 
-  void start() {
+  void start(const std::string& peer) {
     error_code ec;
     const auto endpoint = lowest().socket().remote_endpoint(ec);
     if (!ec) remote_address_ = format_endpoint(endpoint);
     // Small requests and answers: do not let Nagle hold back the last segment.
     lowest().socket().set_option(tcp::no_delay(true), ec);
+    note_waiting();
     {
       std::lock_guard lock(shared_->mutex);
-      shared_->sessions.emplace(this, weak_from_this());
+      shared_->sessions.emplace(this, ServerShared::OpenSession{weak_from_this(), peer});
+      ++shared_->open_by_peer[peer];
+      ++shared_->open_counted;
     }
     net::dispatch(stream_.get_executor(), [self = self()] {
       if constexpr (kTls)
         self->do_tls_start();
       else
         self->do_wait_for_request();
+    });
+  }
+
+  void evict() override {
+    net::post(stream_.get_executor(), [self = self()] {
+      if (self->phase_ == Phase::idle || self->phase_ == Phase::header) return self->close();
+      // It began a request meanwhile: it stays, and counts again.
+      keep_session(*self->shared_, self.get());
     });
   }
 
@@ -189,6 +198,7 @@ class BasicHttpSession : public HttpSession {
     if (stopping()) return close();
     if (buffer_.size() > 0) return do_read_header();  // pipelined: already here
     phase_ = Phase::idle;
+    note_waiting();
     lowest().expires_after(first_request_ ? shared_->options.header_timeout
                                           : shared_->options.idle_timeout);
     stream_.async_read_some(
@@ -567,6 +577,12 @@ class BasicHttpSession : public HttpSession {
     });
   }
 
+  void note_waiting() {
+    waiting_since_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                           std::chrono::steady_clock::now().time_since_epoch())
+                           .count();
+  }
+
   void close() {
     phase_ = Phase::closed;
     error_code ec;
@@ -611,6 +627,7 @@ class BasicHttpSession : public HttpSession {
 template <typename Stream>
 void BasicHttpSession<Stream>::dispatch() {
   phase_ = Phase::handler;
+  waiting_since_us = 0;
   HttpRequest request = plain_request(parser_->get());
   request.path = std::move(path_);
   request.query = std::move(query_);
@@ -635,12 +652,14 @@ void BasicHttpSession<Stream>::dispatch() {
   request.body = std::string();  // what the handler did not take of it
 }
 
-void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared) {
+void start_http_session(tcp::socket socket, std::shared_ptr<ServerShared> shared,
+                        const std::string& peer) {
   if (auto tls = shared->tls_context())
     return std::make_shared<BasicHttpSession<TlsStream>>(std::move(socket), std::move(shared),
                                                          std::move(tls))
-        ->start();
-  std::make_shared<BasicHttpSession<PlainStream>>(std::move(socket), std::move(shared))->start();
+        ->start(peer);
+  std::make_shared<BasicHttpSession<PlainStream>>(std::move(socket), std::move(shared))
+      ->start(peer);
 }
 
 void shut_down_sessions(ServerShared& shared) {
@@ -649,8 +668,8 @@ void shut_down_sessions(ServerShared& shared) {
   std::vector<std::shared_ptr<HttpSession>> open;
   {
     std::lock_guard lock(shared.mutex);
-    for (auto& [raw, weak] : shared.sessions)
-      if (auto session = weak.lock()) open.push_back(std::move(session));
+    for (auto& [raw, entry] : shared.sessions)
+      if (auto session = entry.session.lock()) open.push_back(std::move(session));
   }
   for (const auto& session : open) session->shut_down();
 }

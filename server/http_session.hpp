@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -31,6 +32,15 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   virtual void shut_down() = 0;
   // Delivers a handler's answer, from any thread.
   virtual void deliver(HttpResponse response) = 0;
+  // Closes it at once if it is still only waiting for a request (or for the rest of a
+  // request's header), as a full server takes the oldest such connection for a new one;
+  // otherwise it stays. From any thread.
+  virtual void evict() = 0;
+
+  // Since when (steady clock, microseconds) it has waited for a request or read one whose
+  // header is not complete yet; 0 while it serves one. Written on its strand, read by the
+  // listener.
+  std::atomic<std::int64_t> waiting_since_us{0};
 };
 
 // What every connection needs from the server that accepted it. Shared, because
@@ -51,8 +61,16 @@ struct ServerShared {
   std::atomic<std::size_t> connection_count{0};
 
   std::mutex mutex;
-  // The open sessions, so that stop() can reach the idle ones. Guarded by `mutex`.
-  std::unordered_map<const HttpSession*, std::weak_ptr<HttpSession>> sessions;
+  // The open sessions, so that stop() can reach the idle ones and a full server the oldest
+  // waiting one, and the connections open from each peer address. Guarded by `mutex`.
+  struct OpenSession {
+    std::weak_ptr<HttpSession> session;
+    std::string peer;
+    bool evicted = false;  // asked to close for a newer connection; no longer counted
+  };
+  std::unordered_map<const HttpSession*, OpenSession> sessions;
+  std::unordered_map<std::string, std::size_t> open_by_peer;  // not counting evicted ones
+  std::size_t open_counted = 0;                               // likewise
 
   // The TLS context new connections take (null: plain HTTP). A reload replaces it;
   // connections already open keep theirs.
@@ -69,8 +87,10 @@ struct ServerShared {
   std::shared_ptr<boost::asio::ssl::context> tls;  // guarded by `mutex`
 };
 
-// Serves `socket` (whose executor must be a strand of its own) until it closes.
-void start_http_session(boost::asio::ip::tcp::socket socket, std::shared_ptr<ServerShared> shared);
+// Serves `socket` (whose executor must be a strand of its own) until it closes. `peer` is
+// its remote address, as admit_connection() counted it.
+void start_http_session(boost::asio::ip::tcp::socket socket, std::shared_ptr<ServerShared> shared,
+                        const std::string& peer);
 
 // Asks every open session to close once its current request, if any, is answered.
 // Set shared.stopping first, so that sessions starting meanwhile close too.

@@ -7,6 +7,8 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/strand.hpp>
 
+#include "server/connection_admission.hpp"
+
 namespace tessera {
 
 namespace net = boost::asio;
@@ -60,7 +62,14 @@ void Listener::on_accept(const boost::system::error_code& ec, tcp::socket socket
     });
     return;
   }
-  start_http_session(std::move(socket), shared_);
+  // The address alone: one host's connections count together, whatever their ports.
+  boost::system::error_code peer_ec;
+  const auto endpoint = socket.remote_endpoint(peer_ec);
+  const std::string peer = peer_ec ? std::string() : endpoint.address().to_string();
+  if (admit_connection(*shared_, peer))
+    start_http_session(std::move(socket), shared_, peer);
+  else
+    refuse_connection(*shared_, socket, peer);
   do_accept();
 }
 

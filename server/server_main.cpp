@@ -27,6 +27,7 @@
 #include "server/api_routes.hpp"
 #include "server/asset_collector.hpp"
 #include "server/asset_store.hpp"
+#include "server/descriptor_limit.hpp"
 #include "server/event_hub.hpp"
 #include "server/farm_events.hpp"
 #include "server/http_metrics.hpp"
@@ -63,6 +64,8 @@ struct ServerOptions {
   std::string tls_cert;  // PEM; with tls_key, the coordinator speaks HTTPS
   std::string tls_key;
   std::vector<std::string> allowed_origins;
+  std::size_t max_connections = 0;           // 0: from the descriptor limit
+  std::size_t max_connections_per_peer = 0;  // likewise
 };
 
 // A refusal to start that the user can fix with a flag: exit status 2, like a usage error.
@@ -185,6 +188,8 @@ int run(const ServerOptions& options) {
   // one low-priority thread, not by a pool of OpenEXR threads competing with them.
   encode_images_on_calling_thread();
 
+  // Before anything opens a file: connections must leave the store its descriptors.
+  const DescriptorLimit descriptors = raise_descriptor_limit();
   Store store(options.data_dir);
   SystemClock clock;
   // Before the scheduler, whose store thread tells them of changes until it stops.
@@ -239,6 +244,16 @@ int run(const ServerOptions& options) {
       assets, scheduler, std::chrono::seconds(options.asset_retention_s));
 
   HttpServerOptions http;
+  const tessera::ConnectionCaps caps = connection_caps(descriptors.now);
+  http.max_connections = options.max_connections > 0 ? options.max_connections : caps.total;
+  http.max_connections_per_peer = options.max_connections_per_peer > 0
+                                      ? options.max_connections_per_peer
+                                      : std::min(caps.per_peer, http.max_connections);
+  spdlog::info("{} file descriptors{}: up to {} connections, {} from one address", descriptors.now,
+               descriptors.was < descriptors.now
+                   ? " (raised from " + std::to_string(descriptors.was) + ")"
+                   : std::string(),
+               http.max_connections, http.max_connections_per_peer);
   http.metrics = &http_metrics;
   http.address = host;
   http.port = port;
@@ -420,6 +435,12 @@ void add_limit_options(CLI::App& app, ServerOptions& options) {
       ->capture_default_str();
   app.add_option("--max-tracks", limits.max_tracks, "Most keyframe tracks in a scene")
       ->capture_default_str();
+  app.add_option("--max-connections", options.max_connections,
+                 "Most open connections (default: the descriptor limit less an eighth, at least "
+                 "64, kept for the store's files)");
+  app.add_option("--max-connections-per-peer", options.max_connections_per_peer,
+                 "Most open connections from one address (default: a quarter of "
+                 "--max-connections)");
   app.add_option("--max-job-bytes", options.max_job_bytes,
                  "Largest POST /v1/jobs body in bytes (larger: 413, from the headers)")
       ->capture_default_str()

@@ -104,6 +104,12 @@ TEST(DeploySystemd, TheServerUnitIsHardenedAndKeepsItsDataInItsStateDirectory) {
       << "--data-dir " << data_dir << " is not StateDirectory=" << state;
   EXPECT_EQ(test::flag_value(exec, "--local-workers").value_or(""), "0");
   expect_token_credentials(unit, name, {"--api-token-file", "--worker-token-file"});
+  // Its filter forbids setrlimit, so the unit itself must give it room for connections.
+  const std::string nofile = last(unit, "Service.LimitNOFILE");
+  EXPECT_FALSE(nofile.empty()) << name << ": no LimitNOFILE (the default 1024 is too few)";
+  if (!nofile.empty()) {
+    EXPECT_GE(std::stoul(nofile), 65536u) << name;
+  }
 }
 
 TEST(DeploySystemd, TheWorkerUnitIsHardenedAndHasTimeToStop) {
