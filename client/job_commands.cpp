@@ -44,7 +44,8 @@ struct Options {
   int priority = 50;
   bool wait = false;
   std::string output;
-  std::optional<std::string> frames;  // and get
+  std::optional<std::string> frames;       // and get
+  std::vector<std::string> allowed_paths;  // folders besides the scene's its files may be in
   // others
   std::string job;
   std::string state;
@@ -426,7 +427,10 @@ int submit(const Options& options, CoordinatorClient& api) {
     scene = parse_json_text(read_scene_text(options.scene_path));
     // Mistakes are reported with their JSON Pointer (and a mesh file's, with its line)
     // before anything is sent.
-    const FolderSceneFiles files(folder);
+    // What the scene names is sent to the farm: only files inside its folder, or an
+    // --allow-path, are read at all.
+    const FolderSceneFiles files(folder,
+                                 {options.allowed_paths.begin(), options.allowed_paths.end()});
     animation = parse_scene(scene, Limits{}, nullptr, &files).animation;
   } catch (const SceneError& e) {
     fail(kExitUsage, options.scene_path + ": " + e.what());
@@ -602,6 +606,9 @@ void add_submit_command(CLI::App& app, const SharedOptions& options) {
   submit_cmd->add_option("--priority", options->priority, "0..100, higher first (default 50)")
       ->check(CLI::Range(0, 100));
   submit_cmd->add_flag("--wait", options->wait, "Follow the job until it finishes");
+  submit_cmd->add_option("--allow-path", options->allowed_paths,
+                         "A folder whose files the scene may name and send besides its own "
+                         "folder's (repeat for more); nothing outside them is read");
   submit_cmd->add_option("--frames", options->frames,
                          "Frames of an animated scene: 1-48, 1-100x2 (every second), 1,5,10-20 "
                          "(default: all, or the first for an OUTPUT without #)");

@@ -37,13 +37,40 @@ Model read_model_file(const std::filesystem::path& path, const MeshFileRequest& 
   return read_model({path, request.file, path.parent_path(), &request, {}});
 }
 
+FolderSceneFiles::FolderSceneFiles(std::filesystem::path folder,
+                                   std::vector<std::filesystem::path> allowed)
+    : folder_(std::move(folder)), confined_(true) {
+  allowed.insert(allowed.begin(), folder_.empty() ? std::filesystem::path(".") : folder_);
+  for (const std::filesystem::path& root : allowed) {
+    std::error_code error;
+    const std::filesystem::path real = std::filesystem::weakly_canonical(root, error);
+    if (!error) roots_.push_back(real);
+  }
+}
+
+std::filesystem::path FolderSceneFiles::inside(const std::string& name) const {
+  const std::filesystem::path path = folder_ / name;
+  if (!confined_) return path;
+  // After every link: a link beside the scene that leads out of its folder leads out.
+  std::error_code error;
+  const std::filesystem::path real = std::filesystem::weakly_canonical(path, error);
+  if (!error)
+    for (const std::filesystem::path& root : roots_) {
+      const std::filesystem::path relative = real.lexically_relative(root);
+      if (!relative.empty() && *relative.begin() != "..") return path;
+    }
+  throw SceneFileError(name, "",
+                       "is outside the scene's folder; a scene sent to the farm names only files "
+                       "beside it or below it (--allow-path DIR allows the files under DIR too)");
+}
+
 Model FolderSceneFiles::load_model(const MeshFileRequest& request) const {
   if (request.asset) {
     throw SceneFileError(request.file, "",
                          "is an asset (sha256:...), which only the farm holds; name the file "
                          "itself with \"file\" to render here");
   }
-  return read_model_file(folder_ / request.file, request);
+  return read_model_file(inside(request.file), request);
 }
 
 TextureImage FolderSceneFiles::locate_texture(const TextureRequest& request) const {
@@ -52,7 +79,7 @@ TextureImage FolderSceneFiles::locate_texture(const TextureRequest& request) con
                          "is an asset (sha256:...), which only the farm holds; name the file "
                          "itself with \"texture\" to render here");
   }
-  const std::filesystem::path path = folder_ / request.file;
+  const std::filesystem::path path = inside(request.file);
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
     throw SceneFileError(request.file, "", "is not there (looked for " + path.string() + ")");

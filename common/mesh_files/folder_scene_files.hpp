@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <vector>
 
 #include "common/scene_files.hpp"
 
@@ -12,12 +13,23 @@ namespace tessera {
 
 class FolderSceneFiles : public SceneFiles {
  public:
+  // Reads whatever the scene names: for a scene rendered here, where the files go nowhere.
   explicit FolderSceneFiles(std::filesystem::path folder) : folder_(std::move(folder)) {}
+  // Reads only files inside `folder` or one of `allowed`, after links: for a scene whose
+  // files are sent on (tessera submit), so that a scene someone else wrote cannot send
+  // ~/.ssh/id_ed25519 to a farm as its "texture". A name outside them is refused before
+  // any of its bytes is read.
+  FolderSceneFiles(std::filesystem::path folder, std::vector<std::filesystem::path> allowed);
   Model load_model(const MeshFileRequest& request) const override;
   TextureImage locate_texture(const TextureRequest& request) const override;
 
  private:
+  // folder_ / name, once it is known to be inside the allowed folders (when confined).
+  std::filesystem::path inside(const std::string& name) const;
+
   std::filesystem::path folder_;
+  bool confined_ = false;
+  std::vector<std::filesystem::path> roots_;  // when confined: folder_, then `allowed`, real
 };
 
 // Mesh files as the farm has them: assets, files named by their SHA-256, which `locate`

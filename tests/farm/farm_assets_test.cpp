@@ -119,6 +119,71 @@ TEST(FarmAssets, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
 
 std::string asset_target(const std::string& digest) { return "/v1/assets/sha256:" + digest; }
 
+// A scene from elsewhere may name any file of the machine it is submitted from; only
+// those in its folder (or under an --allow-path) are read and sent. Each other name is
+// refused before a byte of it is read or anything is sent, naming the key.
+TEST(FarmAssets, SubmitSendsOnlyFilesInsideTheScenesFolder) {
+  Farm farm("assets-confined", 0);
+  const fs::path pack = farm.dir() / "pack";
+  const fs::path elsewhere = farm.dir() / "private";
+  write_texture(pack / "textures" / "ok.png", 1);
+  write_texture(elsewhere / "secret.png", 2);
+  fs::create_symlink(elsewhere / "secret.png", pack / "textures" / "link.png");
+  fs::create_symlink(elsewhere, pack / "textures" / "dir");
+  fs::copy_file(fs::path(TESSERA_SOURCE_DIR) / "examples" / "models" / "still_life.obj",
+                elsewhere / "model.obj");
+  fs::copy_file(fs::path(TESSERA_SOURCE_DIR) / "examples" / "models" / "still_life.mtl",
+                elsewhere / "still_life.mtl");
+  const nlohmann::json base = showcase(32, 24, 1, 16);
+  const auto scene_with = [&](const std::string& key, const std::string& name) {
+    nlohmann::json scene = base;
+    if (key == "texture")
+      scene["objects"][0]["material"] = {{"diffuse", {{"texture", name}}}};
+    else
+      scene["objects"].push_back({{"type", "mesh"}, {"file", name}});
+    const fs::path file = pack / ("scene-" + std::to_string(scene.dump().size()) + ".json");
+    write_text(file, scene.dump());
+    return file;
+  };
+  const std::vector<std::pair<std::string, std::string>> refused{
+      {"texture", "/etc/passwd"},           {"texture", (elsewhere / "secret.png").string()},
+      {"texture", "../private/secret.png"}, {"texture", "textures/../../private/secret.png"},
+      {"texture", "textures/link.png"},     {"texture", "textures/dir/secret.png"},
+      {"file", "../private/model.obj"},     {"file", (elsewhere / "model.obj").string()},
+  };
+  for (const auto& [key, name] : refused) {
+    const fs::path scene = scene_with(key, name);
+    const CliRun run = run_cli(farm.dir(), {"--server", farm.url(), "submit", scene.string()});
+    EXPECT_EQ(run.exit_code, 2) << name << ": " << run.output;
+    EXPECT_NE(run.output.find("outside the scene's folder"), std::string::npos)
+        << name << ": " << run.output;
+    const std::string pointer =
+        key == "texture" ? "/objects/0/material/diffuse/texture"
+                         : "/objects/" + std::to_string(base["objects"].size()) + "/file";
+    EXPECT_NE(run.output.find(pointer), std::string::npos) << name << ": " << run.output;
+  }
+  // Nothing reached the coordinator: no asset, no job, no request at all.
+  EXPECT_TRUE(farm.api().jobs("", 10)["jobs"].empty());
+  const auto stored_assets = [&] {
+    int files = 0;
+    if (fs::exists(farm.dir() / "data" / "assets"))
+      for (const auto& entry : fs::recursive_directory_iterator(farm.dir() / "data" / "assets"))
+        files += entry.is_regular_file();
+    return files;
+  };
+  EXPECT_EQ(stored_assets(), 0);
+  // Inside the folder, and under --allow-path, files go.
+  const CliRun inside = run_cli(farm.dir(), {"--server", farm.url(), "submit",
+                                             scene_with("texture", "textures/ok.png").string()});
+  EXPECT_EQ(inside.exit_code, 0) << inside.output;
+  const CliRun allowed =
+      run_cli(farm.dir(), {"--server", farm.url(), "submit", "--allow-path", elsewhere.string(),
+                           scene_with("texture", "../private/secret.png").string()});
+  EXPECT_EQ(allowed.exit_code, 0) << allowed.output;
+  EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+  EXPECT_EQ(stored_assets(), 2);
+}
+
 TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   Farm farm("farm-asset-routes", 0, {"--max-asset-bytes", "4096"});
   HttpClient http = farm.http(std::chrono::seconds(10));
