@@ -5,6 +5,14 @@
 
 namespace tessera {
 
+std::uint64_t tile_count(int width, int height, int tile_size) {
+  if (width <= 0 || height <= 0 || tile_size <= 0)
+    throw std::invalid_argument("tile_count: sizes must be positive");
+  const auto across = static_cast<std::uint64_t>((width + tile_size - 1) / tile_size);
+  const auto down = static_cast<std::uint64_t>((height + tile_size - 1) / tile_size);
+  return across * down;
+}
+
 std::vector<TileRect> split_into_tiles(int width, int height, int tile_size) {
   if (width <= 0 || height <= 0 || tile_size <= 0)
     throw std::invalid_argument("split_into_tiles: sizes must be positive");

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <utility>
@@ -25,6 +26,8 @@ struct TileRect {
 // Cuts a width×height image into tiles of edge `tile_size` (the last row and column are
 // smaller where the size does not divide), in row-major order.
 std::vector<TileRect> split_into_tiles(int width, int height, int tile_size);
+// How many tiles split_into_tiles() makes, without making them.
+std::uint64_t tile_count(int width, int height, int tile_size);
 
 // Linear float RGB, three floats per pixel, rows top to bottom.
 class Image {

@@ -23,6 +23,24 @@ HttpResponse invalid_request(const protocol::ProtocolError& error) {
   return error_response(400, "invalid_request", error.message(), error.pointer());
 }
 
+std::variant<std::size_t, HttpResponse> query_count(const HttpRequest& request,
+                                                    std::string_view name, std::size_t min,
+                                                    std::size_t max, std::size_t fallback) {
+  const auto it = request.query.find(std::string(name));
+  if (it == request.query.end()) return fallback;
+  const std::string& text = it->second;
+  std::size_t value = 0;
+  bool valid = !text.empty() && text.size() <= 12;
+  for (const char c : text) {
+    valid = valid && c >= '0' && c <= '9';
+    if (valid) value = value * 10 + static_cast<std::size_t>(c - '0');
+  }
+  if (valid && value >= min && value <= max) return value;
+  return error_response(400, "invalid_request",
+                        std::string(name) + " must be an integer from " + std::to_string(min) +
+                            " to " + std::to_string(max));
+}
+
 std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, double fallback_s) {
   double wait_s = fallback_s;
   if (auto it = request.query.find(std::string(protocol::query::wait_s));

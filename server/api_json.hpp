@@ -40,6 +40,11 @@ std::variant<T, HttpResponse> request_body(const HttpRequest& request) {
 
 // A long poll's ?wait_s= (0 to 60 seconds; `fallback` when absent), or nothing when it is
 // not such a number.
+// The query parameter `name` as a whole number from `min` to `max`, `fallback` when it is
+// absent; or the 400 that says what it must be.
+std::variant<std::size_t, HttpResponse> query_count(const HttpRequest& request,
+                                                    std::string_view name, std::size_t min,
+                                                    std::size_t max, std::size_t fallback);
 std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, double fallback_s);
 HttpResponse bad_wait();
 

@@ -53,17 +53,28 @@ void add_event_routes(Router& router, ApiContext& context) {
       "GET", std::string(route::job_tiles),
       [&context](HttpRequest&& request, Respond respond) {
         const std::string& id = request.params.at("id");
-        respond_durable(context.scheduler, std::move(respond), [&context, id] {
-          const auto tiles = context.scheduler.tiles(id);
-          if (!tiles) return error_response(404, "not_found", "no job " + id);
-          protocol::TileList list;
-          list.tiles.reserve(tiles->size());
-          for (const FarmObserver::TileChange& tile : *tiles) {
-            protocol::TileStatus& status = list.tiles.emplace_back();
-            status = tile_status(tile);
-          }
-          return body_response(200, list);
-        });
+        // A page at a time, so that a job of millions of tiles is never one answer of
+        // hundreds of megabytes.
+        const auto offset = query_count(request, protocol::query::offset, 0, 1'000'000'000, 0);
+        if (const auto* refused = std::get_if<HttpResponse>(&offset)) return respond(*refused);
+        const auto limit = query_count(request, protocol::query::limit, 1, protocol::kMaxTilesPage,
+                                       protocol::kMaxTilesPage);
+        if (const auto* refused = std::get_if<HttpResponse>(&limit)) return respond(*refused);
+        respond_durable(context.scheduler, std::move(respond),
+                        [&context, id, offset = std::get<std::size_t>(offset),
+                         limit = std::get<std::size_t>(limit)] {
+                          std::size_t total = 0;
+                          const auto tiles = context.scheduler.tiles(id, offset, limit, total);
+                          if (!tiles) return error_response(404, "not_found", "no job " + id);
+                          protocol::TileList list;
+                          list.tiles.reserve(tiles->size());
+                          for (const FarmObserver::TileChange& tile : *tiles)
+                            list.tiles.push_back(tile_status(tile));
+                          list.total = static_cast<std::int64_t>(total);
+                          const std::size_t next = std::min(offset, total) + tiles->size();
+                          if (next < total) list.next_offset = static_cast<std::int64_t>(next);
+                          return body_response(200, list);
+                        });
       },
       std::nullopt, role_client);
 }

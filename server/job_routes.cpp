@@ -87,10 +87,6 @@ HttpResponse scene_refused(const SceneError& e) {
                                              e.limit(), e.limit_value()}));
 }
 
-// The most tiles one job holds, every frame's: those of a 16384x16384 still at 8-pixel
-// tiles, the largest the default limits take.
-constexpr std::uint64_t kMaxJobTiles = (16384 / 8) * (16384 / 8);
-
 // The frames a submission renders: those it names, or every frame of an animation's range;
 // none for a still, which renders its one frame 0 (and may name it). A FrameListError says
 // what is wrong, and where in the list.
@@ -214,21 +210,29 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
     return answer(
         error_response(400, "invalid_request", std::string("/frames: ") + e.what(), "/frames"));
   }
-  // Each frame's tiles are kept in memory while the job lives: an animation may hold no
-  // more of them than the largest still the coordinator takes.
+  // Each frame's tiles are kept in memory while the job lives, within the scheduler's
+  // limits: of one job (--max-job-tiles), and of all of them (--job-memory-budget).
+  // A still has no frame list: its one frame 0.
+  const std::uint64_t frame_count = std::max<std::size_t>(1, frames.size());
   const std::uint64_t tiles =
-      frames.size() *
-      std::max<std::size_t>(
-          1, split_into_tiles(scene.width, scene.height, scene.render.tile_size).size());
-  if (tiles > kMaxJobTiles)
+      frame_count * tile_count(scene.width, scene.height, scene.render.tile_size);
+  const std::string tiles_path = frames.size() > 1 ? "/frames" : "/scene/render/tile_size";
+  const std::uint64_t max_tiles = context.scheduler.config().max_job_tiles;
+  if (max_tiles > 0 && tiles > max_tiles)
+    return answer(
+        json_response(422, protocol::to_json(protocol::Error{
+                               "over_limit",
+                               tiles_path + ": " + std::to_string(frames.size()) + " frame(s) of " +
+                                   std::to_string(tiles / std::max<std::size_t>(1, frames.size())) +
+                                   " tiles each are " + std::to_string(tiles) +
+                                   " tiles; a job holds at most " + std::to_string(max_tiles) +
+                                   " (--max-job-tiles): fewer frames, or a larger tile_size",
+                               tiles_path, "max_job_tiles", max_tiles})));
+  if (const std::optional<std::string> refusal = context.scheduler.job_memory_refusal(tiles))
     return answer(json_response(
-        422, protocol::to_json(protocol::Error{
-                 "over_limit",
-                 "/frames: " + std::to_string(frames.size()) + " frames of " +
-                     std::to_string(tiles / std::max<std::size_t>(1, frames.size())) +
-                     " tiles each are " + std::to_string(tiles) + " tiles; a job holds at most " +
-                     std::to_string(kMaxJobTiles) + " (fewer frames, or a larger tile_size)",
-                 "/frames", "max_job_tiles", kMaxJobTiles})));
+        422, protocol::to_json(protocol::Error{"over_limit", tiles_path + ": " + *refusal,
+                                               tiles_path, "job_memory_budget",
+                                               context.scheduler.config().job_memory_budget})));
   // The stored text is the scene's dump(), byte for byte: its digest is what workers ask
   // for, and the same scene sent twice is stored once.
   std::string scene_json = dump_scene(submission.scene, std::move(objects));
@@ -256,43 +260,23 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
       return error_response(400, "invalid_request",
                             "state must be " + protocol::names_of(protocol::kJobStateNames));
   }
-  std::size_t limit = 100;
-  if (auto it = request.query.find(std::string(protocol::query::limit));
-      it != request.query.end()) {
-    try {
-      std::size_t used = 0;
-      const long value = std::stol(it->second, &used);
-      if (used != it->second.size() || value < 1 || value > 1000) throw std::out_of_range("");
-      limit = static_cast<std::size_t>(value);
-    } catch (const std::exception&) {
-      return error_response(400, "invalid_request", "limit must be an integer from 1 to 1000");
-    }
-  }
-  std::size_t offset = 0;
-  if (auto it = request.query.find(std::string(protocol::query::offset));
-      it != request.query.end()) {
-    try {
-      std::size_t used = 0;
-      const long long value = std::stoll(it->second, &used);
-      if (used != it->second.size() || value < 0 || value > 1'000'000'000)
-        throw std::out_of_range("");
-      offset = static_cast<std::size_t>(value);
-    } catch (const std::exception&) {
-      return error_response(400, "invalid_request",
-                            "offset must be an integer from 0 to 1000000000");
-    }
-  }
+  const auto limit = query_count(request, protocol::query::limit, 1, 1000, 100);
+  if (const auto* refused = std::get_if<HttpResponse>(&limit)) return *refused;
+  const auto offset = query_count(request, protocol::query::offset, 0, 1'000'000'000, 0);
+  if (const auto* refused = std::get_if<HttpResponse>(&offset)) return *refused;
   protocol::JobList list;
   const std::int64_t now = context.clock.now_ms();
   // The jobs whose id begins so: how a client finds the job a short id names.
   if (auto it = request.query.find(std::string(protocol::query::id_prefix));
       it != request.query.end()) {
-    for (const std::string& id : context.scheduler.job_ids_with_prefix(it->second, limit))
+    for (const std::string& id :
+         context.scheduler.job_ids_with_prefix(it->second, std::get<std::size_t>(limit)))
       if (const auto job = context.scheduler.job(id); job && (!state || job->state == *state))
         list.jobs.push_back(status_of(*job, now));
     return body_response(200, list);
   }
-  for (const JobStatus& job : context.scheduler.jobs(state, limit, offset))
+  for (const JobStatus& job :
+       context.scheduler.jobs(state, std::get<std::size_t>(limit), std::get<std::size_t>(offset)))
     list.jobs.push_back(status_of(job, now));
   return body_response(200, list);
 }

@@ -134,6 +134,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       const std::string id = job->status.id;
       JobEntry& entry =
           *jobs_.emplace(id, std::make_unique<JobEntry>(std::move(*job))).first->second;
+      job_memory_ += entry.tiles.size() * kTileBytes;
       index_tiles(entry, std::move(order));
       const std::vector<std::shared_ptr<const Frame>> images = frames_of(entry);
       for (int slot = 0; slot < entry.frame_count(); ++slot)
@@ -152,6 +153,18 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
     for (const auto& callback : notify) callback();
     then(status, "");
   });
+}
+
+std::optional<std::string> Scheduler::job_memory_refusal(std::uint64_t tiles) const {
+  const std::uint64_t budget = config_.job_memory_budget;
+  const std::uint64_t held = job_memory_.load();
+  const std::uint64_t wanted = tiles * kTileBytes;
+  if (budget == 0 || held + wanted <= budget) return std::nullopt;
+  const auto mib = [](std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+  return "its " + std::to_string(tiles) + " tiles would take " + mib(wanted) +
+         " of the coordinator's memory beside the " + mib(held) +
+         " its jobs hold, more than --job-memory-budget (" + mib(budget) +
+         "); remove finished jobs (tessera rm), or render it in fewer, larger tiles";
 }
 
 std::optional<JobStatus> Scheduler::job(const std::string& id) const {
@@ -216,6 +229,7 @@ Pending<RemoveOutcome> Scheduler::remove(const std::string& id) {
       });
   // A finished job holds no leases; only its delivered lease ids are indexed.
   for (int index = 0; index < job->status.tiles_total; ++index) track_tile(*job, index, -1);
+  job_memory_ -= job->tiles.size() * kTileBytes;
   jobs_.erase(id);
   return pending(RemoveOutcome::removed, before);
 }

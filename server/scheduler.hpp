@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -194,6 +195,16 @@ class Scheduler {
   // Every tile of the job as the observer tells them (without pixels), in index order;
   // nothing when there is no such job.
   std::optional<std::vector<FarmObserver::TileChange>> tiles(const std::string& job_id) const;
+  // At most `limit` of them from index `offset` on, and how many the job has: a page of
+  // bounded memory, whatever the job's size.
+  std::optional<std::vector<FarmObserver::TileChange>> tiles(const std::string& job_id,
+                                                             std::size_t offset, std::size_t limit,
+                                                             std::size_t& total) const;
+  // Why a new job of `tiles` tiles does not fit config().job_memory_budget beside the jobs
+  // held now (their tiles reckoned at kTileBytes each); nothing when it fits.
+  std::optional<std::string> job_memory_refusal(std::uint64_t tiles) const;
+  // The jobs' tiles as reckoned for the budget, in bytes.
+  std::uint64_t job_memory() const { return job_memory_.load(); }
   // Before what the callbacks use goes away (the server's long polls): drops them, then
   // waits for the work still in flight to be done.
   void stop_notifying();
@@ -376,9 +387,11 @@ class Scheduler {
   Pending<ControlOutcome> control_job(const std::string& id, Change change_job);
   void tell_observer(const Observed& observed, StoreTicket ticket);
   FarmObserver::TileChange tile_change(const JobEntry& job, int index) const;
-  StoreTicket last_write_ = 0;
-  std::atomic<std::uint64_t> refusals_{
-      0};  // see refusals()  // the ticket of the last write queued by queue_write()
+  StoreTicket last_write_ = 0;              // the ticket of the last write queued by queue_write()
+  std::atomic<std::uint64_t> refusals_{0};  // see refusals()
+  std::atomic<std::uint64_t> job_memory_{0};  // see job_memory(); changed under the lock
+  // During start-up: the unfinished jobs left without tiles by the budget, and why.
+  std::map<std::string, std::string> not_loaded_;
   // After what its callbacks use, so that it finishes them first when destroyed.
   mutable StoreThread store_thread_;
   // After the store thread, which its image thread uses until it has stopped.

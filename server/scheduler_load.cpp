@@ -7,6 +7,8 @@
 #include <set>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "server/scheduler.hpp"
 #include "server/scheduler_entries.hpp"
 
@@ -114,15 +116,36 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
   }
 
   // A job's tiles follow from its size and frames; each is pending unless the store says
-  // otherwise.
-  for (auto& [id, job] : jobs_) {
-    const JobStatus& s = job->status;
+  // otherwise. Oldest first, within the budget: a store that holds more than today's budget
+  // (lowered since, or filled by an older release) must not keep the coordinator from
+  // starting. A job that does not fit holds no tiles; an unfinished one fails, saying why.
+  std::vector<JobEntry*> oldest_first;
+  for (auto& [id, job] : jobs_) oldest_first.push_back(job.get());
+  std::sort(oldest_first.begin(), oldest_first.end(), [](const JobEntry* a, const JobEntry* b) {
+    return a->status.created_at_ms < b->status.created_at_ms;
+  });
+  for (JobEntry* job : oldest_first) {
+    JobStatus& s = job->status;
     if (s.width <= 0 || s.height <= 0 || s.tile_size <= 0) continue;  // fails below: no tiles
+    const std::uint64_t per_frame = tile_count(s.width, s.height, s.tile_size);
+    const std::uint64_t count = per_frame * s.frames->numbers.size();
+    std::optional<std::string> refusal;
+    if (config_.max_job_tiles > 0 && count > config_.max_job_tiles)
+      refusal = "its " + std::to_string(count) + " tiles are more than --max-job-tiles (" +
+                std::to_string(config_.max_job_tiles) + ")";
+    else
+      refusal = job_memory_refusal(count);
+    if (refusal) {
+      spdlog::error("job {} ({}): not loaded at start: {}", s.id, s.name, *refusal);
+      if (!is_finished(s.state)) not_loaded_[s.id] = "not loaded at start: " + *refusal;
+      continue;
+    }
     const std::vector<TileRect> rects = split_into_tiles(s.width, s.height, s.tile_size);
     job->tiles_per_frame = static_cast<int>(rects.size());
     job->tiles.resize(rects.size() * s.frames->numbers.size());
     for (std::size_t i = 0; i < job->tiles.size(); ++i)
       job->tiles[i].rect = rects[i % rects.size()];
+    job_memory_ += job->tiles.size() * kTileBytes;
   }
   return unknown_state;
 }
@@ -248,7 +271,8 @@ void Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {
       if (job.status.tiles_total == 0) {
         JobStatus& s = change.job(job);
         s.state = JobState::failed;
-        s.error = "the job has no tiles";
+        const auto reason = not_loaded_.find(id);
+        s.error = reason != not_loaded_.end() ? reason->second : "the job has no tiles";
         s.finished_at_ms = now;
       } else if (done == job.status.tiles_total) {
         JobStatus& s = change.job(job);

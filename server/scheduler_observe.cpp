@@ -33,6 +33,23 @@ std::optional<std::vector<FarmObserver::TileChange>> Scheduler::tiles(
   return tiles;
 }
 
+std::optional<std::vector<FarmObserver::TileChange>> Scheduler::tiles(const std::string& job_id,
+                                                                      std::size_t offset,
+                                                                      std::size_t limit,
+                                                                      std::size_t& total) const {
+  std::lock_guard lock(mutex_);
+  const JobEntry* job = find_job(job_id);
+  if (!job) return std::nullopt;
+  total = job->tiles.size();
+  const std::size_t first = std::min(offset, total);
+  const std::size_t end = first + std::min(limit, total - first);
+  std::vector<FarmObserver::TileChange> tiles;
+  tiles.reserve(end - first);
+  for (std::size_t index = first; index < end; ++index)
+    tiles.push_back(tile_change(*job, static_cast<int>(index)));
+  return tiles;
+}
+
 FarmObserver::TileChange Scheduler::tile_change(const JobEntry& job, int index) const {
   const TileSlot& tile = job.tiles[index];
   FarmObserver::TileChange change;

@@ -45,7 +45,18 @@ struct SchedulerConfig {
   // A worker that left, or has not been heard from, for this long leaves the worker list
   // and the store; 0: never.
   std::int64_t forget_workers_after_ms = 60 * 60 * 1000;
+  // What the jobs' tiles may cost the coordinator's memory together, as reckoned by
+  // kTileBytes a tile, from submission until the job is removed; a submission past it is
+  // refused, and a start finds the jobs past it failed, not loaded. 0: no limit.
+  std::uint64_t job_memory_budget = std::uint64_t{2} << 30;
+  // The most tiles of one job, every frame's: those of a 16384x16384 still at 8-pixel tiles.
+  std::uint64_t max_job_tiles = (16384 / 8) * (16384 / 8);
 };
+
+// What one tile of a job costs the coordinator's memory, reckoned for job_memory_budget: its
+// state, its place in the hand-out order and the pending set (docs/performance.md,
+// "Coordinator memory per tile", measured 250 bytes).
+inline constexpr std::uint64_t kTileBytes = 256;
 
 // Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
 // that renders the same tiles again and again, or delivers nothing, must be seen as such.

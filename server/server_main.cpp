@@ -64,6 +64,8 @@ struct ServerOptions {
   std::string tls_cert;  // PEM; with tls_key, the coordinator speaks HTTPS
   std::string tls_key;
   std::vector<std::string> allowed_origins;
+  std::uint64_t job_memory_budget = tessera::SchedulerConfig{}.job_memory_budget;
+  std::uint64_t max_job_tiles = tessera::SchedulerConfig{}.max_job_tiles;
   std::size_t max_connections = 0;           // 0: from the descriptor limit
   std::size_t max_connections_per_peer = 0;  // likewise
 };
@@ -147,6 +149,8 @@ tessera::SchedulerConfig scheduler_config(const ServerOptions& options) {
   config.max_tile_handouts = options.max_tile_handouts;
   config.stall_timeout_ms = static_cast<std::int64_t>(options.stall_timeout_s * 1000);
   config.forget_workers_after_ms = static_cast<std::int64_t>(options.forget_workers_after_s * 1000);
+  config.job_memory_budget = options.job_memory_budget;
+  config.max_job_tiles = options.max_job_tiles;
   return config;
 }
 
@@ -434,6 +438,13 @@ void add_limit_options(CLI::App& app, ServerOptions& options) {
   app.add_option("--max-frames", limits.max_frames, "Most frames in an animated scene")
       ->capture_default_str();
   app.add_option("--max-tracks", limits.max_tracks, "Most keyframe tracks in a scene")
+      ->capture_default_str();
+  app.add_option("--job-memory-budget", options.job_memory_budget,
+                 "Bytes of memory the jobs' tiles may take together, reckoned at 256 a tile "
+                 "(0: no limit); a job past it is refused, and at start is not loaded")
+      ->capture_default_str();
+  app.add_option("--max-job-tiles", options.max_job_tiles,
+                 "Most tiles of one job, every frame's (0: no limit)")
       ->capture_default_str();
   app.add_option("--max-connections", options.max_connections,
                  "Most open connections (default: the descriptor limit less an eighth, at least "

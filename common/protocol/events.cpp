@@ -45,13 +45,19 @@ json to_json(const TileStatus& tile) {
 }
 
 TileList TileList::read(const FieldReader& body) {
-  return {read_array<TileStatus>(body, "tiles", &TileStatus::read)};
+  TileList list;
+  list.tiles = read_array<TileStatus>(body, "tiles", &TileStatus::read);
+  list.total = body.integer("total", 0);
+  list.next_offset = body.nullable_integer("next_offset");
+  return list;
 }
 
 json to_json(const TileList& list) {
   json tiles = json::array();
   for (const TileStatus& tile : list.tiles) tiles.push_back(to_json(tile));
-  return {{"tiles", std::move(tiles)}};
+  return {{"tiles", std::move(tiles)},
+          {"total", list.total},
+          {"next_offset", list.next_offset ? json(*list.next_offset) : json()}};
 }
 
 WorkerEvent WorkerEvent::read(const FieldReader& body) {

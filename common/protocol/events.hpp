@@ -56,8 +56,14 @@ struct TileStatus {
 };
 nlohmann::json to_json(const TileStatus& tile);
 
+// The most tiles one GET /v1/jobs/{id}/tiles answers, and what it answers unasked.
+inline constexpr std::size_t kMaxTilesPage = 10'000;
+
+// A page of a job's tiles: from the query's offset on, in index order.
 struct TileList {
   std::vector<TileStatus> tiles;
+  std::int64_t total = 0;                   // the job's tiles, every frame's
+  std::optional<std::int64_t> next_offset;  // the next page's offset; none after the last
 
   static TileList read(const FieldReader& body);
 };

@@ -1439,10 +1439,16 @@ function jobView(main, id) {
   async function loadTiles() {
     tilesLoading = true;
     try {
-      const list = await api('GET', jobPath(id, '/tiles'));
-      if (view.gone) return;
-      tiles = [];
-      for (const tile of list.tiles ?? []) tiles[tile.index] = tile;
+      // A page at a time: a job of millions of tiles is never one answer.
+      const loaded = [];
+      let offset = 0;
+      while (offset !== null && offset !== undefined) {
+        const list = await api('GET', jobPath(id, `/tiles?offset=${offset}`));
+        if (view.gone) return;
+        for (const tile of list.tiles ?? []) loaded[tile.index] = tile;
+        offset = list.next_offset;
+      }
+      tiles = loaded;
       shownTiles = null;
       tilesKnown = true;
     } catch (error) {

@@ -232,7 +232,7 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
   check(api, api.schema("TileStatus"), full_tile());
   check(api, api.schema("FrameStatus"), full_frame());
   check(api, api.response("/v1/jobs/{id}/frames", "get", "200"), FrameList{{full_frame()}});
-  check(api, api.response("/v1/jobs/{id}/tiles", "get", "200"), TileList{{full_tile()}});
+  check(api, api.response("/v1/jobs/{id}/tiles", "get", "200"), TileList{{full_tile()}, 2, 1});
   check(api, event_data(api, "/v1/events", "worker"),
         WorkerEvent{WorkerChange::joined, full_worker()});
   check(api, event_data(api, "/v1/events", "resync"), Resync{"fell behind"});
