@@ -566,6 +566,12 @@ int run(const std::function<int(CoordinatorClient&)>& command, const Options& op
           (e.from_gateway() ? " (a proxy in front of a coordinator it cannot reach?)" : ""));
       return e.from_gateway() ? kExitUnreachable : kExitJobFailed;
     }
+    // The one thing to do about it, rather than the route's words.
+    if (e.code() == "missing_token") {
+      say("the server at " + url +
+          " needs an API token: set TESSERA_API_TOKEN, or pass --token-file FILE (or --token)");
+      return kExitJobFailed;  // refused, as any other refusal
+    }
     // http:// to a coordinator's TLS port: as a TLS failure.
     if (e.code() == "tls_required" || e.code() == "tls_not_served") {
       say("the server at " + url + " answered: " + e.what());

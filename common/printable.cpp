@@ -37,11 +37,24 @@ std::size_t utf8_sequence(std::string_view text) {
   return length;
 }
 
+// The bidirectional formatting characters, which reorder how the text around them is shown
+// (U+202E turns "evil\u202Egnp.exe" into what reads as "evilexe.png"): U+061C, U+200E and
+// U+200F, U+202A to U+202E, U+2066 to U+2069.
+bool is_bidi_control(std::string_view sequence) {
+  const auto at = [&](std::size_t i) { return static_cast<std::uint8_t>(sequence[i]); };
+  if (sequence.size() == 2) return at(0) == 0xd8 && at(1) == 0x9c;
+  if (sequence.size() != 3 || at(0) != 0xe2) return false;
+  if (at(1) == 0x80) return at(2) == 0x8e || at(2) == 0x8f || (at(2) >= 0xaa && at(2) <= 0xae);
+  return at(1) == 0x81 && at(2) >= 0xa6 && at(2) <= 0xa9;
+}
+
 bool is_control(std::string_view sequence) {
   const auto lead = static_cast<std::uint8_t>(sequence[0]);
   if (sequence.size() == 1) return lead < 0x20 || lead == 0x7f;
   // U+0080 to U+009F, the C1 controls, are C2 80 to C2 9F.
-  return sequence.size() == 2 && lead == 0xc2 && static_cast<std::uint8_t>(sequence[1]) <= 0x9f;
+  if (sequence.size() == 2 && lead == 0xc2 && static_cast<std::uint8_t>(sequence[1]) <= 0x9f)
+    return true;
+  return is_bidi_control(sequence);
 }
 
 void append_escaped(std::string& out, std::uint8_t byte) {
@@ -72,6 +85,10 @@ std::string printable(std::string_view text) {
     text.remove_prefix(length);
   }
   return out;
+}
+
+std::string control_sequence_at(std::string_view text, std::size_t at) {
+  return printable(text.substr(at, std::max<std::size_t>(1, utf8_sequence(text.substr(at)))));
 }
 
 std::size_t find_control_character(std::string_view text) {

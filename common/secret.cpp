@@ -1,5 +1,8 @@
 #include "common/secret.hpp"
 
+#include <sys/stat.h>
+
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -29,6 +32,16 @@ std::string resolve_secret(const std::string& value, const std::string& file, co
       throw std::runtime_error("the " + what +
                                " must not contain white space or control characters");
   return secret;
+}
+
+std::string loose_secret_file(const std::string& file, const std::string& what) {
+  struct stat status {};
+  if (file.empty() || ::stat(file.c_str(), &status) != 0) return "";
+  if ((status.st_mode & (S_IRWXG | S_IRWXO)) == 0) return "";
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(status.st_mode & 07777));
+  return "the " + what + " file " + file + " may be read by others than its owner (mode " + mode +
+         "): chmod 600 " + file;
 }
 
 }  // namespace tessera

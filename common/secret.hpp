@@ -13,4 +13,8 @@ namespace tessera {
 std::string resolve_secret(const std::string& value, const std::string& file, const char* env,
                            const std::string& what);
 
+// What to warn of a secret's file that others than its owner may read (its mode grants the
+// group or everyone any access): "" when it is private, or when there is no file.
+std::string loose_secret_file(const std::string& file, const std::string& what);
+
 }  // namespace tessera

@@ -48,13 +48,22 @@ bool AccessPolicy::protects(std::string_view role) const {
   return false;
 }
 
+namespace {
+
+// How a role's token is named to people: the client role's is the API token.
+std::string token_name(std::string_view role) {
+  return role == role_client ? "API token" : std::string(role) + " token";
+}
+
+}  // namespace
+
 std::optional<HttpResponse> AccessPolicy::check(std::string_view role,
                                                 std::string_view authorization) const {
   if (!protects(role)) return std::nullopt;
   const auto token = bearer_token(authorization);
   if (!token)
-    return unauthorized("missing_token", std::string("this route needs the ") + std::string(role) +
-                                             " token: send Authorization: Bearer TOKEN");
+    return unauthorized("missing_token", "this route needs the " + token_name(role) +
+                                             ": send Authorization: Bearer TOKEN");
   const std::string digest = sha256_hex(*token);
   if (role == role_metrics) {
     if (same_digest(digest, metrics_digest_)) return std::nullopt;
@@ -65,9 +74,8 @@ std::optional<HttpResponse> AccessPolicy::check(std::string_view role,
   if (same_digest(digest, wanted)) return std::nullopt;
   if (!other.empty() && same_digest(digest, other))
     return error_response(403, "wrong_role",
-                          std::string("the ") + (role == role_client ? "worker" : "client") +
-                              " token cannot be used here; this route needs the " +
-                              std::string(role) + " token");
+                          "the " + token_name(role == role_client ? role_worker : role_client) +
+                              " cannot be used here; this route needs the " + token_name(role));
   return unauthorized("invalid_token", "the token is not valid for this server");
 }
 

@@ -279,7 +279,7 @@ class BasicHttpSession : public HttpSession {
     if (auto refused =
             shared_->options.authorize(route_.role, head.field("authorization").value_or("")))
       return send(std::move(*refused), body_follows || !keep_alive_);
-    if (auto refused = browser_problem(shared_->options.origins, head, route_.content_type))
+    if (auto refused = browser_problem(shared_->options.origins, head, route_.content_type, kTls))
       return send(std::move(*refused), body_follows || !keep_alive_);
 
     auto query = parse_query(question == std::string_view::npos ? std::string_view()

@@ -28,7 +28,7 @@ bool is_loopback_name(std::string_view host) {
 }  // namespace
 
 std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::string_view host,
-                                           std::optional<std::string_view> origin) {
+                                           std::optional<std::string_view> origin, bool tls) {
   if (policy.loopback_hosts_only && !is_loopback_name(host))
     return error_response(
         403, "host_refused",
@@ -39,8 +39,14 @@ std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::stri
   if (!origin) return std::nullopt;
   const std::string seen = lower_ascii(trim_ows(*origin));
   const std::size_t scheme_end = seen.find("://");
-  if (scheme_end != std::string::npos && seen.substr(scheme_end + 3) == lower_ascii(host))
-    return std::nullopt;  // the server's own pages
+  // The server's own pages: of its own host and port, and of its own scheme. A plain
+  // server's pages may come as https:// too, through a TLS proxy in front of it; a TLS
+  // server's never come over plain http://, where a network attacker could write them.
+  const std::string_view scheme = std::string_view(seen).substr(0, scheme_end);
+  const bool own_scheme = scheme == "https" || (!tls && scheme == "http");
+  if (scheme_end != std::string::npos && own_scheme &&
+      seen.substr(scheme_end + 3) == lower_ascii(host))
+    return std::nullopt;
   for (const std::string& allowed : policy.allowed_origins)
     if (iequals_ascii(allowed, seen)) return std::nullopt;
   return error_response(403, "origin_refused",
@@ -62,8 +68,9 @@ std::optional<HttpResponse> content_type_problem(std::string_view method, std::s
 }
 
 std::optional<HttpResponse> browser_problem(const OriginPolicy& policy, const RequestHead& head,
-                                            std::string_view wanted) {
-  if (auto refused = origin_problem(policy, head.field("host").value_or(""), head.field("origin")))
+                                            std::string_view wanted, bool tls) {
+  if (auto refused =
+          origin_problem(policy, head.field("host").value_or(""), head.field("origin"), tls))
     return refused;
   return content_type_problem(head.method, wanted, head.field("content-type").value_or(""));
 }

@@ -22,11 +22,13 @@ struct OriginPolicy {
   bool loopback_hosts_only = false;
 };
 
-// 403 for an Origin that is neither the server's own (its authority is the request's Host)
-// nor allowed, or for a Host that is not loopback where only those are answered. No Origin
-// (a program, not a page) is fine. nullopt: the request may go on.
+// 403 for an Origin that is neither the server's own (its authority is the request's Host,
+// its scheme the server's: https for a server speaking TLS (`tls`), http or https, through
+// a TLS proxy, for a plain one) nor allowed, or for a Host that is not loopback where only
+// those are answered. No Origin (a program, not a page) is fine. nullopt: the request may
+// go on.
 std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::string_view host,
-                                           std::optional<std::string_view> origin);
+                                           std::optional<std::string_view> origin, bool tls);
 
 // 415 when a request that changes state (POST, PUT, PATCH) does not say its body is of the
 // route's `wanted` media type ("": any). A browser may send a form or text/plain to any site
@@ -36,6 +38,6 @@ std::optional<HttpResponse> content_type_problem(std::string_view method, std::s
 
 // Both, for a request to a route that takes `wanted`.
 std::optional<HttpResponse> browser_problem(const OriginPolicy& policy, const RequestHead& head,
-                                            std::string_view wanted);
+                                            std::string_view wanted, bool tls);
 
 }  // namespace tessera

@@ -126,6 +126,11 @@ tessera::AccessTokens checked_tokens(const ServerOptions& options, const std::st
                      "worker token"),
       resolve_secret(options.metrics_token, options.metrics_token_file, "TESSERA_METRICS_TOKEN",
                      "metrics token")};
+  for (const auto& [file, what] : {std::pair{options.api_token_file, "API token"},
+                                   std::pair{options.worker_token_file, "worker token"},
+                                   std::pair{options.metrics_token_file, "metrics token"}})
+    if (const std::string loose = loose_secret_file(file, what); !loose.empty())
+      spdlog::warn("{}", loose);
   if (!is_loopback(host) && (tokens.client.empty() || tokens.worker.empty()) && !options.insecure)
     throw StartRefused(
         "refusing to listen on " + host +

@@ -49,6 +49,7 @@ TileList TileList::read(const FieldReader& body) {
   list.tiles = read_array<TileStatus>(body, "tiles", &TileStatus::read);
   list.total = body.integer("total", 0);
   list.next_offset = body.nullable_integer("next_offset");
+  if (list.next_offset && *list.next_offset < 0) body.fail("next_offset", "must be at least 0");
   return list;
 }
 

@@ -43,7 +43,7 @@ std::string read_name(const FieldReader& body, std::string_view key) {
   // A name is shown in lists, terminals and logs: it may not hold what would steer them.
   if (const std::size_t at = find_control_character(name); at != std::string::npos)
     body.fail(key, "must not hold control characters; byte " + std::to_string(at) + " is " +
-                       printable(name.substr(at, 1 + (name[at] == '\xc2'))));
+                       control_sequence_at(name, at));
   return name;
 }
 

@@ -34,6 +34,11 @@ std::vector<std::string> token_args(const fs::path& dir) {
   fs::create_directories(dir);
   test::write_text(dir / "api.token", api_token + "\n");
   test::write_text(dir / "worker.token", worker_token + "\n");
+  // The API token's file private, as the README's recipe makes it; the worker token's left
+  // as a careless user leaves it (0644), which the coordinator warns of.
+  fs::permissions(dir / "api.token", fs::perms::owner_read | fs::perms::owner_write);
+  fs::permissions(dir / "worker.token", fs::perms::owner_read | fs::perms::owner_write |
+                                            fs::perms::group_read | fs::perms::others_read);
   return {"--api-token-file", (dir / "api.token").string(), "--worker-token-file",
           (dir / "worker.token").string()};
 }
@@ -153,6 +158,12 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   const fs::path secrets = test::fresh_dir("auth-render-secrets");
   Farm farm("auth-render", 1, token_args(secrets));
   farm.use_api_token(api_token);
+  const std::string log = test::read_text(farm.dir() / "server.log");
+  EXPECT_NE(log.find("the worker token file " + (secrets / "worker.token").string() +
+                     " may be read by others than its owner (mode 0644): chmod 600"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("the API token file"), std::string::npos) << log;
   // An external worker with its token in a file, and one with a wrong token.
   test::write_text(secrets / "wrong.token", "not-the-token\n");
   auto outsider = std::make_unique<test::Process>(
@@ -191,6 +202,9 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   // The CLI takes the API token from the environment too, and without it is refused.
   const test::CliRun without = test::run_cli(farm.dir(), {"--server", farm.url(), "list"});
   EXPECT_EQ(without.exit_code, 1) << without.output;
+  EXPECT_NE(without.output.find("needs an API token: set TESSERA_API_TOKEN, or pass --token-file"),
+            std::string::npos)
+      << without.output;
   ::setenv("TESSERA_API_TOKEN", api_token.c_str(), 1);
   const test::CliRun with = test::run_cli(farm.dir(), {"--server", farm.url(), "list"});
   ::unsetenv("TESSERA_API_TOKEN");

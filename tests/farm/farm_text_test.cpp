@@ -30,6 +30,14 @@ const std::vector<std::pair<const char*, std::string>> kControlNames = {
      "render\xc2\x9b"
      "31m"},
     {"NUL", std::string("render\0x", 8)},
+    // Or reorder what is shown around them: "evil\u202Egnp.exe" reads as "evilexe.png".
+    {"RIGHT-TO-LEFT OVERRIDE (U+202E)", "evil\xe2\x80\xaegnp.exe"},
+    {"RIGHT-TO-LEFT ISOLATE (U+2067)",
+     "a\xe2\x81\xa7"
+     "b"},
+    {"ARABIC LETTER MARK (U+061C)",
+     "a\xd8\x9c"
+     "b"},
 };
 
 TEST(FarmText, NamesWithControlCharactersAreRefusedWithTheirPointer) {

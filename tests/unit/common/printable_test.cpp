@@ -28,6 +28,20 @@ TEST(Printable, SpellsOutEveryControlCharacter) {
   EXPECT_EQ(find_control_character(std::string("\0", 1)), 0u);
 }
 
+TEST(Printable, SpellsOutTheBidirectionalFormattingCharacters) {
+  // U+202E RIGHT-TO-LEFT OVERRIDE would show "evil\u202Egnp.exe" as "evilexe.png".
+  EXPECT_EQ(printable("evil\xe2\x80\xaegnp.exe"), "evil\\xe2\\x80\\xaegnp.exe");
+  for (const char* bidi : {"\xd8\x9c", "\xe2\x80\x8e", "\xe2\x80\x8f", "\xe2\x80\xaa",
+                           "\xe2\x80\xab", "\xe2\x80\xac", "\xe2\x80\xad", "\xe2\x80\xae",
+                           "\xe2\x81\xa6", "\xe2\x81\xa7", "\xe2\x81\xa8", "\xe2\x81\xa9"}) {
+    EXPECT_EQ(find_control_character(std::string("ab") + bidi), 2u) << printable(bidi);
+    EXPECT_EQ(control_sequence_at(std::string("ab") + bidi, 2), printable(bidi));
+  }
+  // Their neighbours are ordinary text: U+2010 (hyphen), U+2065, U+206A and Arabic letters.
+  EXPECT_EQ(find_control_character("\xe2\x80\x90\xe2\x81\xa5\xe2\x81\xaa\xd8\xa7"),
+            std::string::npos);
+}
+
 TEST(Printable, SpellsOutBytesThatAreNotUtf8) {
   EXPECT_EQ(printable("\xff"), "\\xff");
   EXPECT_EQ(printable("\xc0\xaf"), "\\xc0\\xaf");                    // an overlong '/'

@@ -14,7 +14,7 @@
 namespace tessera {
 namespace {
 
-const AccessPolicy both(AccessTokens{"client-secret", "worker-secret"});
+const AccessPolicy both(AccessTokens{"client-secret", "worker-secret", ""});
 
 int status_of(const AccessPolicy& policy, const char* role, const char* authorization) {
   const auto refused = policy.check(role, authorization);
@@ -48,13 +48,18 @@ TEST(Access, RefusalsSayWhatIsWrongInTheErrorShapeAndChallenge) {
   const auto other = both.check(role_worker, "Bearer client-secret");
   ASSERT_TRUE(other);
   EXPECT_NE(other->body.find("\"wrong_role\""), std::string::npos) << other->body;
+  // The client role's token is named as people know it.
+  EXPECT_NE(missing->body.find("needs the API token"), std::string::npos) << missing->body;
+  EXPECT_NE(other->body.find("the API token cannot be used here"), std::string::npos)
+      << other->body;
+  EXPECT_EQ(missing->body.find("client token"), std::string::npos) << missing->body;
   // No answer echoes a token.
   for (const auto& refused : {missing, invalid, other})
     EXPECT_EQ(refused->body.find("secret"), std::string::npos) << refused->body;
 }
 
 TEST(Access, ARoleWithoutATokenIsOpen) {
-  const AccessPolicy workers_only(AccessTokens{"", "worker-secret"});
+  const AccessPolicy workers_only(AccessTokens{"", "worker-secret", ""});
   EXPECT_FALSE(workers_only.protects(role_client));
   EXPECT_TRUE(workers_only.protects(role_worker));
   EXPECT_EQ(status_of(workers_only, role_client, ""), 0);

@@ -12,6 +12,7 @@
 #include <boost/asio/io_context.hpp>
 
 #include "server/http_server.hpp"
+#include "server/origin_policy.hpp"
 #include "server/router.hpp"
 #include "tests/unit/server/raw_connection.hpp"
 
@@ -64,6 +65,21 @@ class HttpOriginTest : public ::testing::Test {
   std::thread thread_;
   std::string last_;
 };
+
+TEST(OriginPolicy, TheServersOwnPagesAreOfItsSchemeToo) {
+  const OriginPolicy none;
+  const auto refused = [&](const char* origin, bool tls) {
+    return origin_problem(none, "farm.example:8640", origin, tls).has_value();
+  };
+  EXPECT_FALSE(refused("http://farm.example:8640", false));
+  EXPECT_FALSE(refused("https://farm.example:8640", false));  // through a TLS proxy
+  EXPECT_FALSE(refused("https://farm.example:8640", true));
+  // A TLS server's pages never come over plain HTTP, which anyone on the way could write.
+  EXPECT_TRUE(refused("http://farm.example:8640", true));
+  EXPECT_TRUE(refused("ftp://farm.example:8640", false));
+  EXPECT_TRUE(refused("farm.example:8640", false));
+  EXPECT_TRUE(refused("https://farm.example:8641", true));
+}
 
 TEST_F(HttpOriginTest, ChangesNeedTheRoutesContentType) {
   start({});
