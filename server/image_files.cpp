@@ -1,5 +1,7 @@
 #include "server/image_files.hpp"
 
+#include <stdexcept>
+
 #include <system_error>
 
 #include "common/image_io.hpp"
@@ -18,7 +20,17 @@ std::filesystem::path ImageFiles::path(const std::string& job_id) const {
 void ImageFiles::write(const std::string& job_id, const Image& image) const {
   // RLE: the coordinator writes a file per frame, often on the cores its workers render
   // on, and ZIP took six times as long (ExrCompression).
-  write_image(image, path(job_id), OutputTransfer::linear, ExrCompression::rle);
+  try {
+    write_image(image, path(job_id), OutputTransfer::linear, ExrCompression::rle);
+  } catch (const std::exception& e) {
+    // The message becomes the job's error, which clients read: the file is named within
+    // the data dir, not by the server's own path.
+    std::string message = e.what();
+    const std::string dir = dir_.string();
+    for (std::size_t at; !dir.empty() && (at = message.find(dir)) != std::string::npos;)
+      message.replace(at, dir.size(), "images");
+    throw std::runtime_error(message);
+  }
 }
 
 void ImageFiles::remove(const std::string& job_id) const {

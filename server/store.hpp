@@ -105,6 +105,8 @@ class Store {
   // is accepted, float32 RGB little-endian, tile after tile. Append-only, so that a backup
   // of the database taken before a copy of these files finds every pixel it points to.
   std::filesystem::path pixel_path(const std::string& job_id) const;
+  // The same within the data dir ("pixels/JOB.f32"): how errors that reach clients name it.
+  static std::string pixel_name(const std::string& job_id);
 
   // Everything but pixels and scene texts, for the Scheduler to start from.
   StoredState load();

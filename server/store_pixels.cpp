@@ -20,15 +20,19 @@
 namespace tessera {
 
 std::filesystem::path Store::pixel_path(const std::string& job_id) const {
-  return data_dir_ / "pixels" / (job_id + ".f32");
+  return data_dir_ / pixel_name(job_id);
 }
+
+std::string Store::pixel_name(const std::string& job_id) { return "pixels/" + job_id + ".f32"; }
 
 std::int64_t Store::append_pixels(const std::string& job_id,
                                   std::span<const std::span<const std::byte>> parts) {
   const std::filesystem::path path = pixel_path(job_id);
+  // Named within the data dir: the message reaches clients as the job's error, and the
+  // server's paths are none of theirs.
   const auto fail = [&](const char* what, int error) {
     return StoreError(fault_of_errno(error), "store: cannot " + std::string(what) + " " +
-                                                 path.string() + ": " + errno_words(error));
+                                                 pixel_name(job_id) + ": " + errno_words(error));
   };
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) throw fail("open", errno);
@@ -90,7 +94,7 @@ void Store::for_each_tile_pixels(
     if (wanted && std::none_of(tiles.begin(), tiles.end(), wanted)) continue;
     if (fd < 0 && (fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC)) < 0)
       throw StoreError(fault_of_errno(errno),
-                       "store: cannot open " + path.string() + ": " + errno_words(errno));
+                       "store: cannot open " + pixel_name(job_id) + ": " + errno_words(errno));
     floats.resize(bytes / sizeof(float));
     std::size_t got = 0;
     while (got < floats.size() * sizeof(float)) {
@@ -100,7 +104,7 @@ void Store::for_each_tile_pixels(
       if (n < 0 && errno == EINTR) continue;
       if (n < 0)
         throw StoreError(fault_of_errno(errno),
-                         "store: cannot read " + path.string() + ": " + errno_words(errno));
+                         "store: cannot read " + pixel_name(job_id) + ": " + errno_words(errno));
       if (n == 0) break;  // the file ends early: the check below names the tile
       got += static_cast<std::size_t>(n);
     }
