@@ -1,6 +1,7 @@
 #include "client/job_commands.hpp"
 
 #include <unistd.h>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -93,6 +94,21 @@ void print_health(const protocol::JobHealth& health) {
     std::printf("  last problem: %s\n", printable(*health.last_problem).c_str());
 }
 
+// At most `columns` characters of `text` (whole UTF-8 sequences), the last one "…" when it
+// was cut: a long name keeps a table's columns in line.
+std::string cut_to(const std::string& text, std::size_t columns) {
+  std::size_t characters = 0;
+  for (std::size_t at = 0; at < text.size(); ++at) {
+    if ((static_cast<unsigned char>(text[at]) & 0xc0) == 0x80) continue;  // inside a sequence
+    if (++characters == columns) {
+      std::size_t end = at + 1;
+      while (end < text.size() && (static_cast<unsigned char>(text[end]) & 0xc0) == 0x80) ++end;
+      return end >= text.size() ? text : text.substr(0, at) + "\u2026";
+    }
+  }
+  return text;
+}
+
 void print_status(const protocol::JobStatus& job) {
   std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
               printable(job.id).c_str(), to_string(job.state), printable(job.name).c_str(),
@@ -119,8 +135,13 @@ void print_job_table(const std::vector<protocol::JobStatus>& jobs) {
     const std::string tiles =
         std::to_string(job.tiles.done) + "/" + std::to_string(job.tiles.total);
     const std::string size = std::to_string(job.width) + "x" + std::to_string(job.height);
-    std::printf("%-10s  %-20s  %-9s  %3d%%  %-13s  %4d  %-11s  %s\n",
-                printable(short_id(job.id)).c_str(), printable(job.name).c_str(),
+    // Padded by characters, not bytes, so that a name in another script stays in line.
+    const std::string name = printable(cut_to(job.name, 20));
+    std::size_t characters = 0;
+    for (const char c : name) characters += (static_cast<unsigned char>(c) & 0xc0) != 0x80;
+    std::printf("%-10s  %s%s  %-9s  %3d%%  %-13s  %4d  %-11s  %s\n",
+                printable(short_id(job.id)).c_str(), name.c_str(),
+                std::string(characters < 20 ? 20 - characters : 0, ' ').c_str(),
                 to_string(job.state), static_cast<int>(job.progress * 100), tiles.c_str(),
                 job.priority, size.c_str(), time_ago(job.created_at, now).c_str());
   }
@@ -693,11 +714,17 @@ void add_job_queries(CLI::App& app, const SharedOptions& options) {
              if (!state)
                fail(kExitUsage, "--state must be " + protocol::names_of(protocol::kJobStateNames));
            }
-           const protocol::JobList reply = api.jobs(state, o.limit);
+           // One more than shown, to tell whether there are more.
+           protocol::JobList reply = api.jobs(state, std::min(o.limit + 1, 1000));
+           const bool more = static_cast<int>(reply.jobs.size()) > o.limit;
+           if (more) reply.jobs.resize(o.limit);
            if (o.json_output) {
              print_json(protocol::to_json(reply));
            } else {
              print_job_table(reply.jobs);
+             if (more)
+               std::printf("(more jobs than these %d: tessera list --limit %d shows more)\n",
+                           o.limit, std::min(o.limit * 2, 1000));
            }
            return kExitOk;
          });

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <string>
 #include <string_view>
 
 #include <CLI/CLI.hpp>
@@ -46,9 +47,23 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {
     leave(e.get_exit_code());  // a command's own exit code, already reported
+  } catch (const CLI::CallForHelp& e) {
+    leave(app.exit(e));  // the help asked for, on stdout
+  } catch (const CLI::CallForAllHelp& e) {
+    leave(app.exit(e));
+  } catch (const CLI::CallForVersion& e) {
+    leave(app.exit(e));
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // prints the usage error, or the help asked for
-    leave(code == 0 ? 0 : 2);      // every usage error is exit code 2, as documented
+    // One line, as every other error (README, "Exit codes"): CLI11's own print adds a second
+    // line of advice.
+    std::string message = e.what();
+    while (!message.empty() && (message.back() == '\n' || message.back() == ' '))
+      message.pop_back();
+    for (char& c : message)
+      if (c == '\n') c = ' ';
+    std::fprintf(stderr, "error: %s (tessera --help lists the commands)\n",
+                 tessera::printable(message).c_str());
+    leave(2);  // every usage error is exit code 2, as documented
   } catch (const std::exception& e) {
     // Whatever a command did not turn into a message itself: still one line, never abort().
     std::fprintf(stderr, "error: %s\n", tessera::printable(e.what()).c_str());

@@ -68,3 +68,16 @@ expect(version MESSAGE "--version printed: ${out}")
 execute_process(COMMAND "${TESSERA}" list --json --server http://127.0.0.1:1
   RESULT_VARIABLE code ERROR_VARIABLE err OUTPUT_QUIET)
 expect(code EQUAL 3 MESSAGE "list --json --server ... exited ${code} (not unreachable): ${err}")
+
+# A usage error is one line, "error: ...", and exit code 2, as every other error: a missing
+# argument, an unknown command, a value out of range.
+foreach(args "submit" "frobnicate" "list;--limit;x")
+  execute_process(COMMAND "${TESSERA}" ${args}
+    RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  expect(code EQUAL 2 MESSAGE "tessera ${args}: exit ${code}, not 2")
+  string(REGEX MATCHALL "\n" lines "${err}")
+  list(LENGTH lines count)
+  expect(count EQUAL 1 MESSAGE "tessera ${args}: not one line: ${err}")
+  string(FIND "${err}" "error: " at)
+  expect(at EQUAL 0 MESSAGE "tessera ${args}: not an error: line: ${err}")
+endforeach()

@@ -65,6 +65,19 @@ TEST(FarmControls, ListAndWorkersPrintAHeaderAndHumanTimes) {
       std::regex(job["id"].get<std::string>().substr(0, 10) +
                  " +table <b> +completed +100% +1/1 +50 +16x16 +(just now|[0-9]+ s ago)\n")))
       << list.output;
+  // A long name is cut to its column, in whole characters; more jobs than shown are said.
+  farm.api().submit("a name far too long for its column", 50, test::showcase(16, 16, 1, 16));
+  farm.api().submit("été 日本 long enough to be cut", 50, test::showcase(16, 16, 1, 16));
+  const test::CliRun cut = cli(farm, {"list", "--limit", "2"});
+  ASSERT_EQ(cut.exit_code, 0) << cut.output;
+  EXPECT_TRUE(std::regex_search(cut.output, std::regex(" a name far too long\u2026 +[a-z]")))
+      << cut.output;
+  EXPECT_TRUE(std::regex_search(cut.output, std::regex(" été 日本 long enough \u2026 +[a-z]")))
+      << cut.output;
+  EXPECT_NE(cut.output.find("(more jobs than these 2: tessera list --limit 4 shows more)"),
+            std::string::npos)
+      << cut.output;
+  EXPECT_EQ(cli(farm, {"list"}).output.find("more jobs"), std::string::npos);
   const test::CliRun workers = cli(farm, {"workers"});
   ASSERT_EQ(workers.exit_code, 0) << workers.output;
   EXPECT_TRUE(std::regex_search(
