@@ -449,33 +449,38 @@ function jobButtons(job, { applied, deleted }) {
     });
     buttons.push(button);
   };
-  if (job.state === 'running' || job.state === 'queued') post('Pause', 'pause');
-  if (job.state === 'paused') post('Resume', 'resume');
-  if (job.state === 'failed') post('Retry', 'retry');
-  if (!FINISHED.has(job.state)) post('Cancel', 'cancel', 'danger');
-  if (FINISHED.has(job.state)) {
-    // Two clicks: the first arms it for a few seconds.
+  // What cannot be undone takes two clicks: the first arms it for a few seconds.
+  const twoClicks = (label, question, verb, then) => {
     let armed = 0;
     const button = h('button', {
-      type: 'button', class: 'danger', text: 'Delete', dataset: { action: 'delete' },
+      type: 'button', class: 'danger', text: label, dataset: { action: verb },
       onclick: () => {
         if (!armed) {
-          setText(button, 'Really delete?');
+          setText(button, question);
           armed = setTimeout(() => {
             armed = 0;
-            setText(button, 'Delete');
+            setText(button, label);
           }, 4000);
           return;
         }
         clearTimeout(armed);
         armed = 0;
-        act(button, `Delete ${job.name || job.id}`, async () => {
-          await api('DELETE', jobPath(job.id));
-          deleted();
-        });
+        act(button, `${label} ${job.name || job.id}`, then);
       },
     });
     buttons.push(button);
+  };
+  if (job.state === 'running' || job.state === 'queued') post('Pause', 'pause');
+  if (job.state === 'paused') post('Resume', 'resume');
+  if (job.state === 'failed') post('Retry', 'retry');
+  if (!FINISHED.has(job.state)) {
+    twoClicks('Cancel', 'Really cancel?', 'cancel', async () => applied(await api('POST', jobPath(job.id, '/cancel'))));
+  }
+  if (FINISHED.has(job.state)) {
+    twoClicks('Delete', 'Really delete?', 'delete', async () => {
+      await api('DELETE', jobPath(job.id));
+      deleted();
+    });
   }
   return buttons;
 }

@@ -260,6 +260,11 @@ async function main() {
   const big = await submit(open, 'to be canceled', showcase(640, 480, SAMPLES), { priority: 90 });
   await page.goto(`${origin}/jobs/${big.id}`);
   await page.locator('.job-head .state.running').waitFor({ timeout: 30000 });
+  // Two clicks, as for Delete: the first only asks.
+  await page.locator('button[data-action="cancel"]').click();
+  await page.locator('button[data-action="cancel"]', { hasText: 'Really cancel?' }).waitFor({ timeout: 5000 });
+  const asked = await api(open, 'GET', `/v1/jobs/${big.id}`);
+  check(asked.state !== 'canceled', 'one click on Cancel canceled the job');
   await page.locator('button[data-action="cancel"]').click();
   await page.locator('.job-head .state.canceled').waitFor({ timeout: 15000 });
   const canceled = await api(open, 'GET', `/v1/jobs/${big.id}`);
