@@ -33,6 +33,7 @@
 #include "server/http_metrics.hpp"
 #include "server/http_server.hpp"
 #include "server/local_workers.hpp"
+#include "server/memory_give_back.hpp"
 
 namespace {
 
@@ -107,14 +108,18 @@ void schedule_event_flush(boost::asio::steady_timer& timer, tessera::FarmEvents&
 }
 
 void schedule_upkeep(boost::asio::steady_timer& timer, tessera::Scheduler& scheduler,
-                     tessera::LocalWorkers* workers) {
+                     tessera::LocalWorkers* workers, const tessera::HttpServer& server,
+                     tessera::MemoryGiveBack& memory) {
   timer.expires_after(std::chrono::seconds(1));
-  timer.async_wait([&timer, &scheduler, workers](const boost::system::error_code& ec) {
-    if (ec) return;
-    scheduler.expire_leases();
-    if (workers) workers->restart_exited();
-    schedule_upkeep(timer, scheduler, workers);
-  });
+  timer.async_wait(
+      [&timer, &scheduler, workers, &server, &memory](const boost::system::error_code& ec) {
+        if (ec) return;
+        scheduler.expire_leases();
+        if (workers) workers->restart_exited();
+        if (memory.note(server.connection_count()))
+          spdlog::debug("connections closed: free memory given back");
+        schedule_upkeep(timer, scheduler, workers, server, memory);
+      });
 }
 
 // The tokens, and the refusal to listen beyond this machine without them.
@@ -311,7 +316,8 @@ int run(const ServerOptions& options) {
   };
   await_hangup();
   boost::asio::steady_timer expiry(io);
-  schedule_upkeep(expiry, scheduler, workers.get());
+  tessera::MemoryGiveBack memory_give_back;
+  schedule_upkeep(expiry, scheduler, workers.get(), server, memory_give_back);
   boost::asio::steady_timer event_flush(io);
   schedule_event_flush(event_flush, farm_events);
   // The Store is open and the Scheduler has reconciled it (its constructor): /readyz says so.

@@ -2,6 +2,13 @@
 // RSS, read from /proc, grows by at most 4 times the body for a refused scene and 8 times
 // for an accepted one, comes back once the request is done, and submissions over the
 // shared budget are refused for now (503, Retry-After) with nothing of them kept.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -190,6 +197,50 @@ TEST(FarmMemory, SubmissionsOverTheBudgetAreToldToRetry) {
   }
   // Nothing of a refused one was kept: the jobs are exactly those answered 201.
   EXPECT_EQ(farm.api().jobs("", 1000)["jobs"].size(), static_cast<std::size_t>(created));
+}
+
+}  // namespace
+}  // namespace tessera
+
+namespace tessera {
+namespace {
+
+// A flood of event streams that read nothing, each queueing a job's tiles with their
+// pixels, then closed: the memory they took goes back to the system (glibc keeps it in its
+// arenas unless asked: 128 MiB before, 540 with 2,000 streams open, 491 after they closed).
+TEST(FarmMemory, MemoryGoesBackAfterAFloodOfEventStreams) {
+  Farm farm("memory-streams", 1, {"--worker-threads", "2"});
+  if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status to measure with";
+  const pid_t pid = farm.server().pid();
+  const long before = status_kib(pid, "VmRSS");
+  const std::string id = farm.api().submit("watched", 50, test::showcase(640, 480, 1, 8))["id"];
+  std::vector<int> streams;
+  for (int i = 0; i < 1000; ++i) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    ASSERT_GE(fd, 0) << "cannot open a socket: " << std::strerror(errno);
+    // A small receive window, so that the coordinator queues what the reader does not take.
+    const int window = 4096;
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &window, sizeof window);
+    sockaddr_in to{};
+    to.sin_family = AF_INET;
+    to.sin_port = htons(static_cast<std::uint16_t>(farm.port()));
+    to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to), 0);
+    const std::string request = "GET /v1/jobs/" + id +
+                                "/events HTTP/1.1\r\nHost: 127.0.0.1\r\nAccept: "
+                                "text/event-stream\r\n\r\n";
+    ASSERT_GT(::send(fd, request.data(), request.size(), MSG_NOSIGNAL), 0);
+    streams.push_back(fd);
+  }
+  ASSERT_EQ(farm.wait_finished(id, 120s)["state"], "completed");
+  const long open = status_kib(pid, "VmRSS");
+  ASSERT_GT(open - before, 64 * 1024) << "the streams took too little to tell: make more";
+  for (const int fd : streams) ::close(fd);
+  // Back to within a third of what they took, once the coordinator sees them gone.
+  EXPECT_TRUE(test::eventually(
+      [&] { return status_kib(pid, "VmRSS") - before < (open - before) / 3; }, 15s))
+      << "RSS " << before << " KiB before, " << open << " with the streams open, "
+      << status_kib(pid, "VmRSS") << " after they closed";
 }
 
 }  // namespace
