@@ -36,8 +36,25 @@ std::string resolve_job_id(CoordinatorClient& api, const std::string& text) {
   const std::string prefix = with_kind(text, "j-");
   if (prefix.size() == kJobIdSize && all_hex(std::string_view(prefix).substr(2))) return prefix;
   if (text.empty()) throw UnknownId("a job id is empty");
-  const protocol::JobList found = api.jobs_with_prefix(prefix, kCandidatesShown + 1);
-  if (found.jobs.empty()) throw UnknownId("no job " + printable(text));
+  // An id's prefix first, as it is shown in lists; else the job's name, where one job has it.
+  const bool id_like = all_hex(std::string_view(prefix).substr(2));
+  protocol::JobList found;
+  if (id_like) found = api.jobs_with_prefix(prefix, kCandidatesShown + 1);
+  if (found.jobs.empty()) {
+    const protocol::JobList named = api.jobs_named(text, kCandidatesShown + 1);
+    if (named.jobs.size() == 1) return named.jobs.front().id;
+    if (named.jobs.size() > 1) {
+      std::vector<std::string> candidates;
+      for (const auto& job : named.jobs)
+        if (candidates.size() < kCandidatesShown) candidates.push_back(job.id);
+      std::string message = "more than one job is named " + printable(text) + ": ";
+      for (std::size_t i = 0; i < candidates.size(); ++i)
+        message += (i == 0 ? "" : ", ") + candidates[i];
+      if (named.jobs.size() > kCandidatesShown) message += " and more";
+      throw UnknownId(message + "; give its id");
+    }
+  }
+  if (found.jobs.empty()) throw UnknownId("no job " + printable(text) + ", by id or by name");
   if (found.jobs.size() == 1) return found.jobs.front().id;
   std::vector<std::string> candidates;
   for (const auto& job : found.jobs)

@@ -15,8 +15,8 @@ class UnknownId : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The whole id of the one job whose id begins with `text` ("j-" may be left out). A whole
-// id is taken as it is, without asking.
+// The whole id of the one job whose id begins with `text` ("j-" may be left out), or else
+// of the one job named `text`. A whole id is taken as it is, without asking.
 std::string resolve_job_id(CoordinatorClient& api, const std::string& text);
 // The id of the one worker whose id begins with `text` ("w-" may be left out), or whose
 // name is `text`.

@@ -275,8 +275,11 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
         list.jobs.push_back(status_of(*job, now));
     return body_response(200, list);
   }
-  for (const JobStatus& job :
-       context.scheduler.jobs(state, std::get<std::size_t>(limit), std::get<std::size_t>(offset)))
+  std::optional<std::string> name;
+  if (auto it = request.query.find(std::string(protocol::query::name)); it != request.query.end())
+    name = it->second;
+  for (const JobStatus& job : context.scheduler.jobs(state, std::get<std::size_t>(limit),
+                                                     std::get<std::size_t>(offset), name))
     list.jobs.push_back(status_of(job, now));
   return body_response(200, list);
 }

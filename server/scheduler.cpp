@@ -175,11 +175,13 @@ std::optional<JobStatus> Scheduler::job(const std::string& id) const {
 }
 
 std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_t limit,
-                                       std::size_t offset) const {
+                                       std::size_t offset,
+                                       const std::optional<std::string>& name) const {
   std::lock_guard lock(mutex_);
   std::vector<const JobStatus*> matching;
   for (const auto& [id, job] : jobs_)
-    if (!state || job->status.state == *state) matching.push_back(&job->status);
+    if ((!state || job->status.state == *state) && (!name || job->status.name == *name))
+      matching.push_back(&job->status);
   const auto newest_first = [](const JobStatus* a, const JobStatus* b) {
     if (a->created_at_ms != b->created_at_ms) return a->created_at_ms > b->created_at_ms;
     return a->id > b->id;

@@ -61,7 +61,8 @@ class Scheduler {
   std::optional<JobStatus> job(const std::string& id) const;
   // Newest first; `state` filters when set; at most `limit`, after the first `offset`.
   std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
-                              std::size_t offset = 0) const;
+                              std::size_t offset = 0,
+                              const std::optional<std::string>& name = std::nullopt) const;
   Pending<CancelOutcome> cancel(const std::string& id);
   Pending<RemoveOutcome> remove(const std::string& id);
   // Farm controls (scheduler_controls.cpp). A new priority takes effect at the next claim

@@ -144,6 +144,10 @@ protocol::JobList CoordinatorClient::jobs_with_prefix(std::string_view prefix, i
       call("GET", protocol::jobs_with_prefix_target(prefix, limit)).body);
 }
 
+protocol::JobList CoordinatorClient::jobs_named(std::string_view name, int limit) {
+  return read_body<protocol::JobList>(call("GET", protocol::jobs_named_target(name, limit)).body);
+}
+
 protocol::Worker CoordinatorClient::drain(std::string_view worker_id, bool draining) {
   return read_body<protocol::Worker>(
       call("POST", fill(draining ? route::worker_drain : route::worker_undrain, worker_id)).body);

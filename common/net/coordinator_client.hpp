@@ -73,6 +73,7 @@ class CoordinatorClient {
   protocol::JobStatus retry(std::string_view id);
   // The jobs whose id begins with `prefix`.
   protocol::JobList jobs_with_prefix(std::string_view prefix, int limit);
+  protocol::JobList jobs_named(std::string_view name, int limit);
   protocol::Worker drain(std::string_view worker_id, bool draining);
   void remove_worker(std::string_view worker_id);
   std::string image(std::string_view id, const ImageFormat& format, bool partial);

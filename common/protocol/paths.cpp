@@ -70,6 +70,11 @@ std::string jobs_with_prefix_target(std::string_view prefix, int limit) {
          with(query::id_prefix, prefix);
 }
 
+std::string jobs_named_target(std::string_view name, int limit) {
+  return std::string(route::jobs) + "?" + with(query::limit, std::to_string(limit)) + "&" +
+         with(query::name, name);
+}
+
 std::string image_target(std::string_view id, const ImageFormat& format, bool partial) {
   std::string target = fill(route::job_image, id) + "?" + with(query::format, format.name);
   if (partial) target += "&" + with(query::partial, "1");

@@ -73,6 +73,7 @@ inline constexpr std::string_view limit = "limit";
 inline constexpr std::string_view format = "format";
 inline constexpr std::string_view partial = "partial";
 inline constexpr std::string_view id_prefix = "id_prefix";
+inline constexpr std::string_view name = "name";
 inline constexpr std::string_view offset = "offset";
 }  // namespace query
 
@@ -86,6 +87,8 @@ std::string job_target(std::string_view id, double wait_s = 0);
 std::string jobs_target(std::optional<JobState> state, int limit);
 // The jobs whose id begins with `prefix` (at most `limit`).
 std::string jobs_with_prefix_target(std::string_view prefix, int limit);
+// GET /v1/jobs of the jobs named exactly `name`, newest first, at most `limit`.
+std::string jobs_named_target(std::string_view name, int limit);
 std::string image_target(std::string_view id, const ImageFormat& format, bool partial);
 // The image of one frame of the job.
 std::string frame_image_target(std::string_view id, int frame, const ImageFormat& format,

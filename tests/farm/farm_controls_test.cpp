@@ -51,6 +51,29 @@ TEST(FarmControls, AUniquePrefixOfAJobIdWorksEverywhereAndAnAmbiguousOneListsThe
   EXPECT_TRUE(contains(none.output, "no job j-ffffffffffffffffffff")) << none.output;
 }
 
+TEST(FarmControls, AJobIsNamedByItsNameWhereNoOtherHasIt) {
+  Farm farm("controls-names", 0);
+  const std::string shot =
+      farm.api().submit("nightly shot 12", 50, test::showcase(16, 16, 1, 16))["id"];
+  const std::string first = farm.api().submit("dup", 50, test::showcase(16, 16, 1, 16))["id"];
+  const std::string second = farm.api().submit("dup", 50, test::showcase(16, 16, 1, 16))["id"];
+  const test::CliRun status = cli(farm, {"status", "nightly shot 12"});
+  EXPECT_EQ(status.exit_code, 0) << status.output;
+  EXPECT_TRUE(contains(status.output, shot)) << status.output;
+  EXPECT_EQ(cli(farm, {"pause", "nightly shot 12"}).exit_code, 0);
+  EXPECT_EQ(farm.api().job(shot)["state"], "paused");
+  // Two jobs of one name: both are named, and nothing is done.
+  const test::CliRun both = cli(farm, {"cancel", "dup"});
+  EXPECT_EQ(both.exit_code, 1) << both.output;
+  EXPECT_TRUE(contains(both.output, "more than one job is named dup")) << both.output;
+  EXPECT_TRUE(contains(both.output, first) && contains(both.output, second)) << both.output;
+  EXPECT_NE(farm.api().job(first)["state"], "canceled");
+  // Neither an id nor a name: says so.
+  const test::CliRun none = cli(farm, {"status", "no such name"});
+  EXPECT_EQ(none.exit_code, 1) << none.output;
+  EXPECT_TRUE(contains(none.output, "no job no such name, by id or by name")) << none.output;
+}
+
 TEST(FarmControls, ListAndWorkersPrintAHeaderAndHumanTimes) {
   Farm farm("controls-tables", 1);
   const json job = farm.api().submit("table <b>", 50, test::showcase(16, 16, 1, 16));
