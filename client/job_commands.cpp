@@ -109,9 +109,16 @@ std::string cut_to(const std::string& text, std::size_t columns) {
   return text;
 }
 
+// A job's state as people read it: a paused job whose leases are still out is "pausing",
+// its workers finishing the tiles they hold.
+const char* state_words(const protocol::JobStatus& job) {
+  if (job.state == JobState::paused && job.tiles.rendering > 0) return "pausing";
+  return to_string(job.state);
+}
+
 void print_status(const protocol::JobStatus& job) {
   std::printf("%s  %-9s  %-20s  %3d%%  %d/%d tiles  priority %d  %dx%d\n",
-              printable(job.id).c_str(), to_string(job.state), printable(job.name).c_str(),
+              printable(job.id).c_str(), state_words(job), printable(job.name).c_str(),
               static_cast<int>(job.progress * 100), job.tiles.done, job.tiles.total, job.priority,
               job.width, job.height);
   if (job.frames.total > 1) {
@@ -141,9 +148,9 @@ void print_job_table(const std::vector<protocol::JobStatus>& jobs) {
     for (const char c : name) characters += (static_cast<unsigned char>(c) & 0xc0) != 0x80;
     std::printf("%-10s  %s%s  %-9s  %3d%%  %-13s  %4d  %-11s  %s\n",
                 printable(short_id(job.id)).c_str(), name.c_str(),
-                std::string(characters < 20 ? 20 - characters : 0, ' ').c_str(),
-                to_string(job.state), static_cast<int>(job.progress * 100), tiles.c_str(),
-                job.priority, size.c_str(), time_ago(job.created_at, now).c_str());
+                std::string(characters < 20 ? 20 - characters : 0, ' ').c_str(), state_words(job),
+                static_cast<int>(job.progress * 100), tiles.c_str(), job.priority, size.c_str(),
+                time_ago(job.created_at, now).c_str());
   }
 }
 

@@ -74,6 +74,25 @@ TEST(FarmControls, AJobIsNamedByItsNameWhereNoOtherHasIt) {
   EXPECT_TRUE(contains(none.output, "no job no such name, by id or by name")) << none.output;
 }
 
+TEST(FarmControls, APausedJobWhoseTilesAreStillOutIsPausing) {
+  Farm farm("controls-pausing", 0, {"--lease-timeout", "30", "--heartbeat-interval", "0.2"});
+  // Two tiles of several seconds each: the first is still out well after the pause.
+  const std::string id =
+      farm.api().submit("slow tiles", 50, test::showcase(128, 64, 768, 64))["id"];
+  auto worker = farm.start_worker("steady", 1);
+  ASSERT_TRUE(test::eventually([&] { return farm.api().job(id)["tiles"]["rendering"] == 1; }, 30s));
+  ASSERT_EQ(cli(farm, {"pause", id}).exit_code, 0);
+  const test::CliRun status = cli(farm, {"status", id});
+  const test::CliRun list = cli(farm, {"list"});
+  const json job = farm.api().job(id);
+  ASSERT_EQ(job["tiles"]["rendering"], 1) << "the tile was done before it could be seen out";
+  EXPECT_TRUE(contains(status.output, " pausing ")) << status.output;
+  EXPECT_TRUE(contains(list.output, " pausing ")) << list.output;
+  // Once its tile is in, it is paused.
+  ASSERT_TRUE(test::eventually([&] { return farm.api().job(id)["tiles"]["rendering"] == 0; }, 60s));
+  EXPECT_TRUE(contains(cli(farm, {"status", id}).output, " paused ")) << "not paused after";
+}
+
 TEST(FarmControls, ListAndWorkersPrintAHeaderAndHumanTimes) {
   Farm farm("controls-tables", 1);
   const json job = farm.api().submit("table <b>", 50, test::showcase(16, 16, 1, 16));
