@@ -122,14 +122,7 @@ std::unique_ptr<test::Process> start_limited(const fs::path& dir, const std::str
       dir / "server.log");
 }
 
-int wait_port(const fs::path& dir) {
-  EXPECT_TRUE(test::eventually(
-      [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s))
-      << test::read_text(dir / "server.log");
-  int port = 0;
-  std::ifstream(dir / "port") >> port;
-  return port;
-}
+int wait_port(const fs::path& dir) { return test::port_from_file(dir, dir / "server.log"); }
 
 bool have_prlimit() { return fs::exists("/usr/bin/prlimit"); }
 

@@ -350,11 +350,7 @@ TEST(FarmFaults, AFullDiskThenSpaceBackThenASubmitAndARestartKeepTheJob) {
                                  "--local-workers", "1", "--worker-threads", "2", "--port-file",
                                  (dir / "port").string(), "--log-level", "info"},
         dir / log);
-    EXPECT_TRUE(test::eventually(
-        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 20s))
-        << test::read_text(dir / log);
-    int port = 0;
-    std::ifstream(dir / "port") >> port;
+    const int port = test::port_from_file(dir, dir / log);
     return std::make_pair(std::move(server), "http://127.0.0.1:" + std::to_string(port));
   };
   auto [server, url] = start("server.log");

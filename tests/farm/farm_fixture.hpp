@@ -169,6 +169,18 @@ inline int tiles_rendered_by(const farm_fs::path& log) {
   return count;
 }
 
+// The port a coordinator started with --port-file DIR/port wrote there, once it has (0 if
+// it has not within 30 s, after a test failure that shows its `log`).
+inline int port_from_file(const farm_fs::path& dir, const farm_fs::path& log) {
+  using namespace std::chrono_literals;
+  EXPECT_TRUE(eventually(
+      [&] { return farm_fs::exists(dir / "port") && farm_fs::file_size(dir / "port") > 0; }, 30s))
+      << read_text(log);
+  int port = 0;
+  std::ifstream(dir / "port") >> port;
+  return port;
+}
+
 // A coordinator without local workers on `dir`'s data directory, listening on `listen`
 // (an ephemeral port, or the port of one before it: a test kills it and starts another on
 // the same store and address), logging to `log` in `dir`; with the port it took.
@@ -183,10 +195,7 @@ inline std::pair<std::unique_ptr<Process>, int> start_coordinator(const farm_fs:
                                "--local-workers", "0", "--port-file", (dir / "port").string(),
                                "--log-level", "info"},
       dir / log);
-  EXPECT_TRUE(eventually(
-      [&] { return farm_fs::exists(dir / "port") && farm_fs::file_size(dir / "port") > 0; }, 20s));
-  int port = 0;
-  std::ifstream(dir / "port") >> port;
+  const int port = port_from_file(dir, dir / log);
   return {std::move(server), port};
 }
 

@@ -50,11 +50,7 @@ TEST(FarmJobMemory, JobsAreBudgetedTheirTilesPagedAndAStartOverTheBudgetServes) 
                                  "--local-workers", "0", "--port-file", (dir / "port").string(),
                                  "--job-memory-budget", budget, "--log-level", "info"},
         dir / log);
-    EXPECT_TRUE(test::eventually(
-        [&] { return fs::exists(dir / "port") && fs::file_size(dir / "port") > 0; }, 30s))
-        << test::read_text(dir / log);
-    int port = 0;
-    std::ifstream(dir / "port") >> port;
+    const int port = test::port_from_file(dir, dir / log);
     return std::make_pair(std::move(server), "http://127.0.0.1:" + std::to_string(port));
   };
   // 300 MB: one job of 2^20 tiles (256 MiB reckoned) fits, a second does not.

@@ -108,14 +108,7 @@ class FaultRun {
             "--lease-timeout", "2",           "--heartbeat-interval", "0.2",
             "--log-level",     "info"};
   }
-  int wait_port() {
-    EXPECT_TRUE(test::eventually(
-        [&] { return fs::exists(dir_ / "port") && fs::file_size(dir_ / "port") > 0; }, 20s))
-        << test::read_text(dir_ / "server.log");
-    int port = 0;
-    std::ifstream(dir_ / "port") >> port;
-    return port;
-  }
+  int wait_port() { return test::port_from_file(dir_, dir_ / "server.log"); }
   std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
   // From now on the faults count down.
   void arm() const { test::write_text(arm_, "armed\n"); }
