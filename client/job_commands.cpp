@@ -811,7 +811,8 @@ void add_job_controls(CLI::App& app, const SharedOptions& options) {
   control("pause", "Pause a job: its leases run out and no new tiles go out",
           &CoordinatorClient::pause);
   control("resume", "Resume a paused job", &CoordinatorClient::resume);
-  control("retry", "Render a failed job's failed tiles again", &CoordinatorClient::retry);
+  control("retry", "Render a failed or canceled job's unfinished tiles again",
+          &CoordinatorClient::retry);
 }
 
 // Drain, undrain and remove a worker, named by a unique prefix of its id or by its name.

@@ -3,7 +3,7 @@
 namespace tessera {
 
 void add_api_routes(Router& router, ApiContext& context, const Readiness* readiness) {
-  add_health_routes(router, readiness);
+  add_health_routes(router, readiness, context.api_token_required);
   add_job_routes(router, context);
   add_worker_routes(router, context);
   add_scene_routes(router, context);

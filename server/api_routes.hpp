@@ -50,6 +50,7 @@ struct ApiContext {
   bool metrics_loopback_only = true;
   std::filesystem::path data_dir = {};  // whose files /metrics sizes
   EventHub* events = nullptr;           // server-sent events; none: not served
+  bool api_token_required = false;      // the client routes want the API token (/healthz)
 };
 
 // One file per resource, each named for it: job_routes.cpp and so on.
@@ -68,7 +69,8 @@ void add_event_routes(Router& router, ApiContext& context);  // /v1/assets, /v1/
 void add_web_routes(Router& router, ApiContext& context);
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller
 // that knows start-up is over (server_main) can say so.
-void add_health_routes(Router& router, const Readiness* readiness = nullptr);
+void add_health_routes(Router& router, const Readiness* readiness = nullptr,
+                       bool api_token_required = false);
 // Every route of docs/openapi.yaml, as the coordinator serves them (the asset routes only
 // with an AssetStore in `context`).
 void add_api_routes(Router& router, ApiContext& context, const Readiness* readiness = nullptr);

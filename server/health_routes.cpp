@@ -5,10 +5,11 @@
 
 namespace tessera {
 
-void add_health_routes(Router& router, const Readiness* readiness) {
-  router.add("GET", std::string(protocol::route::healthz), [](HttpRequest&&, Respond respond) {
-    respond(body_response(200, protocol::Health{}));
-  });
+void add_health_routes(Router& router, const Readiness* readiness, bool api_token_required) {
+  router.add("GET", std::string(protocol::route::healthz),
+             [api_token_required](HttpRequest&&, Respond respond) {
+               respond(body_response(200, protocol::Health{api_token_required}));
+             });
   // 503 both before start-up is over and once shutdown has begun: either way, requests
   // should go elsewhere (or wait), though the process is alive.
   router.add(

@@ -383,9 +383,11 @@ class Scheduler {
   };
   Observed observed_before(const StagedChange& change) const;
   // A farm control of the job `id` (scheduler_controls.cpp): `change_job(job, change)`
-  // stages what it changes, or returns why it refuses; what it stages is committed.
+  // stages what it changes, or returns why it refuses; what it stages is committed, and
+  // `durable`, where given, runs on the store thread once it is durable.
   template <typename Change>
-  Pending<ControlOutcome> control_job(const std::string& id, Change change_job);
+  Pending<ControlOutcome> control_job(const std::string& id, Change change_job,
+                                      std::function<void()> durable = {});
   void tell_observer(const Observed& observed, StoreTicket ticket);
   FarmObserver::TileChange tile_change(const JobEntry& job, int index) const;
   StoreTicket last_write_ = 0;              // the ticket of the last write queued by queue_write()

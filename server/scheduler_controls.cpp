@@ -1,6 +1,7 @@
 // The farm's controls: a job's priority, pausing and resuming it, retrying a failed one,
 // draining and removing workers. Each is one staged change, as every other state change.
 #include <algorithm>
+#include <memory>
 
 #include <spdlog/spdlog.h>
 
@@ -25,7 +26,8 @@ ControlOutcome finished(const JobStatus& job) {
 }  // namespace
 
 template <typename Change>
-Pending<ControlOutcome> Scheduler::control_job(const std::string& id, Change change_job) {
+Pending<ControlOutcome> Scheduler::control_job(const std::string& id, Change change_job,
+                                               std::function<void()> durable) {
   Callbacks notify;
   Pending<ControlOutcome> answer;
   {
@@ -37,7 +39,11 @@ Pending<ControlOutcome> Scheduler::control_job(const std::string& id, Change cha
     if (const std::optional<ControlOutcome> refusal = change_job(*job, change))
       return pending(*refusal, before);
     if (!change.empty()) {
-      commit(change);
+      const StoreTicket ticket = commit(change);
+      if (durable)
+        store_thread_.after(ticket, [durable = std::move(durable)](const std::string& error) {
+          if (error.empty()) durable();
+        });
       notify = callbacks_;  // a claim waiting for work may take it now
     }
     answer = pending(done, before);
@@ -77,39 +83,58 @@ Pending<ControlOutcome> Scheduler::resume(const std::string& id) {
 }
 
 Pending<ControlOutcome> Scheduler::retry(const std::string& id) {
-  return control_job(id, [&](JobEntry& job, StagedChange& change) -> std::optional<ControlOutcome> {
-    if (job.status.state != JobState::failed)
-      return refused("not_failed", "job " + id + " is " + to_string(job.status.state) +
-                                       "; only a failed job is retried");
-    if (job.status.tiles_done == job.status.tiles_total)
-      return refused("nothing_to_retry",
-                     "every tile of job " + id +
-                         " is done; it failed for another reason: " + job.status.error);
-    int again = 0;
-    for (int index = 0; index < job.status.tiles_total; ++index) {
-      const TileSlot& tile = job.tiles[index];
-      if (tile.state == TileState::done) continue;
-      ++again;
-      if (tile.attempts == 0 && tile.last_error.empty() && tile.handouts == 0) continue;
-      TileSlot& staged = change.tile(job, index);
-      staged.attempts = 0;
-      staged.last_error.clear();
-      staged.handouts = 0;
-    }
-    JobStatus& status = change.job(job);
-    status.state = status.started_at_ms != 0 ? JobState::running : JobState::queued;
-    status.error.clear();
-    status.finished_at_ms = 0;
-    // What went wrong before is in the log; the retried job starts with a clean record.
-    job.status.health = JobHealth{};
-    job.status.health.progress_at_ms = clock_.now_ms();
-    job.failures_by_worker.clear();
-    // Its tiles go to a canvas again as they arrive (its frames done keep their images).
-    for (int slot = 0; slot < job.frame_count(); ++slot)
-      if (job.frame_done[slot] < job.tiles_per_frame) images_.resumed(image_key(job, slot));
-    spdlog::info("job {} ({}): retrying {} tile(s)", id, job.status.name, again);
-    return std::nullopt;
-  });
+  // Done frames whose image is written again once the retry is durable, as after a
+  // completion: a write that fails then finds the job completed (or running) and fails it
+  // once more, with the reason.
+  auto rewrite = std::make_shared<std::vector<std::string>>();
+  return control_job(
+      id,
+      [&](JobEntry& job, StagedChange& change) -> std::optional<ControlOutcome> {
+        // A canceled job comes back as well: canceled by mistake, or to finish it after
+        // all, it renders what it lacked, keeping its id, its links and its tiles done.
+        if (job.status.state != JobState::failed && job.status.state != JobState::canceled)
+          return refused("not_failed", "job " + id + " is " + to_string(job.status.state) +
+                                           "; only a failed or canceled job is retried");
+        int again = 0;
+        for (int index = 0; index < job.status.tiles_total; ++index) {
+          const TileSlot& tile = job.tiles[index];
+          if (tile.state == TileState::done) continue;
+          ++again;
+          if (tile.attempts == 0 && tile.last_error.empty() && tile.handouts == 0) continue;
+          TileSlot& staged = change.tile(job, index);
+          staged.attempts = 0;
+          staged.last_error.clear();
+          staged.handouts = 0;
+        }
+        // Every tile done: it failed for want of its image (a full disk, say), and it is
+        // completed again; the image is written from the stored tiles, and should that
+        // fail once more, it fails once more.
+        JobStatus& status = change.job(job);
+        status.state = again == 0                  ? JobState::completed
+                       : status.started_at_ms != 0 ? JobState::running
+                                                   : JobState::queued;
+        status.error.clear();
+        status.finished_at_ms = again == 0 ? clock_.now_ms() : 0;
+        // What went wrong before is in the log; the retried job starts with a clean record.
+        job.status.health = JobHealth{};
+        job.status.health.progress_at_ms = clock_.now_ms();
+        job.failures_by_worker.clear();
+        for (int slot = 0; slot < job.frame_count(); ++slot) {
+          const std::string key = image_key(job, slot);
+          // Its unfinished frames' tiles go to a canvas again as they arrive; its frames
+          // done keep their images, or have them written now.
+          if (job.frame_done[slot] < job.tiles_per_frame)
+            images_.resumed(key);
+          else if (!images_.has_file(key))
+            rewrite->push_back(key);
+        }
+        spdlog::info("job {} ({}): retrying {} tile(s){}", id, job.status.name, again,
+                     rewrite->empty() ? "" : fmt::format(", writing {} image(s)", rewrite->size()));
+        return std::nullopt;
+      },
+      [this, rewrite] {
+        for (const std::string& key : *rewrite) images_.completed(key);
+      });
 }
 
 std::vector<std::string> Scheduler::job_ids_with_prefix(const std::string& prefix,

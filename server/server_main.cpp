@@ -248,6 +248,7 @@ int run(const ServerOptions& options) {
   context.metrics_loopback_only = tokens.metrics.empty();
   context.data_dir = options.data_dir;
   context.events = &event_hub;
+  context.api_token_required = !tokens.client.empty();
   boost::asio::thread_pool disk(2);
   context.run_disk = [&disk](std::function<void()> work) {
     boost::asio::post(disk, std::move(work));

@@ -16,7 +16,11 @@ constexpr int busy_timeout_ms = 5000;
 // with, for a failed file operation, the system's ("disk I/O error" alone would not say
 // that the disk is full).
 StoreError sqlite_error(sqlite3* db, int rc, const std::string& what, const std::string& sql) {
-  std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+  // The connection's message is its last call's; where that is not this one (an error
+  // returned before SQLite recorded it), the code's own words are truer.
+  std::string message = !db                                           ? "out of memory"
+                        : (sqlite3_errcode(db) & 0xff) == (rc & 0xff) ? sqlite3_errmsg(db)
+                                                                      : sqlite3_errstr(rc);
   StoreFault fault = StoreFault::other;
   const int primary = rc & 0xff;
   const int system = db ? sqlite3_system_errno(db) : 0;

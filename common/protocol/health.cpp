@@ -11,9 +11,15 @@ void expect_status(const FieldReader& body, const char* status) {
 
 Health Health::read(const FieldReader& body) {
   expect_status(body, "ok");
-  return {};
+  Health health;
+  // Absent from coordinators before it was added.
+  if (body.has("api_token_required"))
+    health.api_token_required = body.boolean("api_token_required");
+  return health;
 }
-nlohmann::json to_json(const Health&) { return {{"status", "ok"}}; }
+nlohmann::json to_json(const Health& health) {
+  return {{"status", "ok"}, {"api_token_required", health.api_token_required}};
+}
 
 Ready Ready::read(const FieldReader& body) {
   expect_status(body, "ready");

@@ -7,7 +7,10 @@
 
 namespace tessera::protocol {
 
-struct Health {  // {"status": "ok"}
+struct Health {  // {"status": "ok", "api_token_required": false}
+  // Whether the client routes want the API token: a web page asks for it before any call
+  // rather than after a refusal. What a 401 would say anyway, told to anyone.
+  bool api_token_required = false;
   static Health read(const FieldReader& body);
 };
 nlohmann::json to_json(const Health&);

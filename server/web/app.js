@@ -137,9 +137,39 @@ const token = {
   },
 };
 
+// Whether the coordinator wants the API token, as its /healthz says (null until asked).
+// Without the token, nothing that needs it is asked for: the prompt comes up instead of a
+// refusal, so the first visit is no 401 in the console.
+const access = { tokenRequired: null };
+
+async function learnAccess() {
+  try {
+    const response = await fetch('/healthz', { headers: { Accept: 'application/json' }, cache: 'no-store' });
+    const body = await response.json();
+    access.tokenRequired = body.api_token_required === true;
+  } catch {
+    access.tokenRequired = false; // an older coordinator: its 401s ask for the token
+  }
+}
+
+// The refusal a call would get, without making it: the token is wanted and not given.
+function tokenMissing() {
+  if (!access.tokenRequired || token.get()) return null;
+  const error = new ApiError(401, 'token_missing', 'The coordinator wants the API token.');
+  auth.ask();
+  return error;
+}
+
 function withAuth(headers = {}) {
   const secret = token.get();
   return secret ? { ...headers, Authorization: `Bearer ${secret}` } : headers;
+}
+
+// fetch() with the token, for what is read whole (images): refused here while it is missing.
+function fetchWithToken(path, init = {}) {
+  const missing = tokenMissing();
+  if (missing) return Promise.reject(missing);
+  return fetch(path, { ...init, headers: withAuth(init.headers) });
 }
 
 class ApiError extends Error {
@@ -177,6 +207,8 @@ async function checked(response) {
 }
 
 async function api(method, path, body) {
+  const missing = tokenMissing();
+  if (missing) throw missing;
   const headers = withAuth({ Accept: 'application/json' });
   const init = { method, headers, cache: 'no-store' };
   // POST, PUT and PATCH must say application/json, with a body or without (docs/api.md).
@@ -304,6 +336,10 @@ class EventStream {
       const abort = () => attempt.abort();
       this.stopper.signal.addEventListener('abort', abort, { once: true });
       try {
+        if (tokenMissing()) {
+          this.on.denied?.();
+          return;
+        }
         const headers = withAuth({ Accept: 'text/event-stream' });
         if (this.lastId !== null) headers['Last-Event-ID'] = this.lastId;
         const response = await fetch(this.path, { headers, cache: 'no-store', signal: attempt.signal });
@@ -472,7 +508,8 @@ function jobButtons(job, { applied, deleted }) {
   };
   if (job.state === 'running' || job.state === 'queued') post('Pause', 'pause');
   if (job.state === 'paused') post('Resume', 'resume');
-  if (job.state === 'failed') post('Retry', 'retry');
+  // A canceled job is retried too: it renders what it lacked, under the same id.
+  if (job.state === 'failed' || job.state === 'canceled') post('Retry', 'retry');
   if (!FINISHED.has(job.state)) {
     twoClicks('Cancel', 'Really cancel?', 'cancel', async () => applied(await api('POST', jobPath(job.id, '/cancel'))));
   }
@@ -848,7 +885,7 @@ class FrameImages {
   async load(entry) {
     entry.state = 'loading';
     try {
-      const response = await fetch(jobPath(this.jobId, `/frames/${entry.frame}/image?format=png`), { headers: withAuth(), cache: 'no-store' });
+      const response = await fetchWithToken(jobPath(this.jobId, `/frames/${entry.frame}/image?format=png`), { cache: 'no-store' });
       await checked(response);
       const blob = await response.blob();
       if (this.closed) return;
@@ -1480,7 +1517,7 @@ function jobView(main, id) {
     imageLoading = true;
     try {
       const target = animated ? `/frames/${frame}/image?format=png&partial=1` : '/image?format=png&partial=1';
-      const response = await fetch(jobPath(id, target), { headers: withAuth(), cache: 'no-store' });
+      const response = await fetchWithToken(jobPath(id, target), { cache: 'no-store' });
       await checked(response);
       const bitmap = await createImageBitmap(await response.blob());
       if (view.gone || serial !== imageSerial) {
@@ -1649,7 +1686,7 @@ function jobView(main, id) {
   const download = (button, format) => act(button, `The ${format.toUpperCase()} image`, async () => {
     const frame = animated ? shownFrame : null;
     const target = frame === null ? `/image?format=${format}&partial=1` : `/frames/${frame}/image?format=${format}&partial=1`;
-    const response = await fetch(jobPath(id, target), { headers: withAuth(), cache: 'no-store' });
+    const response = await fetchWithToken(jobPath(id, target), { cache: 'no-store' });
     await checked(response);
     const url = URL.createObjectURL(await response.blob());
     const name = frame === null
@@ -1986,4 +2023,4 @@ $('#forget-token').addEventListener('click', () => {
 });
 
 showForgetButton();
-route();
+learnAccess().then(route);

@@ -2,12 +2,14 @@
 // a real tessera-server with one local worker:
 //   1. a job submitted over the API ...
 //   2. ... shows up in the jobs table;
-//   3. its page fills in tile by tile (two screenshots of the canvas, apart, differ);
-//   4. a running job is canceled from its page, and the API says so;
+//   3. its page fills in tile by tile (two screenshots of the canvas, apart, differ), and
+//      its Tiles and Heatmap toggles show which is on;
+//   4. a running job is canceled from its page, and the API says so, then retried from it;
 //   5. a job named like markup is shown as text (no element made, no dialog);
 //   6. no request leaves the coordinator's origin;
 //   7. a coordinator with tokens: the page asks for the API token, shows nothing until it
-//      has it, keeps it in sessionStorage only (never in a URL or a cookie);
+//      has it and asks nothing that would be refused (no 401), keeps it in sessionStorage
+//      only (never in a URL or a cookie);
 //   8. an animation's page: its frame strip has a cell per frame, which turn done and show
 //      thumbnails; a frame clicked is shown; the flipbook plays the frames; the tile counts
 //      are of the frame shown. A still's page shows none of it.
@@ -249,6 +251,23 @@ async function main() {
   await download.saveAs(saved);
   check(fs.readFileSync(saved).subarray(0, 8).equals(Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a])), 'the PNG download is a PNG');
   log(`   the PNG download is a PNG (${download.suggestedFilename()})`);
+  // The overlay's toggles show which is on: pressed, and coloured unlike the one that is off.
+  const looks = () => page.evaluate(() => Object.fromEntries(['#toggle-tiles', '#toggle-heat'].map((selector) => {
+    const button = document.querySelector(selector);
+    return [selector.slice(8), { pressed: button.getAttribute('aria-pressed'), background: getComputedStyle(button).backgroundColor }];
+  })));
+  const before = await looks();
+  check(before.tiles.pressed === 'true' && before.heat.pressed === 'false', `the toggles start ${JSON.stringify(before)}`);
+  check(before.tiles.background !== before.heat.background, 'Tiles (on) and Heatmap (off) look alike');
+  await page.click('#toggle-heat');
+  await page.click('#toggle-tiles');
+  const after = await looks();
+  check(after.tiles.pressed === 'false' && after.heat.pressed === 'true', `the toggles are ${JSON.stringify(after)} once clicked`);
+  check(after.heat.background === before.tiles.background && after.tiles.background === before.heat.background, 'a toggle clicked does not look as the other did');
+  check(await page.locator('.legend').isVisible(), 'the heatmap shows no legend');
+  await page.click('#toggle-heat');
+  await page.click('#toggle-tiles');
+  log('   Tiles and Heatmap show which is on');
   const final = await until('the first job to complete', async () => {
     const s = await api(open, 'GET', `/v1/jobs/${job.id}?wait_s=10`);
     return s.state === 'completed' ? s : null;
@@ -270,6 +289,14 @@ async function main() {
   const canceled = await api(open, 'GET', `/v1/jobs/${big.id}`);
   check(canceled.state === 'canceled', `the API says ${canceled.state}, not canceled`);
   log('4. a running job was canceled from its page');
+  // Canceled by mistake: Retry brings it back, under its id, with its tiles done.
+  await page.locator('button[data-action="retry"]').click();
+  await page.locator('.job-head .state.running, .job-head .state.queued').first().waitFor({ timeout: 15000 });
+  const retried = await api(open, 'GET', `/v1/jobs/${big.id}`);
+  check(retried.state === 'running' || retried.state === 'queued', `the API says ${retried.state} after Retry`);
+  check(retried.tiles.done >= canceled.tiles.done, `the retried job lost tiles: ${retried.tiles.done} of ${canceled.tiles.done}`);
+  await api(open, 'POST', `/v1/jobs/${big.id}/cancel`); // it would take the worker from what follows
+  log(`   and retried from its page, keeping its ${canceled.tiles.done} tiles done`);
 
   // 5. A name made of markup is text.
   const cliEnv = { ...process.env, TESSERA_SERVER: origin };
@@ -379,12 +406,20 @@ async function main() {
   const locked = await startServer('tokens', ['--api-token', API_TOKEN, '--worker-token', WORKER_TOKEN]);
   const secretJob = await submit(locked, 'behind a token', showcase(64, 48, 1), { token: API_TOKEN });
   const tokenPage = watch(await context.newPage());
+  // Until a token is given, nothing is asked that would be refused: no 401 in the console.
+  let tokenGiven = false;
+  const refusedEarly = [];
+  tokenPage.on('response', (response) => {
+    if (!tokenGiven && response.status() === 401) refusedEarly.push(response.url());
+  });
   await page.close();
   await tokenPage.goto(`${locked.origin}/`);
   await tokenPage.locator('#token-form').waitFor({ state: 'visible', timeout: 15000 });
   await pageUntil(tokenPage, 'the jobs table to ask for the token', () => /API token/.test(document.querySelector('#jobs .empty-row')?.textContent ?? ''), null, 15000);
   check((await tokenPage.locator('#jobs tbody tr[data-job-id]').count()) === 0, 'jobs are shown without the token');
   // A wrong token is refused, saying so.
+  check(refusedEarly.length === 0, `asked without the token, and refused: ${refusedEarly.join(', ')}`);
+  tokenGiven = true;
   await tokenPage.fill('#token-input', 'not-the-token');
   await tokenPage.press('#token-input', 'Enter');
   await tokenPage.locator('#auth-error').waitFor({ state: 'visible', timeout: 15000 });
@@ -402,10 +437,13 @@ async function main() {
   check(stored.local === 0, 'localStorage holds something');
   check(stored.cookie === '', `document.cookie is ${JSON.stringify(stored.cookie)}`);
   check((await context.cookies()).length === 0, 'the browser holds cookies');
-  // "Forget token" forgets it.
+  // "Forget token" forgets it, and asks nothing more without it.
+  tokenGiven = false;
   await tokenPage.click('#forget-token');
   await tokenPage.locator('#token-form').waitFor({ state: 'visible', timeout: 15000 });
   check(await tokenPage.evaluate(() => sessionStorage.getItem('tessera.token')) === null, 'the token is still stored after "Forget token"');
+  await pageUntil(tokenPage, 'the jobs table to ask for the token again', () => /API token/.test(document.querySelector('#jobs .empty-row')?.textContent ?? ''), null, 15000);
+  check(refusedEarly.length === 0, `asked without the token once forgotten, and refused: ${refusedEarly.join(', ')}`);
   log('7. with tokens: the page asks for the API token, shows the jobs once given, keeps it in sessionStorage only');
 
   // 6. Every request stayed at the coordinators' origins, and no URL carried a token.

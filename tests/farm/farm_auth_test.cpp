@@ -140,7 +140,10 @@ TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
       403);
   // The server kept serving, and logged no secret.
   HttpClient http = farm.http(10s);
-  EXPECT_EQ(http.request("GET", "/healthz").status, 200);
+  const HttpResult health = http.request("GET", "/healthz");
+  EXPECT_EQ(health.status, 200);
+  // Said to anyone, as a 401 would: the dashboard asks for the token before any call.
+  EXPECT_EQ(nlohmann::json::parse(health.body)["api_token_required"], true) << health.body;
   const std::string log = test::read_text(farm.dir() / "server.log");
   EXPECT_EQ(log.find(api_token), std::string::npos);
   EXPECT_EQ(log.find(worker_token), std::string::npos);

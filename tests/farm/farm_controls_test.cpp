@@ -192,7 +192,7 @@ TEST(FarmControls, AFailedJobIsRetriedOnAHealthyWorkerAndItsImageIsWhole) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
   const test::CliRun again = cli(farm, {"retry", id});
   EXPECT_EQ(again.exit_code, 1) << again.output;
-  EXPECT_TRUE(contains(again.output, "only a failed job is retried")) << again.output;
+  EXPECT_TRUE(contains(again.output, "only a failed or canceled job is retried")) << again.output;
 }
 
 TEST(FarmControls, ADrainedWorkerTakesNoTilesAndARemovedOneIsForgotten) {

@@ -256,6 +256,42 @@ TEST_F(SchedulerBatchTest, AJobWhoseImageCannotBeWrittenFails) {
   EXPECT_EQ(failed.state, JobState::failed);
   EXPECT_NE(failed.error.find("cannot write the image"), std::string::npos) << failed.error;
   EXPECT_EQ(failed.tiles_done, 1);  // the tiles are kept all the same
+  EXPECT_FALSE(s().image_file(job));
+}
+
+// The disk was full when the image was written, and has room again: a retry writes it
+// from the stored tiles, rendering nothing again, and the job is completed for good.
+TEST_F(SchedulerBatchTest, ARetryWritesTheImageThatCouldNotBeWritten) {
+  const std::string job = submit(64, 32, 16).id;  // 8 tiles
+  std::filesystem::remove_all(store_->data_dir() / "images");
+  std::ofstream(store_->data_dir() / "images") << "not a directory";
+  const std::string w = worker();
+  while (const auto lease = s().claim(w, 100))
+    ASSERT_EQ(deliver(*lease, 0.25f), ResultOutcome::accepted);
+  s().wait_for_images();
+  ASSERT_EQ(s().job(job)->state, JobState::failed);
+  // Still no room: the retry is taken, and fails again for the same reason.
+  ASSERT_EQ(s().retry(job).result, ControlOutcome::Result::done);
+  s().wait_for_images();
+  EXPECT_EQ(s().job(job)->state, JobState::failed);
+  EXPECT_NE(s().job(job)->error.find("cannot write the image"), std::string::npos);
+
+  std::filesystem::remove(store_->data_dir() / "images");
+  std::filesystem::create_directories(store_->data_dir() / "images");
+  ASSERT_EQ(s().retry(job).result, ControlOutcome::Result::done);
+  EXPECT_EQ(s().job(job)->state, JobState::completed);
+  EXPECT_EQ(s().job(job)->error, "");
+  EXPECT_FALSE(s().claim(w, 100)) << "nothing renders again";
+  s().wait_for_images();
+  Image expected(64, 32);
+  for (const TileRect& rect : split_into_tiles(64, 32, 16))
+    expected.paste(rect, tile_pixels(rect, 0.25f));
+  ASSERT_TRUE(s().image_file(job));
+  EXPECT_TRUE(same_bits(read_image(*s().image_file(job)).pixels(), expected.pixels()));
+  reopen();
+  EXPECT_EQ(s().job(job)->state, JobState::completed);
+  ASSERT_TRUE(s().image_file(job));
+  EXPECT_EQ(s().retry(job).code, "not_failed");
 }
 
 // What the store writes per operation: a row per lease and per upload, whatever the tiles.

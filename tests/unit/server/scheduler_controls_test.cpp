@@ -128,6 +128,38 @@ TEST_F(SchedulerTest, ARetriedJobRendersOnlyTheTilesItLackedAndItsImageIsWhole) 
   EXPECT_EQ(s().retry(job).code, "not_failed");
 }
 
+// Canceled by mistake: a retry brings the job back under its id, with its tiles done; the
+// lease the cancel withdrew stays withdrawn, and the rest renders once.
+TEST_F(SchedulerTest, ACanceledJobIsRetriedKeepingItsTilesDone) {
+  const std::string job = submit(64, 32, 16).id;  // 8 tiles
+  const std::string w = worker();
+  ASSERT_EQ(deliver(*s().claim(w, 3), 0.5f), ResultOutcome::accepted);
+  const Lease withdrawn = *s().claim(w, 2);
+  ASSERT_EQ(s().cancel(job), CancelOutcome::canceled);
+  ASSERT_EQ(s().job(job)->state, JobState::canceled);
+  EXPECT_EQ(s().retry(job).result, Result::done);
+  const JobStatus retried = *s().job(job);
+  EXPECT_EQ(retried.state, JobState::running);
+  EXPECT_EQ(retried.finished_at_ms, 0);
+  EXPECT_EQ(retried.tiles_done, 3);
+  EXPECT_EQ(deliver(withdrawn, 0.5f), ResultOutcome::stale);
+  reopen();  // the retry is stored
+  EXPECT_EQ(s().job(job)->state, JobState::running);
+  int rendered = 0;
+  while (const auto lease = s().claim(w, 100)) {
+    rendered += static_cast<int>(lease->tiles.size());
+    ASSERT_EQ(deliver(*lease, 0.5f), ResultOutcome::accepted);
+  }
+  EXPECT_EQ(rendered, 5);
+  EXPECT_EQ(s().job(job)->state, JobState::completed);
+  Image expected(64, 32);
+  for (const TileRect& rect : split_into_tiles(64, 32, 16))
+    expected.paste(rect, tile_pixels(rect, 0.5f));
+  s().wait_for_images();
+  ASSERT_TRUE(s().image_file(job));
+  EXPECT_TRUE(same_bits(read_image(*s().image_file(job)).pixels(), expected.pixels()));
+}
+
 TEST_F(SchedulerTest, ARetryAfterARestartForgetsTheStoredFailures) {
   config_.max_tile_attempts = 1;
   reopen();
