@@ -313,7 +313,10 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   EXPECT_NE(error.find("full"), std::string::npos) << error;
   // Named within the data dir: the server's own paths are none of a client's business.
   EXPECT_EQ(error.find(data.string()), std::string::npos) << error;
-  EXPECT_NE(error.find("pixels/" + id + ".f32"), std::string::npos) << error;
+  // Which write meets the full disk first depends on timing: the pixels, or the store's log.
+  EXPECT_TRUE(error.find("pixels/" + id + ".f32") != std::string::npos ||
+              error.find("cannot store a change") != std::string::npos)
+      << error;
 
   // Still serving: status, lists, health; a new job gets an answer, stored or refused clearly.
   EXPECT_FALSE(server->wait_for(0ms).has_value()) << "the coordinator died";
