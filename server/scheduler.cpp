@@ -105,7 +105,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   s.frames = std::move(job_frames);
   job->tiles_per_frame = static_cast<int>(rects.size());
   job->tiles.resize(rects.size() * frame_count);
-  for (std::size_t i = 0; i < job->tiles.size(); ++i) job->tiles[i].rect = rects[i % rects.size()];
+  job->rects = std::make_shared<const std::vector<TileRect>>(rects);
 
   StoreTicket ticket = 0;
   {
@@ -315,7 +315,7 @@ FrameInfo Scheduler::frame_info(const JobEntry& job, int slot) const {
     for (int index = first; index < first + job.tiles_per_frame; ++index) {
       const TileSlot& tile = job.tiles[index];
       if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
-      info.error = spent_tile_error(index - first, tile);
+      info.error = spent_tile_error(index - first, job.rect(index), tile);
       break;
     }
   } else if (info.tiles_rendering > 0 || info.tiles_done > 0) {

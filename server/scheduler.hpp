@@ -29,6 +29,7 @@
 #include "server/clock.hpp"
 #include "server/image_assembly.hpp"
 #include "server/scheduler_records.hpp"
+#include "server/shared_text.hpp"
 #include "server/store.hpp"
 #include "server/store_thread.hpp"
 
@@ -242,6 +243,8 @@ class Scheduler {
   void stage_job_states(StagedChange& change, std::int64_t now);
   JobEntry* find_job(const std::string& id) const;
   WorkerEntry* find_worker(const std::string& id) const;
+  // The worker's id as tiles hold it: one text for all the tiles it holds or rendered.
+  SharedText worker_text(const std::string& id) const;
   // The image thread could not write a completed job's image: the job fails.
   void image_write_failed(const std::string& id, const std::string& error);
 

@@ -327,11 +327,7 @@ void Scheduler::index_tiles(JobEntry& job, std::vector<int> order) {
   const int frames = job.frame_count();
   if (job.tiles_per_frame == 0) job.tiles_per_frame = static_cast<int>(job.tiles.size()) / frames;
   if (order.empty()) {
-    std::vector<TileRect> rects;
-    rects.reserve(job.tiles_per_frame);
-    for (int index = 0; index < job.tiles_per_frame; ++index)
-      rects.push_back(job.tiles[index].rect);
-    order = hand_out_order(rects, job.status.width, job.status.height, frames);
+    order = hand_out_order(*job.rects, job.status.width, job.status.height, frames);
   }
   job.order = std::move(order);
   job.rank.assign(job.order.size(), 0);

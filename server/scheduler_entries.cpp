@@ -109,9 +109,7 @@ std::shared_ptr<const JobFrames> still_frames() {
 }
 
 std::vector<std::shared_ptr<const Frame>> frames_of(const JobEntry& job) {
-  auto rects = std::make_shared<std::vector<TileRect>>();
-  rects->reserve(job.tiles_per_frame);
-  for (int i = 0; i < job.tiles_per_frame; ++i) rects->push_back(job.tiles[i].rect);
+  const std::shared_ptr<const std::vector<TileRect>>& rects = job.rects;
   std::vector<std::shared_ptr<const Frame>> frames;
   for (int slot = 0; slot < job.frame_count(); ++slot)
     frames.push_back(std::make_shared<const Frame>(Frame{job.status.width, job.status.height, rects,
@@ -130,9 +128,9 @@ std::string image_key(const JobEntry& job, int slot) {
          std::to_string(job.status.frames->numbers[slot]);
 }
 
-std::string spent_tile_error(int index, const TileSlot& tile) {
-  return "tile " + std::to_string(index) + " at (" + std::to_string(tile.rect.x) + ", " +
-         std::to_string(tile.rect.y) + ") failed " + std::to_string(tile.attempts) +
+std::string spent_tile_error(int index, const TileRect& rect, const TileSlot& tile) {
+  return "tile " + std::to_string(index) + " at (" + std::to_string(rect.x) + ", " +
+         std::to_string(rect.y) + ") failed " + std::to_string(tile.attempts) +
          " times; the last error: " + tile.last_error;
 }
 

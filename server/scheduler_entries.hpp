@@ -18,11 +18,12 @@
 #include "common/protocol/workers.hpp"
 #include "server/pending_tiles.hpp"
 #include "server/scheduler.hpp"
+#include "server/shared_text.hpp"
 #include "server/store.hpp"
 
 namespace tessera {
 
-enum class TileState { pending, leased, done };
+enum class TileState : std::uint8_t { pending, leased, done };
 const char* to_string(TileState state);
 std::optional<TileState> tile_state_from_string(std::string_view text);
 
@@ -40,19 +41,22 @@ inline bool is_present(std::string_view state) {
   return state != worker_gone && state != worker_departed;
 }
 
+// A tile's state. A job holds one per tile of every frame, millions of them for a large
+// one, so it is kept small (72 bytes): its rectangle is the job's (JobEntry::rect), and
+// its ids are shared with the lease and worker that every other tile of theirs names.
 struct TileSlot {
-  TileRect rect;
-  TileState state = TileState::pending;
-  std::string lease_id;   // the live lease; "" when none
-  std::string worker_id;  // the lease holder, or who rendered a done tile
+  SharedText lease_id;         // the live lease; "" when none
+  SharedText worker_id;        // the lease holder, or who rendered a done tile
+  SharedText result_lease_id;  // the lease whose pixels are stored
+  SharedText last_error;       // why it failed last
   std::int64_t lease_expires_ms = 0;
-  int attempts = 0;  // times it failed: its lease expired, or its worker reported an error
   std::uint64_t rays = 0;
-  std::string result_lease_id;  // the lease whose pixels are stored
-  std::string last_error;       // why it failed last
-  int handouts = 0;  // times it went out under a lease; in memory only (see count_handouts)
   std::uint64_t render_us = 0;  // of a done tile, as its worker timed it; in memory only
+  int attempts = 0;  // times it failed: its lease expired, or its worker reported an error
+  int handouts = 0;  // times it went out under a lease; in memory only (see count_handouts)
+  TileState state = TileState::pending;
 };
+static_assert(sizeof(TileSlot) <= 72, "a tile's state is kept small: see TileSlot");
 
 struct JobEntry {
   JobStatus status;  // tiles_total/done/rendering are kept current by Scheduler::track_tile
@@ -60,6 +64,11 @@ struct JobEntry {
   // indexes k * tiles_per_frame to (k + 1) * tiles_per_frame - 1, cut alike.
   std::vector<TileSlot> tiles;
   int tiles_per_frame = 0;
+  // One frame's rectangles, by index in the frame: every frame is cut alike.
+  // Empty for a job that holds no tiles (not loaded at start).
+  std::shared_ptr<const std::vector<TileRect>> rects =
+      std::make_shared<const std::vector<TileRect>>();
+  const TileRect& rect(int index) const { return (*rects)[index % tiles_per_frame]; }
   int slot_of(int index) const { return index / tiles_per_frame; }
   int frame_of_tile(int index) const { return status.frames->numbers[slot_of(index)]; }
   int frame_count() const { return static_cast<int>(status.frames->numbers.size()); }
@@ -81,6 +90,7 @@ struct WorkerEntry {
   std::string key() const { return info.name + "@" + info.host; }
 
   WorkerInfo info;                     // current_job/current_tile mirror lease_id
+  SharedText id_text;                  // info.id, shared by the tiles that name it
   std::string lease_id;                // the live lease it holds; "" when none
   std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store
   std::string secret_sha256;           // of the secret its registration gave it
@@ -126,7 +136,7 @@ std::string image_key(const JobEntry& job, int slot);
 // Why a tile that spent its attempts failed, `index` counted in its frame: "tile 4 at
 // (32, 32) failed 3 times; the last error: ...". A still's job error, an animation's
 // frame's.
-std::string spent_tile_error(int index, const TileSlot& tile);
+std::string spent_tile_error(int index, const TileRect& rect, const TileSlot& tile);
 // The job id of an image key, and the frame slot it names in `job` (nothing for a key
 // that is not one of the job's).
 std::string job_of_image(const std::string& key);

@@ -25,7 +25,7 @@ void Scheduler::stage_tile_failure(StagedChange& change, JobEntry& job, int inde
                tile.attempts, config_.max_tile_attempts, error);
   if (tile.attempts < config_.max_tile_attempts) return;
   if (job.frame_count() == 1) {
-    stage_job_failure(change, job, spent_tile_error(index, tile));
+    stage_job_failure(change, job, spent_tile_error(index, job.rect(index), tile));
     return;
   }
   // An animation loses the frame, not the job: the frame's other tiles are withdrawn (its
@@ -68,8 +68,8 @@ std::string Scheduler::failed_frames_error(const JobEntry& job, const std::vecto
     const TileSlot& tile = staged != change.tiles.end() ? staged->second : job.tiles[index];
     if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
     error += "; frame " + std::to_string(failed.front()) + ", tile " +
-             std::to_string(index - first) + " at (" + std::to_string(tile.rect.x) + ", " +
-             std::to_string(tile.rect.y) + "): " + tile.last_error;
+             std::to_string(index - first) + " at (" + std::to_string(job.rect(index).x) + ", " +
+             std::to_string(job.rect(index).y) + "): " + tile.last_error;
     break;
   }
   return error;

@@ -25,7 +25,7 @@ namespace {
 std::string handouts_error(const JobEntry& job, const std::vector<int>& tiles, int limit) {
   const int index = *std::min_element(tiles.begin(), tiles.end(),
                                       [&](int a, int b) { return job.rank[a] < job.rank[b]; });
-  const TileRect& rect = job.tiles[index].rect;
+  const TileRect& rect = job.rect(index);
   std::string error = "tile " + std::to_string(index) + " at (" + std::to_string(rect.x) + ", " +
                       std::to_string(rect.y) + ") went out to workers " + std::to_string(limit) +
                       " times without its result being accepted";
@@ -132,6 +132,9 @@ std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
                                         int count, std::int64_t expires_ms, bool extending,
                                         int slot) {
   std::vector<int> batch;
+  // Shared by the batch's tiles, rather than a copy of each id in each.
+  const SharedText lease(lease_id);
+  const SharedText worker = worker_text(worker_id);
   int position = job.pending.first_from(0);  // staging leaves the pending set alone
   for (int i = 0; i < count && position >= 0;
        ++i, position = job.pending.first_from(position + 1)) {
@@ -144,8 +147,8 @@ std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
     if ((i > 0 || extending) && job.tiles[index].attempts > 0) break;
     TileSlot& tile = change.tile(job, index);
     tile.state = TileState::leased;
-    tile.lease_id = lease_id;
-    tile.worker_id = worker_id;
+    tile.lease_id = lease;
+    tile.worker_id = worker;
     tile.lease_expires_ms = expires_ms;
     count_handout(job, tile);
     batch.push_back(index);
@@ -187,7 +190,7 @@ Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int
       Lease lease = lease_of(lease_id);
       lease.tiles.clear();
       // In hand-out order, as stage_batch() took them.
-      for (const int index : added) lease.tiles.push_back({index, job.tiles[index].rect});
+      for (const int index : added) lease.tiles.push_back({index, job.rect(index)});
       result = std::move(lease);
     }
     answer = pending(std::move(result), before);
@@ -345,7 +348,7 @@ Lease Scheduler::lease_of(const std::string& lease_id) const {
     lease.worker_id = job.tiles[live.front()].worker_id;
     lease.expires_at_ms = job.tiles[live.front()].lease_expires_ms;
   }
-  for (const int index : live) lease.tiles.push_back({index, job.tiles[index].rect});
+  for (const int index : live) lease.tiles.push_back({index, job.rect(index)});
   return lease;
 }
 

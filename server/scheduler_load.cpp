@@ -37,12 +37,14 @@ void Scheduler::load_and_reconcile() {
   StagedChange change;
   load_results(stored.results, change);
   for (const LeaseRow& row : stored.leases) {
+    const SharedText lease(row.id);
+    const SharedText worker = worker_text(row.worker_id);
     for (const int index : row.tiles) {
       TileSlot* tile = stored_tile(row.job_id, index);
       if (!tile || tile->state == TileState::done) continue;  // delivered after all
       tile->state = TileState::leased;
-      tile->lease_id = row.id;
-      tile->worker_id = row.worker_id;
+      tile->lease_id = lease;
+      tile->worker_id = worker;
     }
   }
   for (auto& [id, job] : jobs_) index_tiles(*job);
@@ -91,6 +93,7 @@ void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
   for (WorkerRow& row : rows) {
     auto worker = std::make_unique<WorkerEntry>();
     worker->info.id = row.id;
+    worker->id_text = row.id;
     worker->info.name = std::move(row.name);
     worker->info.host = std::move(row.host);
     worker->info.threads = row.threads;
@@ -143,8 +146,7 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
     const std::vector<TileRect> rects = split_into_tiles(s.width, s.height, s.tile_size);
     job->tiles_per_frame = static_cast<int>(rects.size());
     job->tiles.resize(rects.size() * s.frames->numbers.size());
-    for (std::size_t i = 0; i < job->tiles.size(); ++i)
-      job->tiles[i].rect = rects[i % rects.size()];
+    job->rects = std::make_shared<const std::vector<TileRect>>(rects);
     job_memory_ += job->tiles.size() * kTileBytes;
   }
   return unknown_state;
@@ -169,7 +171,9 @@ void Scheduler::load_results(const std::vector<ResultRow>& rows, StagedChange& c
     for (std::size_t i = 0; usable && i < row.tiles.size(); ++i) {
       const TileSlot* tile = stored_tile(row.job_id, row.tiles[i]);
       usable = tile && tile->state != TileState::done && named.insert(row.tiles[i]).second;
-      if (usable) bytes += static_cast<std::int64_t>(tile->rect.pixel_count() * 3 * sizeof(float));
+      if (usable)
+        bytes +=
+            static_cast<std::int64_t>(job->rect(row.tiles[i]).pixel_count() * 3 * sizeof(float));
     }
     if (!usable || bytes != row.pixel_bytes) {
       forgotten_results.push_back(row.id);
@@ -181,12 +185,14 @@ void Scheduler::load_results(const std::vector<ResultRow>& rows, StagedChange& c
       }
       continue;
     }
+    const SharedText lease(row.lease_id);
+    const SharedText worker = worker_text(row.worker_id);
     for (std::size_t i = 0; i < row.tiles.size(); ++i) {
       TileSlot& tile = job->tiles[row.tiles[i]];
       tile.state = TileState::done;
-      tile.worker_id = row.worker_id;
+      tile.worker_id = worker;
       tile.rays = row.rays[i];
-      tile.result_lease_id = row.lease_id;
+      tile.result_lease_id = lease;
     }
   }
   // Forgotten together with the rays they counted, in the one transaction of what follows.

@@ -56,7 +56,7 @@ FarmObserver::TileChange Scheduler::tile_change(const JobEntry& job, int index) 
   change.job_id = job.status.id;
   change.index = index;
   change.frame = job.frame_of_tile(index);
-  change.rect = tile.rect;
+  change.rect = job.rect(index);
   change.view = view_of(tile);
   if (change.view == FarmObserver::TileView::rendering ||
       change.view == FarmObserver::TileView::done) {

@@ -55,8 +55,8 @@ struct SchedulerConfig {
 
 // What one tile of a job costs the coordinator's memory, reckoned for job_memory_budget: its
 // state, its place in the hand-out order and the pending set (docs/performance.md,
-// "Coordinator memory per tile", measured 250 bytes).
-inline constexpr std::uint64_t kTileBytes = 256;
+// "Coordinator memory per tile", measured 105 to 115 bytes).
+inline constexpr std::uint64_t kTileBytes = 128;
 
 // Signs of trouble on a job that has not (yet) failed of them, shown with its status: a farm
 // that renders the same tiles again and again, or delivers nothing, must be seen as such.

@@ -106,7 +106,8 @@ std::variant<ResultOutcome, std::vector<const TileResult*>> Scheduler::fresh_res
     // delivered was never its own; a lease with no live tile left has ended.
     if (tile.lease_id != lease_id)
       return live.empty() ? ResultOutcome::stale : ResultOutcome::wrong_tile;
-    if (result.pixels.size() != tile.rect.pixel_count() * 3) return ResultOutcome::wrong_size;
+    if (result.pixels.size() != job.rect(result.tile_index).pixel_count() * 3)
+      return ResultOutcome::wrong_size;
     fresh.push_back(&result);
   }
   if (fresh.empty()) return results.empty() ? ResultOutcome::wrong_size : ResultOutcome::duplicate;
@@ -121,10 +122,11 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
   for (const TileResult* result : fresh) {
     TileSlot& tile = change.tile(job, result->tile_index);
     tile.state = TileState::done;
+    // Its lease's id, shared, now names its stored pixels; worker_id stays: who rendered it.
+    tile.result_lease_id = std::move(tile.lease_id);
     tile.lease_id.clear();
     tile.lease_expires_ms = 0;
     tile.rays = result->rays;
-    tile.result_lease_id = lease_id;  // worker_id stays: who rendered it
     tile.render_us = result->render_us;
     change.pixels[{&job, result->tile_index}] = result->pixels;
     status.rays += result->rays;
@@ -185,7 +187,8 @@ std::optional<std::vector<std::size_t>> Scheduler::tile_pixel_counts(
   std::vector<std::size_t> counts;
   counts.reserve(tile_indexes.size());
   for (const std::uint64_t index : tile_indexes)
-    counts.push_back(index < job.tiles.size() ? job.tiles[index].rect.pixel_count() : 0);
+    counts.push_back(index < job.tiles.size() ? job.rect(static_cast<int>(index)).pixel_count()
+                                              : 0);
   return counts;
 }
 

@@ -25,6 +25,7 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
   do {
     info.id = "w-" + random_hex(12);
   } while (workers_.contains(info.id));
+  worker->id_text = info.id;
   info.name = name;
   info.host = host;
   info.threads = threads;
@@ -168,6 +169,11 @@ void Scheduler::note_seen(WorkerEntry& worker, std::int64_t now) {
   if (now - worker.persisted_seen_ms < seen_write_interval_ms) return;
   queue_write([id = worker.info.id, now](Store& store) { store.update_worker_seen(id, now); });
   worker.persisted_seen_ms = now;
+}
+
+SharedText Scheduler::worker_text(const std::string& id) const {
+  const WorkerEntry* worker = find_worker(id);
+  return worker ? worker->id_text : SharedText(id);
 }
 
 }  // namespace tessera

@@ -53,8 +53,8 @@ TEST(FarmJobMemory, JobsAreBudgetedTheirTilesPagedAndAStartOverTheBudgetServes) 
     const int port = test::port_from_file(dir, dir / log);
     return std::make_pair(std::move(server), "http://127.0.0.1:" + std::to_string(port));
   };
-  // 300 MB: one job of 2^20 tiles (256 MiB reckoned) fits, a second does not.
-  auto [server, url] = start("300000000", "server.log");
+  // 200 MB: one job of 2^20 tiles (128 MiB reckoned) fits, a second does not.
+  auto [server, url] = start("200000000", "server.log");
   HttpClient http(url, 30s);
   // Over --max-job-tiles (4,194,304 by default): a 32768-pixel square at 8-pixel tiles.
   // The width limit is raised by nothing here, so ask within it: 16384 at 4-pixel tiles.
@@ -65,14 +65,19 @@ TEST(FarmJobMemory, JobsAreBudgetedTheirTilesPagedAndAStartOverTheBudgetServes) 
   EXPECT_EQ(json::parse(too_many.body)["error"]["limit"], "max_job_tiles");
   EXPECT_NE(too_many.body.find("--max-job-tiles"), std::string::npos) << too_many.body;
 
+  const std::int64_t idle = rss_kib(server->pid());
   const HttpResult first = submit(http, sphere_scene(8192));  // 1,048,576 tiles
   ASSERT_EQ(first.status, 201) << first.body;
+  // Compact tiles: what the job costs stays within what the budget reckons, 128 bytes a
+  // tile (it was about 230 while each tile held its own strings and rectangle).
+  const std::int64_t held = rss_kib(server->pid()) - idle;
+  EXPECT_LT(held, 128 * 1024) << "a job of 1,048,576 tiles took " << held << " KiB";
   const std::string id = json::parse(first.body)["id"];
   const HttpResult second = submit(http, sphere_scene(8192));
   ASSERT_EQ(second.status, 422) << second.body;
   const json refusal = json::parse(second.body)["error"];
   EXPECT_EQ(refusal["limit"], "job_memory_budget");
-  EXPECT_EQ(refusal["limit_value"], 300000000);
+  EXPECT_EQ(refusal["limit_value"], 200000000);
   EXPECT_NE(refusal["message"].get<std::string>().find("--job-memory-budget"), std::string::npos)
       << second.body;
   // Smaller jobs still fit beside it.
