@@ -24,9 +24,9 @@
 
 #include "bench/grid_mesh.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scene_frames.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/local_render.hpp"
+#include "common/scene/scene_frames.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/local_render.hpp"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

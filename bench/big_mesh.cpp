@@ -11,7 +11,7 @@
 //       one 32 x 32 tile rendered; prints the seconds of each and the process's peak RSS
 //       growth over its RSS before the file was read
 // Lines are "key value" pairs, for bench/run. Like tessera-worker, the program starts itself
-// again with glibc's malloc on transparent huge pages (common/huge_page_malloc.hpp).
+// again with glibc's malloc on transparent huge pages (common/image/huge_page_malloc.hpp).
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -29,10 +29,10 @@
 
 #include "bench/coordinator_load/server_process.hpp"
 #include "bench/grid_mesh.hpp"
-#include "common/huge_page_malloc.hpp"
+#include "common/image/huge_page_malloc.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/renderer.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/renderer.hpp"
 
 namespace {
 

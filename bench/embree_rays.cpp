@@ -23,10 +23,10 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/median.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/embree_device.hpp"
-#include "worker/local_render.hpp"
-#include "worker/scene_geometry.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/embree_device.hpp"
+#include "tracer/local_render.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace {
 

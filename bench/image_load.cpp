@@ -13,8 +13,8 @@
 #include <string_view>
 #include <thread>
 
-#include "common/huge_page_malloc.hpp"
-#include "common/image_file_loader.hpp"
+#include "common/image/huge_page_malloc.hpp"
+#include "common/image/image_file_loader.hpp"
 
 namespace {
 

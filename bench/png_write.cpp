@@ -17,10 +17,10 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/median.hpp"
-#include "common/image_io.hpp"
-#include "common/png_file.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/local_render.hpp"
+#include "common/image/image_io.hpp"
+#include "common/image/png_file.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/local_render.hpp"
 
 namespace {
 

@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/median.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/local_render.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/local_render.hpp"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "client/job_commands.hpp"
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 

@@ -11,8 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include "client/job_commands.hpp"
-#include "common/printable.hpp"
-#include "common/scn_import.hpp"
+#include "common/scn/scn_import.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 namespace {

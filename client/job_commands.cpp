@@ -20,15 +20,15 @@
 #include "client/scene_assets.hpp"
 #include "client/scene_input.hpp"
 #include "client/short_ids.hpp"
-#include "common/frame_list.hpp"
-#include "common/image_format.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
-#include "common/printable.hpp"
 #include "common/protocol/events.hpp"
+#include "common/protocol/image_format.hpp"
 #include "common/protocol/paths.hpp"
-#include "common/scene_parser.hpp"
-#include "common/secret.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/text/printable.hpp"
+#include "common/text/secret.hpp"
 
 namespace tessera {
 namespace {

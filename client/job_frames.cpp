@@ -8,9 +8,9 @@
 #include "client/frame_paths.hpp"
 #include "client/movie_file.hpp"
 #include "client/output_file.hpp"
-#include "common/animation.hpp"
-#include "common/frame_list.hpp"
-#include "common/printable.hpp"
+#include "common/scene/animation.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 namespace {

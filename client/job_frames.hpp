@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
+#include "common/protocol/image_format.hpp"
 
 namespace tessera {
 

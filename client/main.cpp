@@ -10,8 +10,8 @@
 #include "client/import_command.hpp"
 #include "client/job_commands.hpp"
 #include "client/render_command.hpp"
-#include "common/huge_page_malloc.hpp"
-#include "common/printable.hpp"
+#include "common/image/huge_page_malloc.hpp"
+#include "common/text/printable.hpp"
 
 namespace {
 

@@ -12,14 +12,14 @@
 #include "client/frame_paths.hpp"
 #include "client/movie_file.hpp"
 #include "client/scene_input.hpp"
-#include "common/frame_list.hpp"
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/printable.hpp"
-#include "common/scene_frames.hpp"
-#include "common/scene_parser.hpp"
-#include "common/scn_import.hpp"
-#include "worker/local_render.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/scene_frames.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/scn/scn_import.hpp"
+#include "common/text/printable.hpp"
+#include "tracer/local_render.hpp"
 
 namespace tessera {
 namespace {

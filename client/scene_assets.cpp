@@ -8,8 +8,9 @@
 
 #include "common/mesh_files/model_references.hpp"
 #include "common/net/file_digest.hpp"
-#include "common/printable.hpp"
-#include "common/scene_parser.hpp"
+#include "common/protocol/asset_digest.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 namespace {
@@ -104,7 +105,7 @@ class Sender {
 };
 
 // A material's textures, {"texture": FILE, ...}, sent and named by digest instead:
-// {"asset": "sha256:...", "name": FILE, ...}.
+// {"asset": DIGEST, "name": FILE, ...}.
 void send_textures(nlohmann::json& material, const std::filesystem::path& folder, Sender& sender) {
   if (!material.is_object()) return;
   for (const std::string_view term : textured_term_names) {
@@ -117,7 +118,7 @@ void send_textures(nlohmann::json& material, const std::filesystem::path& folder
     const std::string digest = digest_of(path, name);
     sender.send(path, name, digest);
     texture.erase("texture");
-    texture["asset"] = "sha256:" + digest;
+    texture["asset"] = protocol::AssetDigest::of_hex(digest).text();
     texture["name"] = name;
   }
 }
@@ -151,12 +152,12 @@ AssetUploads send_scene_assets(nlohmann::json& scene, const std::filesystem::pat
       const std::filesystem::path file = path.parent_path() / reference;
       const std::string digest = digest_of(file, reference);
       sender.send(file, reference, digest);
-      files[reference] = "sha256:" + digest;
+      files[reference] = protocol::AssetDigest::of_hex(digest).text();
     }
     const std::string digest = digest_of(path, name);
     sender.send(path, name, digest);
     object.erase("file");
-    object["asset"] = "sha256:" + digest;
+    object["asset"] = protocol::AssetDigest::of_hex(digest).text();
     object["format"] = std::string(mesh_format_names[static_cast<int>(format)]);
     object["name"] = name;
     if (!files.empty()) object["files"] = std::move(files);

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cctype>
 
-#include "common/scene_parser.hpp"
-#include "common/scn_import.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/scn/scn_import.hpp"
 
 namespace tessera {
 

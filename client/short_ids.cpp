@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 namespace {

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libboost-dev libboost-system-dev
   nlohmann-json3-dev libsimdjson-dev libglm-dev libembree-dev libopenimageio-dev openimageio-tools
-  libpng-dev  # PNGs are written with libpng itself, not OpenImageIO (common/png_file.hpp)
+  libpng-dev  # PNGs are written with libpng itself, not OpenImageIO (common/image/png_file.hpp)
   libtinyobjloader-dev libtinygltf-dev  # mesh files: OBJ with MTL, glTF (common/mesh_files/)
   libtbb-dev libsqlite3-dev libssl-dev libcli11-dev libspdlog-dev
   libgtest-dev libgmock-dev

@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/png_file.hpp"
+#include "common/image/png_file.hpp"
 #include "examples/gltf_bytes.hpp"
 
 namespace {

@@ -20,20 +20,20 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/thread_pool.hpp>
 
-#include "common/image_io.hpp"
-#include "common/log_lines.hpp"
-#include "common/secret.hpp"
-#include "server/access.hpp"
-#include "server/api_routes.hpp"
-#include "server/asset_collector.hpp"
-#include "server/asset_store.hpp"
-#include "server/descriptor_limit.hpp"
-#include "server/event_hub.hpp"
-#include "server/farm_events.hpp"
-#include "server/http_metrics.hpp"
-#include "server/http_server.hpp"
-#include "server/local_workers.hpp"
-#include "server/memory_give_back.hpp"
+#include "common/image/image_io.hpp"
+#include "common/text/log_lines.hpp"
+#include "common/text/secret.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/asset_collector.hpp"
+#include "server/api/asset_store.hpp"
+#include "server/api/event_hub.hpp"
+#include "server/api/farm_events.hpp"
+#include "server/api/local_workers.hpp"
+#include "server/api/memory_give_back.hpp"
+#include "server/http/descriptor_limit.hpp"
+#include "server/http/http_server.hpp"
+#include "server/metrics/http_metrics.hpp"
 
 namespace {
 

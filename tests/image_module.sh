@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # ctest image_files.module: OpenImageIO lives in a module that programs open only to read
-# an image or write one that is not a PNG (common/image_file_module.hpp).
+# an image or write one that is not a PNG (common/image/image_file_module.hpp).
 #   tests/image_module.sh SOURCE_DIR TESSERA TESSERA_SERVER TESSERA_WORKER
 # 1. None of the three programs links OpenImageIO, so none loads its libraries at start.
 # 2. `tessera render` finds the module from its own directory and writes an EXR; a PNG it
-#    writes without opening the module (libpng: common/png_file.hpp).
+#    writes without opening the module (libpng: common/image/png_file.hpp).
 # 3. A `tessera` without the module beside it still writes a PNG; asked for an EXR, it says
 #    the module is missing, naming the file it looked for, before it renders anything,
 #    exits 1 and writes nothing.

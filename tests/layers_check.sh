@@ -6,11 +6,14 @@ set -euo pipefail
 root=${1:?usage: layers_check.sh SOURCE_DIR}
 cd "$root"
 status=0
-# refuse FOLDER PATTERN WHY: no file under FOLDER (its subfolders excepted where listed
-# after a colon) may have an #include matching PATTERN.
+# refuse FOLDER PATTERN WHY [EXCEPT]: no file under FOLDER may have an #include matching
+# PATTERN, but for the grep lines (FILE:LINE:TEXT) that EXCEPT matches from their start.
+# Rules name folders, never files: a new file is checked by the rules of its folder.
 refuse() {
   local folder=$1 pattern=$2 why=$3 exclude=${4:-}
   local hits
+  # A rule whose folder is gone checks nothing: that is a failure, not a pass.
+  [ -d "$folder" ] || { echo "$folder: no such folder; the rule \"$why\" checks nothing"; status=1; return; }
   hits=$(grep -rnE --include='*.cpp' --include='*.hpp' "^#include [<\"]($pattern)" "$folder" |
          { if [ -n "$exclude" ]; then grep -vE "^($exclude)" || true; else cat; fi; } || true)
   if [ -n "$hits" ]; then
@@ -19,19 +22,34 @@ refuse() {
     status=1
   fi
 }
-refuse common 'boost/|embree|sqlite3|worker/|server/|client/' \
-  "the core of common/ stays free of Beast, Embree and SQLite, and of the folders above it" \
-  'common/net/'
+# common/: each folder uses only those before it, and nothing above common/.
+refuse common 'boost/|embree|sqlite3|tracer/|worker/|server/|client/' \
+  "common/ includes nothing above it, and only common/net/ uses Beast" 'common/net/'
+refuse common/text 'common/' "text/ is common's bottom: it includes no other folder of common/" \
+  'common/text/[a-z0-9_]+\.(cpp|hpp):[0-9]+:#include "common/text/'
+refuse common/scene 'common/(image|scn|mesh_files|net)/' \
+  "the scene format uses text/ and the protocol's types (its asset digests) alone"
+refuse common/image 'common/(scn|mesh_files|net)/' "images use the scene format, the protocol's types and text/ alone"
+refuse common/scn 'common/(image|mesh_files|net)/' \
+  "the .scn importer writes the scene format; it reads no images and knows no wire"
 refuse common 'tiny_obj_loader|tiny_gltf|common/mesh_files/' \
   "only common/mesh_files/ reads mesh formats; the parser sees them through SceneFiles" \
   'common/mesh_files/'
 refuse common/mesh_files 'boost/|embree|sqlite3|common/net/|common/protocol/' \
   "mesh files are read with tinyobjloader, tinygltf and common/ alone"
-refuse common/protocol 'boost/|common/net/' "the protocol is JSON types only"
-refuse common/net 'embree|sqlite3|worker/|server/|client/' "the transport knows only the protocol"
-refuse worker 'client/|server/' "the worker links common/net and common/protocol, nothing of client/ or server/"
-refuse client 'server/|worker/(worker_daemon|batch_tiles|lease_heartbeat|tile_uploads|render_lease)' \
-  "the CLI uses the tracer of worker/, not its daemon, and nothing of server/"
-refuse server 'worker/|client/|common/net/' "the coordinator is never a client"
+refuse common/protocol 'boost/|common/(net|scene|image|scn|mesh_files)/' \
+  "the protocol is JSON types only, over text/: the scene format and images are above it"
+refuse common/net 'embree|sqlite3' "the transport knows only the protocol"
+# The tracer renders a validated scene: no daemon, CLI, coordinator or network in it.
+refuse tracer 'boost/|sqlite3|worker/|client/|server/|common/net/|common/protocol/' \
+  "the tracer renders a validated Scene and knows nothing of who asked"
+refuse worker 'client/|server/' "the worker daemon links tracer/, common/net and common/protocol"
+refuse client 'server/|worker/' "the CLI renders with tracer/; it includes neither the worker daemon nor the coordinator"
+# The coordinator: farm state and HTTP know nothing of each other; api/ joins them.
+refuse server 'tracer/|worker/|client/|common/net/' "the coordinator is never a client and never renders"
+refuse server/metrics 'server/' "metrics/ is what the others count into: it includes none of them" \
+  'server/metrics/[a-z0-9_]+\.(cpp|hpp):[0-9]+:#include "server/metrics/'
+refuse server/farm 'server/(http|api)/|boost/beast' "farm state never includes HTTP or routes"
+refuse server/http 'server/(farm|api)/' "HTTP never includes farm state or routes"
 [ "$status" -eq 0 ] && echo "every #include keeps to the layers of docs/architecture.md"
 exit "$status"

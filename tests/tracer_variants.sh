@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # ctest tracer.variants: the builds of the tracer's shared library (x86-64, x86-64-v3,
-# x86-64-v4: worker/CMakeLists.txt) compute the same bits.
+# x86-64-v4: tracer/CMakeLists.txt) compute the same bits.
 # 1. None holds a fused multiply-add or a call into libmvec, the two ways a build for a
 #    newer CPU could round differently. (A pixel seldom shows a difference in the last bit
 #    of a double, so 2 is no proof of this.)

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstddef>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/analytic_shapes_callbacks.hpp"
-#include "worker/scene_geometry.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/analytic_shapes_callbacks.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

@@ -8,7 +8,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "worker/scene_geometry.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera::analytic_detail {
 

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cstddef>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/scene_geometry.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <limits>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/analytic_shapes_callbacks.hpp"
-#include "worker/scene_geometry.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/analytic_shapes_callbacks.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "worker/camera.hpp"
+#include "tracer/camera.hpp"
 
 namespace tessera {
 

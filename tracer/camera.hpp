@@ -2,9 +2,9 @@
 // at the top left.
 #pragma once
 
-#include "common/scene.hpp"
-#include "worker/ray.hpp"
-#include "worker/tracer_api.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/ray.hpp"
+#include "tracer/tracer_api.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "worker/embree_device.hpp"
+#include "tracer/embree_device.hpp"
 
 #include <stdexcept>
 

@@ -8,7 +8,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "worker/tracer_api.hpp"
+#include "tracer/tracer_api.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "worker/local_render.hpp"
+#include "tracer/local_render.hpp"
 
 #include <atomic>
 #include <mutex>

@@ -1,8 +1,8 @@
 // Renders a whole image on this machine: every tile in parallel on a TBB arena.
 #pragma once
 
-#include "common/image.hpp"
-#include "worker/renderer.hpp"
+#include "common/image/image.hpp"
+#include "tracer/renderer.hpp"
 
 namespace tessera {
 

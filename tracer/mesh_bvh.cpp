@@ -1,4 +1,4 @@
-#include "worker/mesh_bvh.hpp"
+#include "tracer/mesh_bvh.hpp"
 
 #include <tuple>
 

@@ -7,8 +7,8 @@
 #include <cstddef>
 #include <utility>
 
-#include "worker/embree_device.hpp"
-#include "worker/scene_geometry.hpp"
+#include "tracer/embree_device.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

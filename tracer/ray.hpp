@@ -9,7 +9,7 @@
 
 #include <glm/glm.hpp>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

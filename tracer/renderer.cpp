@@ -1,11 +1,11 @@
-#include "worker/renderer.hpp"
+#include "tracer/renderer.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
 #include <xmmintrin.h>
 
-#include "worker/pixel_sampler.hpp"
+#include "tracer/pixel_sampler.hpp"
 
 namespace tessera {
 namespace {

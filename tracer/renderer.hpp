@@ -5,13 +5,13 @@
 #include <memory>
 #include <span>
 
-#include "common/image.hpp"
-#include "common/scene.hpp"
-#include "worker/camera.hpp"
-#include "worker/embree_device.hpp"
-#include "worker/scene_geometry.hpp"
-#include "worker/scene_textures.hpp"
-#include "worker/tracer.hpp"
+#include "common/image/image.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/camera.hpp"
+#include "tracer/embree_device.hpp"
+#include "tracer/scene_geometry.hpp"
+#include "tracer/scene_textures.hpp"
+#include "tracer/tracer.hpp"
 
 namespace tessera {
 

@@ -1,13 +1,13 @@
 // SceneGeometry's queries for single rays, and the hits rebuilt in double by finish_hit(),
 // which the packets' queries (scene_geometry_packet.cpp) call too for the shapes they do not
 // rebuild on all lanes at once.
-#include "worker/scene_geometry.hpp"
+#include "tracer/scene_geometry.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/mesh_bvh.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/mesh_bvh.hpp"
 
 namespace tessera {
 namespace {

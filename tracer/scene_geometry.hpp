@@ -15,10 +15,10 @@
 #include <utility>
 #include <vector>
 
-#include "common/scene.hpp"
-#include "worker/embree_device.hpp"
-#include "worker/ray.hpp"
-#include "worker/tracer_api.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/embree_device.hpp"
+#include "tracer/ray.hpp"
+#include "tracer/tracer_api.hpp"
 
 namespace tessera {
 

@@ -1,14 +1,14 @@
 // Building SceneGeometry: each object of the scene prepared for its exact test and
 // registered with Embree, and the BVH committed.
-#include "worker/scene_geometry.hpp"
+#include "tracer/scene_geometry.hpp"
 
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/mesh_bvh.hpp"
-#include "worker/triangulate.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/mesh_bvh.hpp"
+#include "tracer/triangulate.hpp"
 
 namespace tessera {
 

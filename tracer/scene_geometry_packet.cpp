@@ -2,9 +2,9 @@
 // for all lanes at once where they lie on world spheres and planes, and occlusion.
 #include <cstdint>
 
-#include "worker/analytic_shapes.hpp"
-#include "worker/mesh_bvh.hpp"
-#include "worker/scene_geometry.hpp"
+#include "tracer/analytic_shapes.hpp"
+#include "tracer/mesh_bvh.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 namespace {

@@ -1,10 +1,10 @@
-#include "worker/scene_textures.hpp"
+#include "tracer/scene_textures.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
-#include "common/image_file_loader.hpp"
-#include "common/texture_images.hpp"
+#include "common/image/image_file_loader.hpp"
+#include "common/scene/texture_images.hpp"
 
 namespace tessera {
 

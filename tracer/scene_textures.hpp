@@ -1,5 +1,5 @@
 // The textures a scene's materials read, decoded and mip-mapped once per scene, through the
-// image-file module (common/image_file_module.hpp), which is opened only for a scene that
+// image-file module (common/image/image_file_module.hpp), which is opened only for a scene that
 // has any.
 #pragma once
 
@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "common/image_file_module.hpp"
-#include "common/scene.hpp"
+#include "common/image/image_file_module.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "worker/surface_uv.hpp"
+#include "tracer/surface_uv.hpp"
 
 #include <algorithm>
 #include <cmath>

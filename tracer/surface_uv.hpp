@@ -3,8 +3,8 @@
 // axes on planes, a square per face on boxes, the vertices' uvs on triangles and meshes.
 #pragma once
 
-#include "common/scene.hpp"
-#include "worker/scene_geometry.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

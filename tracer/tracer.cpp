@@ -1,8 +1,8 @@
-#include "worker/tracer.hpp"
+#include "tracer/tracer.hpp"
 
 #include <cmath>
 
-#include "worker/tracer_shading.hpp"
+#include "tracer/tracer_shading.hpp"
 
 namespace tessera {
 namespace {

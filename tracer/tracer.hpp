@@ -7,11 +7,11 @@
 #include <optional>
 #include <vector>
 
-#include "common/image_file_module.hpp"
-#include "common/scene.hpp"
-#include "worker/ray.hpp"
-#include "worker/scene_geometry.hpp"
-#include "worker/scene_textures.hpp"
+#include "common/image/image_file_module.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/ray.hpp"
+#include "tracer/scene_geometry.hpp"
+#include "tracer/scene_textures.hpp"
 
 namespace tessera {
 

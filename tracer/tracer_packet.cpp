@@ -1,9 +1,9 @@
 // The tracer sixteen rays at a time: a packet's hits, their shadow rays towards each light,
 // and their reflected and transmitted rays each make one packet for Embree. Lane by lane,
 // the arithmetic is Tracer::trace's own, in the same order.
-#include "worker/tracer.hpp"
+#include "tracer/tracer.hpp"
 
-#include "worker/tracer_shading.hpp"
+#include "tracer/tracer_shading.hpp"
 
 namespace tessera {
 

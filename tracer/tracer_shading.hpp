@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "worker/tracer.hpp"
+#include "tracer/tracer.hpp"
 
 namespace tessera::shading_detail {
 

@@ -9,9 +9,9 @@
 // and stretched by 1 / cos θ along it.
 #include <cmath>
 
-#include "worker/surface_uv.hpp"
-#include "worker/tracer.hpp"
-#include "worker/tracer_shading.hpp"
+#include "tracer/surface_uv.hpp"
+#include "tracer/tracer.hpp"
+#include "tracer/tracer_shading.hpp"
 
 namespace tessera {
 namespace {

@@ -1,4 +1,4 @@
-#include "worker/triangulate.hpp"
+#include "tracer/triangulate.hpp"
 
 namespace tessera {
 namespace {

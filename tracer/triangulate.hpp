@@ -2,8 +2,8 @@
 // scene's own arrays, which SceneGeometry places in world space as it fills Embree's buffers.
 #pragma once
 
-#include "common/scene.hpp"
-#include "worker/scene_geometry.hpp"
+#include "common/scene/scene.hpp"
+#include "tracer/scene_geometry.hpp"
 
 namespace tessera {
 

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "common/image.hpp"
+#include "common/image/image.hpp"
 
 namespace tessera {
 

@@ -16,7 +16,7 @@
 
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/protocol/limits.hpp"
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 
 namespace tessera {
 namespace {

@@ -17,11 +17,11 @@
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "common/net/coordinator_client.hpp"
 #include "common/protocol/limits.hpp"
-#include "common/scene_frames.hpp"
+#include "common/scene/scene_frames.hpp"
+#include "tracer/renderer.hpp"
 #include "worker/asset_cache.hpp"
 #include "worker/batch_tiles.hpp"
 #include "worker/lease_heartbeat.hpp"
-#include "worker/renderer.hpp"
 #include "worker/tile_uploads.hpp"
 
 namespace tessera {

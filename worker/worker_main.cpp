@@ -11,11 +11,11 @@
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
-#include "common/huge_page_malloc.hpp"
-#include "common/log_lines.hpp"
+#include "common/image/huge_page_malloc.hpp"
 #include "common/net/http_client.hpp"
-#include "common/printable.hpp"
-#include "common/secret.hpp"
+#include "common/text/log_lines.hpp"
+#include "common/text/printable.hpp"
+#include "common/text/secret.hpp"
 #include "worker/worker_daemon.hpp"
 
 namespace {

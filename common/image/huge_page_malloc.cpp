@@ -1,4 +1,4 @@
-#include "common/huge_page_malloc.hpp"
+#include "common/image/huge_page_malloc.hpp"
 
 #include <cstdlib>
 #include <string>

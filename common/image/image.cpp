@@ -1,4 +1,4 @@
-#include "common/image.hpp"
+#include "common/image/image.hpp"
 
 #include <algorithm>
 #include <stdexcept>

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/large_buffer.hpp"
+#include "common/image/large_buffer.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "common/image_file_loader.hpp"
+#include "common/image/image_file_loader.hpp"
 
 #include <dlfcn.h>
 

@@ -5,7 +5,7 @@
 #include <functional>
 #include <mutex>
 
-#include "common/image_file_module.hpp"
+#include "common/image/image_file_module.hpp"
 
 namespace tessera {
 

@@ -1,12 +1,12 @@
 // OpenImageIO behind the ImageFileModule boundary; the only file that includes it.
-#include "common/image_file_module.hpp"
+#include "common/image/image_file_module.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
 #include <OpenImageIO/imageio.h>
 
-#include "common/texture_files.hpp"
+#include "common/image/texture_files.hpp"
 
 namespace tessera {
 namespace {

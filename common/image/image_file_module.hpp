@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "common/image_format.hpp"
-#include "common/scene.hpp"
+#include "common/protocol/image_format.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 
 #include <unistd.h>
 #include <algorithm>
@@ -10,8 +10,8 @@
 #include <string>
 #include <utility>
 
-#include "common/image_file_loader.hpp"
-#include "common/png_file.hpp"
+#include "common/image/image_file_loader.hpp"
+#include "common/image/png_file.hpp"
 
 namespace tessera {
 namespace {

@@ -8,10 +8,10 @@
 #include <filesystem>
 #include <functional>
 
-#include "common/image.hpp"
-#include "common/image_file_module.hpp"
-#include "common/large_buffer.hpp"
-#include "common/scene.hpp"
+#include "common/image/image.hpp"
+#include "common/image/image_file_module.hpp"
+#include "common/image/large_buffer.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

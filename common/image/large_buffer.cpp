@@ -1,4 +1,4 @@
-#include "common/large_buffer.hpp"
+#include "common/image/large_buffer.hpp"
 
 #include <cstdint>
 

@@ -1,4 +1,4 @@
-#include "common/png_file.hpp"
+#include "common/image/png_file.hpp"
 
 #include <png.h>
 

@@ -5,7 +5,7 @@
 // Why files: the TextureSystem reads its mip levels tile by tile through its cache, from
 // files; writing each texture once as one is what lets it filter any image with bounded
 // memory, the same way for a PNG, a JPEG or an EXR.
-#include "common/texture_files.hpp"
+#include "common/image/texture_files.hpp"
 
 #include <stdlib.h>
 

@@ -4,7 +4,7 @@
 #include <memory>
 #include <vector>
 
-#include "common/image_file_module.hpp"
+#include "common/image/image_file_module.hpp"
 
 namespace tessera {
 

@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-#include "common/scene_files.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

@@ -57,7 +57,7 @@ bool write_nothing(std::string*, const std::string&, const std::vector<unsigned 
 }
 
 // Images are kept as their file's bytes, undecoded: the tracer decodes the textures
-// (worker/scene_textures.hpp), and a model read only to be checked decodes none.
+// (tracer/scene_textures.hpp), and a model read only to be checked decodes none.
 bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::string*, int, int,
                       const unsigned char* bytes, int size, void* user) {
   auto& kept = *static_cast<std::vector<std::shared_ptr<const std::string>>*>(user);

@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "common/scene_files.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

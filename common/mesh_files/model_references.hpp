@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "common/scene_files.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-#include "common/scene_files.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

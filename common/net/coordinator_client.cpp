@@ -4,6 +4,7 @@
 #include <charconv>
 #include <thread>
 
+#include "common/protocol/asset_digest.hpp"
 #include "common/protocol/assets.hpp"
 #include "common/protocol/events.hpp"
 #include "common/protocol/paths.hpp"
@@ -222,27 +223,29 @@ std::optional<protocol::Lease> CoordinatorClient::extend(std::string_view lease,
 }
 
 bool CoordinatorClient::has_asset(std::string_view sha256) {
-  return call("HEAD", fill(route::asset, "sha256:" + std::string(sha256)), {}, {404}).status == 200;
+  return call("HEAD", fill(route::asset, protocol::AssetDigest::of_hex(sha256).text()), {}, {404})
+             .status == 200;
 }
 
 bool CoordinatorClient::put_asset(std::string_view sha256, std::string bytes) {
   const HttpResult result =
-      checked(http_.request("PUT", fill(route::asset, "sha256:" + std::string(sha256)),
+      checked(http_.request("PUT", fill(route::asset, protocol::AssetDigest::of_hex(sha256).text()),
                             std::move(bytes), "application/octet-stream"));
   return result.status == 201;
 }
 
 bool CoordinatorClient::put_asset_file(std::string_view sha256, const std::filesystem::path& path,
                                        const HttpClient::UploadProgress& progress) {
-  const HttpResult result =
-      checked(http_.send_file("PUT", fill(route::asset, "sha256:" + std::string(sha256)), path,
-                              "application/octet-stream", progress, identity()));
+  const HttpResult result = checked(
+      http_.send_file("PUT", fill(route::asset, protocol::AssetDigest::of_hex(sha256).text()), path,
+                      "application/octet-stream", progress, identity()));
   return result.status == 201;
 }
 
 void CoordinatorClient::scene_asset_to(std::string_view sha256, const std::filesystem::path& into) {
-  checked(http_.receive_file("GET", fill(route::scene_asset, "sha256:" + std::string(sha256)), into,
-                             identity()));
+  checked(http_.receive_file("GET",
+                             fill(route::scene_asset, protocol::AssetDigest::of_hex(sha256).text()),
+                             into, identity()));
 }
 
 std::string CoordinatorClient::scene(std::string_view digest) {

@@ -15,11 +15,11 @@
 #include <string>
 #include <string_view>
 
-#include "common/image_format.hpp"
 #include "common/net/event_stream.hpp"
 #include "common/net/http_client.hpp"
 #include "common/protocol/error.hpp"
 #include "common/protocol/health.hpp"
+#include "common/protocol/image_format.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/leases.hpp"
 #include "common/protocol/workers.hpp"

@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-#include "common/or_list.hpp"
+#include "common/text/or_list.hpp"
 
 namespace tessera {
 

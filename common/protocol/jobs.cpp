@@ -1,6 +1,6 @@
 #include "common/protocol/jobs.hpp"
 
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera::protocol {
 namespace {

@@ -25,7 +25,7 @@ struct JobSubmission {
   int priority = 50;
   nlohmann::json scene;  // checked by the scene parser, which names the scene's own errors
   // The frames of an animated scene to render, as render farms write them ("1-100x2",
-  // common/frame_list.hpp); every frame of its range when left out.
+  // common/scene/frame_list.hpp); every frame of its range when left out.
   std::optional<std::string> frames;
   static constexpr std::size_t kMaxFramesBytes = 4096;
 

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <utility>
 
-#include "common/or_list.hpp"
+#include "common/text/or_list.hpp"
 
 namespace tessera::protocol {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "common/image_format.hpp"
+#include "common/protocol/image_format.hpp"
 #include "common/protocol/job_state.hpp"
 
 namespace tessera::protocol {
@@ -47,13 +47,12 @@ inline constexpr std::string_view lease_release = "/v1/leases/{id}/release";
 // looked up by clients, fetched by workers from the second.
 inline constexpr std::string_view asset = "/v1/assets/{digest}";
 inline constexpr std::string_view scene_asset = "/v1/scene-assets/{digest}";
-// The web dashboard (server/web_routes.cpp): its page, at the paths of its views, and the
-// script and style the page loads.
+// The web dashboard (server/api/web_routes.cpp): its page, at the paths of its views, and the
+// files the page loads (its script's modules, its style), each by its name in server/web/.
 inline constexpr std::string_view ui_page = "/";
 inline constexpr std::string_view ui_job = "/jobs/{id}";
 inline constexpr std::string_view ui_workers = "/workers";
-inline constexpr std::string_view ui_script = "/ui/app.js";
-inline constexpr std::string_view ui_style = "/ui/app.css";
+inline constexpr std::string_view ui_file = "/ui/{name}";
 // Every one of them, for the contract test.
 inline constexpr std::string_view all[] = {
     healthz,      readyz,          metrics,       events,  job_events,      job_tiles,
@@ -61,7 +60,7 @@ inline constexpr std::string_view all[] = {
     job_pause,    job_resume,      job_retry,     workers, worker,          worker_claim,
     worker_drain, worker_undrain,  worker_remove, scene,   lease_heartbeat, lease_extend,
     lease_result, lease_fail,      lease_release, asset,   scene_asset,     ui_page,
-    ui_job,       ui_workers,      ui_script,     ui_style};
+    ui_job,       ui_workers,      ui_file};
 }  // namespace route
 
 // The names of the routes' query parameters.

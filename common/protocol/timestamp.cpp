@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <ctime>
 
-#include "common/rfc3339.hpp"
+#include "common/text/rfc3339.hpp"
 
 namespace tessera::protocol {
 

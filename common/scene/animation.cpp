@@ -1,4 +1,4 @@
-#include "common/animation.hpp"
+#include "common/scene/animation.hpp"
 
 #include <algorithm>
 

@@ -1,11 +1,11 @@
-#include "common/frame_list.hpp"
+#include "common/scene/frame_list.hpp"
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cstdint>
 
-#include "common/animation.hpp"
+#include "common/scene/animation.hpp"
 
 namespace tessera {
 namespace {

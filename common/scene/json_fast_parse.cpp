@@ -1,4 +1,4 @@
-#include "common/json_fast_parse.hpp"
+#include "common/scene/json_fast_parse.hpp"
 
 #include <string>
 #include <utility>

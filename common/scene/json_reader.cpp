@@ -11,9 +11,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/json_fast_parse.hpp"
-#include "common/scene_parser.hpp"
-#include "common/scene_parser_parts.hpp"
+#include "common/scene/json_fast_parse.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/scene/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {

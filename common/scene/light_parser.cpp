@@ -1,6 +1,6 @@
 #include <string_view>
 
-#include "common/scene_parser_parts.hpp"
+#include "common/scene/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {

@@ -1,8 +1,9 @@
 #include <algorithm>
 #include <string_view>
 
-#include "common/scene_parser_parts.hpp"
-#include "common/suggest.hpp"
+#include "common/protocol/asset_digest.hpp"
+#include "common/scene/scene_parser_parts.hpp"
+#include "common/text/suggest.hpp"
 
 namespace tessera {
 namespace {
@@ -34,7 +35,8 @@ TexturedColor parse_texture(const ValueReader& value, const SceneFiles* files) {
     request.asset = read_digest(file);
     const auto name = reader.find("name");
     if (name && !name->json().is_string()) name->fail_type("a file name (string)");
-    request.file = name ? name->string() : "sha256:" + request.asset->substr(0, 12);
+    request.file =
+        name ? name->string() : protocol::AssetDigest::of_hex(*request.asset).short_text();
   } else {
     reader.allow_only({"texture", "scale", "wrap"});
     if (!file.json().is_string()) file.fail_type("an image file's name (string)");

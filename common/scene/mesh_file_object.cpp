@@ -2,7 +2,8 @@
 #include <algorithm>
 #include <cctype>
 
-#include "common/scene_parser_parts.hpp"
+#include "common/protocol/asset_digest.hpp"
+#include "common/scene/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {
@@ -15,20 +16,18 @@ constexpr std::string_view mesh_asset_keys[] = {"type", "material", "transform",
 }  // namespace
 
 std::string read_digest(const ValueReader& value) {
-  if (!value.json().is_string()) value.fail_type("an asset digest \"sha256:<64 hex digits>\"");
+  using protocol::AssetDigest;
+  if (!value.json().is_string())
+    value.fail_type("an asset digest (" + std::string(AssetDigest::kForm) + ")");
   const std::string& text = value.string();
-  constexpr std::string_view prefix = "sha256:";
-  const bool hex = text.size() == prefix.size() + 64 && text.starts_with(prefix) &&
-                   std::all_of(text.begin() + prefix.size(), text.end(), [](char c) {
-                     return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-                   });
-  if (!hex) value.fail("must be \"sha256:\" and 64 lower-case hex digits, got " + quote(text));
-  return text.substr(prefix.size());
+  const auto digest = AssetDigest::parse(text);
+  if (!digest) value.fail("must be " + std::string(AssetDigest::kForm) + ", got " + quote(text));
+  return digest->hex();
 }
 
 namespace {
 
-// The farm's form: {"asset": "sha256:...", "format": "obj", "files": {"x.mtl": "sha256:..."}}.
+// The farm's form: {"asset": DIGEST, "format": "obj", "files": {"x.mtl": DIGEST}}.
 void read_asset(const ObjectReader& object, MeshFileRequest& request) {
   request.asset = read_digest(object.require("asset"));
   if (const auto files = object.find("files")) {
@@ -38,7 +37,7 @@ void read_asset(const ObjectReader& object, MeshFileRequest& request) {
   }
   const auto name = object.find("name");
   if (name && !name->json().is_string()) name->fail_type("a file name (string)");
-  request.file = name ? name->string() : "sha256:" + request.asset->substr(0, 12);
+  request.file = name ? name->string() : protocol::AssetDigest::of_hex(*request.asset).short_text();
 }
 
 MeshFormat read_format(const ObjectReader& reader, const ValueReader& file) {

@@ -4,9 +4,9 @@
 #include <string_view>
 #include <vector>
 
-#include "common/scene_parser_parts.hpp"
-#include "common/scene_stream.hpp"
-#include "common/transform.hpp"
+#include "common/scene/scene_parser_parts.hpp"
+#include "common/scene/scene_stream.hpp"
+#include "common/scene/transform.hpp"
 
 namespace tessera {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <string_view>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

@@ -14,7 +14,7 @@
 
 #include <glm/glm.hpp>
 
-#include "common/animation.hpp"
+#include "common/scene/animation.hpp"
 
 namespace tessera {
 
@@ -82,7 +82,7 @@ struct Material {
 };
 
 // Whether a material lets light through at all, which decides how its shapes are
-// registered with Embree (worker/scene_geometry_build.cpp).
+// registered with Embree (tracer/scene_geometry_build.cpp).
 inline bool transmits(const Material& material) {
   const Color& t = material.transmission;
   return t.r != 0.0 || t.g != 0.0 || t.b != 0.0;

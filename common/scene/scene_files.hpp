@@ -12,8 +12,8 @@
 #include <string_view>
 #include <vector>
 
-#include "common/scene.hpp"
-#include "common/scene_error.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_error.hpp"
 
 namespace tessera {
 
@@ -119,7 +119,7 @@ class SceneFiles {
   // limit.
   virtual Model load_model(const MeshFileRequest& request) const = 0;
   // The image a material's texture names. Throws SceneFileError for a file that is not
-  // there (its pixels are read by the tracer, worker/scene_textures.hpp).
+  // there (its pixels are read by the tracer, tracer/scene_textures.hpp).
   virtual TextureImage locate_texture(const TextureRequest& request) const = 0;
 };
 

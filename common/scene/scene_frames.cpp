@@ -1,9 +1,9 @@
-#include "common/scene_frames.hpp"
+#include "common/scene/scene_frames.hpp"
 
 #include <string_view>
 #include <utility>
 
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 
 namespace tessera {
 

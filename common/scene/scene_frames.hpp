@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/scene.hpp"
-#include "common/scene_files.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

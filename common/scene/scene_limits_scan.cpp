@@ -1,4 +1,4 @@
-#include "common/scene_limits_scan.hpp"
+#include "common/scene/scene_limits_scan.hpp"
 
 #include <cstddef>
 #include <optional>
@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/scene_parser_parts.hpp"
-#include "common/value_reader.hpp"
+#include "common/scene/scene_parser_parts.hpp"
+#include "common/scene/value_reader.hpp"
 
 namespace tessera {
 namespace {

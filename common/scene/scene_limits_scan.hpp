@@ -6,8 +6,8 @@
 #include <optional>
 #include <string_view>
 
-#include "common/scene.hpp"
-#include "common/scene_error.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_error.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 
 #include <cstdint>
 #include <limits>
@@ -7,9 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/output_transfer.hpp"
-#include "common/scene_parser_parts.hpp"
-#include "common/scene_stream.hpp"
+#include "common/scene/output_transfer.hpp"
+#include "common/scene/scene_parser_parts.hpp"
+#include "common/scene/scene_stream.hpp"
 
 namespace tessera {
 namespace {

@@ -10,11 +10,11 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "common/json_fast_parse.hpp"
+#include "common/scene/json_fast_parse.hpp"
 
-#include "common/scene.hpp"
-#include "common/scene_error.hpp"
-#include "common/scene_files.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_error.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

@@ -12,9 +12,9 @@
 #include <string_view>
 #include <vector>
 
-#include "common/scene.hpp"
-#include "common/scene_files.hpp"
-#include "common/value_reader.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_files.hpp"
+#include "common/scene/value_reader.hpp"
 
 namespace tessera {
 
@@ -92,7 +92,7 @@ Enum enum_choice(const ValueReader& value, const std::string_view (&names)[N]) {
 
 // `files` locates the textures the material names (none: a texture is refused).
 Material parse_material(const ValueReader& value, const SceneFiles* files);
-// "sha256:" and 64 lower-case hex digits: the 64 digits, or a SceneError at `value`.
+// An asset digest (protocol::AssetDigest): its 64 hex digits, or a SceneError at `value`.
 std::string read_digest(const ValueReader& value);
 
 // Scene::materials as it fills up: the default material at 0, then the named ones, then

@@ -1,11 +1,11 @@
-#include "common/scene_stream.hpp"
+#include "common/scene/scene_stream.hpp"
 
 #include <algorithm>
 #include <map>
 #include <span>
 #include <utility>
 
-#include "common/scene_parser_parts.hpp"
+#include "common/scene/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {

@@ -12,9 +12,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/json_fast_parse.hpp"
-#include "common/scene.hpp"
-#include "common/scene_files.hpp"
+#include "common/scene/json_fast_parse.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera {
 

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "common/scene_parser_parts.hpp"
+#include "common/scene/scene_parser_parts.hpp"
 
 namespace tessera {
 namespace {

@@ -1,4 +1,4 @@
-#include "common/texture_images.hpp"
+#include "common/scene/texture_images.hpp"
 
 #include <algorithm>
 

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

@@ -1,8 +1,8 @@
 // Reading a keyframe track where a scene's value belongs (ValueReader::animated()).
 #include <string>
 
-#include "common/scene_parser_parts.hpp"
-#include "common/value_reader.hpp"
+#include "common/scene/scene_parser_parts.hpp"
+#include "common/scene/value_reader.hpp"
 
 namespace tessera {
 namespace {

@@ -1,4 +1,4 @@
-#include "common/transform.hpp"
+#include "common/scene/transform.hpp"
 
 #include <cmath>
 #include <numbers>

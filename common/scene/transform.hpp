@@ -5,7 +5,7 @@
 #include <span>
 #include <variant>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

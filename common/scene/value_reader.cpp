@@ -1,10 +1,10 @@
-#include "common/value_reader.hpp"
+#include "common/scene/value_reader.hpp"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 
-#include "common/suggest.hpp"
+#include "common/text/suggest.hpp"
 
 namespace tessera {
 

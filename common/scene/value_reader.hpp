@@ -15,10 +15,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/animation.hpp"
-#include "common/json_fast_parse.hpp"
-#include "common/scene.hpp"
-#include "common/scene_error.hpp"
+#include "common/scene/animation.hpp"
+#include "common/scene/json_fast_parse.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_error.hpp"
 
 namespace tessera {
 
@@ -63,7 +63,7 @@ std::optional<Vec3> try_normalize(const Vec3& v);
 // numbers; ValueReader::vec3() then says what is wrong, and where.
 std::optional<Vec3> plain_vec3(const nlohmann::json& value);
 
-// How a reading of the scene treats keyframe tracks (common/animation.hpp): the frame whose
+// How a reading of the scene treats keyframe tracks (common/scene/animation.hpp): the frame whose
 // values it reads, and whether it checks and records each track it meets.
 struct FrameReading {
   const Animation* animation = nullptr;  // the scene's; a track is refused when not animated

@@ -5,8 +5,8 @@
 #include <numbers>
 #include <string>
 
-#include "common/scene_files.hpp"
-#include "common/scn_importer.hpp"
+#include "common/scene/scene_files.hpp"
+#include "common/scn/scn_importer.hpp"
 
 namespace tessera::scn {
 namespace {

@@ -1,4 +1,4 @@
-#include "common/scn_import.hpp"
+#include "common/scn/scn_import.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,9 +8,9 @@
 #include <system_error>
 #include <utility>
 
-#include "common/scn_importer.hpp"
-#include "common/suggest.hpp"
-#include "common/transform.hpp"
+#include "common/scene/transform.hpp"
+#include "common/scn/scn_importer.hpp"
+#include "common/text/suggest.hpp"
 
 namespace tessera {
 namespace scn {

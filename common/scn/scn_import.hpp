@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace tessera {
 

@@ -12,9 +12,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/scene.hpp"
-#include "common/scn_import.hpp"
-#include "common/scn_lexer.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scn/scn_import.hpp"
+#include "common/scn/scn_lexer.hpp"
 
 namespace tessera::scn {
 

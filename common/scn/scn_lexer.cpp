@@ -1,4 +1,4 @@
-#include "common/scn_lexer.hpp"
+#include "common/scn/scn_lexer.hpp"
 
 #include <cerrno>
 #include <charconv>
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <system_error>
 
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera::scn {
 namespace {

@@ -1,4 +1,4 @@
-#include "common/log_lines.hpp"
+#include "common/text/log_lines.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -12,8 +12,8 @@
 #include <spdlog/pattern_formatter.h>
 #include <spdlog/spdlog.h>
 
-#include "common/printable.hpp"
-#include "common/rfc3339.hpp"
+#include "common/text/printable.hpp"
+#include "common/text/rfc3339.hpp"
 
 namespace tessera {
 

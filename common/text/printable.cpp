@@ -1,4 +1,4 @@
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "common/secret.hpp"
+#include "common/text/secret.hpp"
 
 #include <sys/stat.h>
 

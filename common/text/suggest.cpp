@@ -1,4 +1,4 @@
-#include "common/suggest.hpp"
+#include "common/text/suggest.hpp"
 
 #include <algorithm>
 #include <string>

@@ -1,10 +1,10 @@
-#include "server/access.hpp"
+#include "server/api/access.hpp"
 
 #include <cctype>
 
 #include <openssl/crypto.h>
 
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
 namespace tessera {
 namespace {

@@ -1,11 +1,11 @@
-#include "server/api_json.hpp"
+#include "server/api/api_json.hpp"
 
 #include <algorithm>
 
-#include "common/frame_list.hpp"
 #include "common/protocol/paths.hpp"
 #include "common/protocol/timestamp.hpp"
-#include "common/scene_parser.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/scene_parser.hpp"
 
 namespace tessera {
 

@@ -15,8 +15,8 @@
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/leases.hpp"
 #include "common/protocol/workers.hpp"
-#include "server/http_types.hpp"
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

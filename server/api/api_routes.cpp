@@ -1,4 +1,4 @@
-#include "server/api_routes.hpp"
+#include "server/api/api_routes.hpp"
 
 namespace tessera {
 

@@ -6,13 +6,13 @@
 #include <filesystem>
 #include <functional>
 
-#include "common/scene.hpp"
-#include "server/clock.hpp"
-#include "server/long_polls.hpp"
-#include "server/readiness.hpp"
-#include "server/router.hpp"
-#include "server/scheduler.hpp"
-#include "server/submit_budget.hpp"
+#include "common/scene/scene.hpp"
+#include "server/api/long_polls.hpp"
+#include "server/api/readiness.hpp"
+#include "server/api/submit_budget.hpp"
+#include "server/farm/clock.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/http/router.hpp"
 
 namespace tessera {
 
@@ -58,13 +58,13 @@ void add_job_routes(Router& router, ApiContext& context);     // /v1/jobs...
 void add_worker_routes(Router& router, ApiContext& context);  // /v1/workers...
 void add_scene_routes(Router& router, ApiContext& context);   // /v1/scenes/{digest}
 void add_lease_routes(Router& router, ApiContext& context);   // /v1/leases/{id}/...
-void add_asset_routes(Router& router, ApiContext& context);
+void add_asset_routes(Router& router, ApiContext& context);   // /v1/assets, /v1/scene-assets
 // Priority, pause, resume, retry; drain and remove workers (control_routes.cpp).
 void add_control_routes(Router& router, ApiContext& context);
 // GET /metrics, in Prometheus's text format (metrics_route.cpp).
 void add_metrics_route(Router& router, ApiContext& context);
 // Server-sent events and a job's tiles (event_routes.cpp).
-void add_event_routes(Router& router, ApiContext& context);  // /v1/assets, /v1/scene-assets
+void add_event_routes(Router& router, ApiContext& context);
 // The web dashboard: its page at /, /jobs/{id} and /workers, and /ui/... (web_routes.cpp).
 void add_web_routes(Router& router, ApiContext& context);
 // /healthz and /readyz. Without a Readiness, /readyz never reports ready: only a caller

@@ -1,4 +1,5 @@
-#include "server/asset_collector.hpp"
+#include "server/api/asset_collector.hpp"
+#include "common/protocol/asset_digest.hpp"
 
 #include <algorithm>
 #include <future>
@@ -6,21 +7,10 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/asset_store.hpp"
-#include "server/scheduler.hpp"
+#include "server/api/asset_store.hpp"
+#include "server/farm/scheduler.hpp"
 
 namespace tessera {
-
-std::set<std::string> digests_named_in(std::string_view text) {
-  std::set<std::string> digests;
-  constexpr std::string_view prefix = "sha256:";
-  for (std::size_t at = text.find(prefix); at != std::string_view::npos;
-       at = text.find(prefix, at + prefix.size())) {
-    const std::string_view hex = text.substr(at + prefix.size(), 64);
-    if (is_sha256_hex(hex)) digests.emplace(hex);
-  }
-  return digests;
-}
 
 AssetCollector::AssetCollector(AssetStore& store, const Scheduler& scheduler,
                                std::chrono::seconds retention)
@@ -51,7 +41,9 @@ std::size_t AssetCollector::collect_once() {
     if (arrived.wait_for(std::chrono::minutes(1)) != std::future_status::ready) return 0;
     const auto json = arrived.get();
     if (!json) return 0;  // a scene of a live job not found: keep everything
-    in_use.merge(digests_named_in(*json));
+    // Every digest the text names counts, generously: a name that merely looks like one keeps
+    // an asset, which is the safe side.
+    in_use.merge(protocol::digests_named_in(*json));
   }
   return store_.collect(retention_, in_use);
 }

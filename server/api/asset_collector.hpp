@@ -40,9 +40,4 @@ class AssetCollector {
   std::thread thread_;
 };
 
-// Every "sha256:" followed by 64 lower-case hex digits in `text`, as the digits: the assets
-// a stored scene may name, counted generously (a name that merely looks like one keeps an
-// asset, which is the safe side).
-std::set<std::string> digests_named_in(std::string_view text);
-
 }  // namespace tessera

@@ -5,31 +5,29 @@
 #include <deque>
 #include <mutex>
 
+#include "common/protocol/asset_digest.hpp"
 #include "common/protocol/assets.hpp"
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
-#include "server/asset_store.hpp"
-#include "server/worker_identity.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/asset_store.hpp"
+#include "server/api/worker_identity.hpp"
 
 namespace tessera {
 namespace {
 
-constexpr std::string_view kPrefix = "sha256:";
-
-// The 64 hex digits of "sha256:<64 hex digits>", or nothing.
+// The 64 hex digits of the digest the path names, or nothing.
 std::optional<std::string> digest_of(const HttpRequest& request) {
-  const std::string& text = request.params.at("digest");
-  if (!text.starts_with(kPrefix) || !is_sha256_hex(std::string_view(text).substr(kPrefix.size())))
-    return std::nullopt;
-  return text.substr(kPrefix.size());
+  const auto digest = protocol::AssetDigest::parse(request.params.at("digest"));
+  if (!digest) return std::nullopt;
+  return digest->hex();
 }
 
 HttpResponse bad_digest(const HttpRequest& request) {
   return error_response(400, "invalid_digest",
-                        "an asset is named \"sha256:\" and 64 lower-case hex digits, got \"" +
-                            request.params.at("digest") + "\"");
+                        "an asset is named " + std::string(protocol::AssetDigest::kForm) +
+                            ", got \"" + request.params.at("digest") + "\"");
 }
 
 // Pieces are written in order by one task at a time on the disk pool, while the session
@@ -121,9 +119,11 @@ HttpResponse stored(ApiContext& context, UploadSink& sink, const std::string& di
   std::string actual;
   switch (context.assets->commit(sink.upload(), digest, &actual)) {
     case AssetStore::Committed::added:
-      return body_response(201, protocol::AssetStored{"sha256:" + digest, true});
+      return body_response(
+          201, protocol::AssetStored{protocol::AssetDigest::of_hex(digest).text(), true});
     case AssetStore::Committed::already_held:
-      return body_response(200, protocol::AssetStored{"sha256:" + digest, false});
+      return body_response(
+          200, protocol::AssetStored{protocol::AssetDigest::of_hex(digest).text(), false});
     case AssetStore::Committed::wrong_digest:
       return error_response(400, "digest_mismatch",
                             "the body's SHA-256 is sha256:" + actual + ", not sha256:" + digest +
@@ -167,17 +167,20 @@ void add_asset_routes(Router& router, ApiContext& context) {
       [&context](HttpRequest&& request, Respond respond) {
         put_asset(context, std::move(request), std::move(respond));
       },
-      context.assets->max_bytes(), role_client, "application/octet-stream",
-      [&context](const HttpRequest& head) -> std::shared_ptr<BodySink> {
-        // A malformed digest is answered before its body is read.
-        if (!digest_of(head)) return nullptr;
-        return std::make_shared<UploadSink>(context.assets->begin_upload(), context);
-      });
+      RouteOptions{}
+          .with_body_limit(context.assets->max_bytes())
+          .with_role(role_client)
+          .with_content_type("application/octet-stream")
+          .with_sink([&context](const HttpRequest& head) -> std::shared_ptr<BodySink> {
+            // A malformed digest is answered before its body is read.
+            if (!digest_of(head)) return nullptr;
+            return std::make_shared<UploadSink>(context.assets->begin_upload(), context);
+          }));
   // GET, and HEAD through it: whether the coordinator has the asset, and its bytes.
   router.add(
       "GET", asset,
       [&context](HttpRequest&& request, Respond respond) { respond(asset_file(context, request)); },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::scene_asset),
       [&context](HttpRequest&& request, Respond respond) {
@@ -185,7 +188,7 @@ void add_asset_routes(Router& router, ApiContext& context) {
           return respond(std::move(*refused));
         respond(asset_file(context, request));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
 }
 
 }  // namespace tessera

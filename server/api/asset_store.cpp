@@ -1,4 +1,5 @@
-#include "server/asset_store.hpp"
+#include "server/api/asset_store.hpp"
+#include "common/protocol/asset_digest.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -11,7 +12,7 @@
 
 #include <openssl/evp.h>
 
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
 namespace tessera {
 
@@ -19,13 +20,6 @@ struct AssetStore::Upload::Digest {
   EVP_MD_CTX* context = EVP_MD_CTX_new();
   ~Digest() { EVP_MD_CTX_free(context); }
 };
-
-bool is_sha256_hex(std::string_view text) {
-  if (text.size() != 64) return false;
-  for (const char c : text)
-    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
-  return true;
-}
 
 AssetStore::AssetStore(std::filesystem::path dir, std::uint64_t max_bytes)
     : dir_(std::move(dir)), incoming_(dir_ / "incoming"), max_bytes_(max_bytes) {
@@ -37,7 +31,7 @@ AssetStore::AssetStore(std::filesystem::path dir, std::uint64_t max_bytes)
 }
 
 std::optional<std::filesystem::path> AssetStore::find(std::string_view sha256) const {
-  if (!is_sha256_hex(sha256)) return std::nullopt;
+  if (!protocol::is_sha256_hex(sha256)) return std::nullopt;
   std::filesystem::path path = dir_ / std::string(sha256);
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) return std::nullopt;
@@ -61,7 +55,8 @@ std::size_t AssetStore::collect(std::chrono::seconds retention,
   std::error_code error;
   for (const auto& entry : std::filesystem::directory_iterator(dir_, error)) {
     const std::string name = entry.path().filename().string();
-    if (!is_sha256_hex(name) || in_use.contains(name) || !entry.is_regular_file(error)) continue;
+    if (!protocol::is_sha256_hex(name) || in_use.contains(name) || !entry.is_regular_file(error))
+      continue;
     if (entry.last_write_time(error) > cutoff || error) continue;
     if (std::filesystem::remove(entry.path(), error)) ++removed;
   }

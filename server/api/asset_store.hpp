@@ -68,7 +68,4 @@ class AssetStore {
   std::mutex mutex_;  // reference() against collect()
 };
 
-// Whether `text` is 64 lower-case hex digits.
-bool is_sha256_hex(std::string_view text);
-
 }  // namespace tessera

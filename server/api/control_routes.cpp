@@ -3,9 +3,9 @@
 // with the job's or the worker's state as it is then.
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
 
 namespace tessera {
 namespace {
@@ -49,7 +49,7 @@ void add_job_control(Router& router, ApiContext& context, std::string_view patte
         respond_when_stored(context.scheduler, (context.scheduler.*control)(id), std::move(respond),
                             job_answer(context, id, what));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
 }
 
 void add_drain(Router& router, ApiContext& context, std::string_view pattern, bool draining) {
@@ -61,7 +61,7 @@ void add_drain(Router& router, ApiContext& context, std::string_view pattern, bo
             context.scheduler, context.scheduler.drain_worker(id, draining), std::move(respond),
             worker_answer(context, id, draining ? "the draining" : "the undraining"));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
 }
 
 }  // namespace
@@ -89,7 +89,7 @@ void add_control_routes(Router& router, ApiContext& context) {
         respond_when_stored(context.scheduler, context.scheduler.set_priority(id, *wanted.priority),
                             std::move(respond), job_answer(context, id, "the new priority"));
       },
-      kMaxChangeBytes, role_client);
+      RouteOptions{}.with_body_limit(kMaxChangeBytes).with_role(role_client));
   add_job_control(router, context, route::job_pause, &Scheduler::pause, "the pause");
   add_job_control(router, context, route::job_resume, &Scheduler::resume, "the resumption");
   add_job_control(router, context, route::job_retry, &Scheduler::retry, "the retry");
@@ -109,7 +109,7 @@ void add_control_routes(Router& router, ApiContext& context) {
                               return HttpResponse{204, "", "", {}};
                             });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
 }
 
 }  // namespace tessera

@@ -1,9 +1,9 @@
-#include "server/event_hub.hpp"
+#include "server/api/event_hub.hpp"
 
 #include <algorithm>
 
 #include "common/protocol/events.hpp"
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
 namespace tessera {
 namespace {

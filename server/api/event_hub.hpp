@@ -15,7 +15,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "server/http_types.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

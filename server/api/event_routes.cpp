@@ -2,11 +2,11 @@
 // (GET /v1/jobs/{id}/tiles), which a page loads once and then follows by events.
 #include "common/protocol/events.hpp"
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
-#include "server/event_hub.hpp"
-#include "server/farm_events.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/event_hub.hpp"
+#include "server/api/farm_events.hpp"
 
 namespace tessera {
 namespace {
@@ -39,7 +39,7 @@ void add_event_routes(Router& router, ApiContext& context) {
         if (!context.events) return respond(error_response(404, "not_found", "no events here"));
         respond(event_stream(context.events->subscribe("", last_event_id(request))));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(route::job_events),
       [&context](HttpRequest&& request, Respond respond) {
@@ -48,7 +48,7 @@ void add_event_routes(Router& router, ApiContext& context) {
           return respond(error_response(404, "not_found", "no job " + id));
         respond(event_stream(context.events->subscribe(id, last_event_id(request))));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(route::job_tiles),
       [&context](HttpRequest&& request, Respond respond) {
@@ -76,7 +76,7 @@ void add_event_routes(Router& router, ApiContext& context) {
                           return body_response(200, list);
                         });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
 }
 
 }  // namespace tessera

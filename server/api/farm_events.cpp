@@ -1,12 +1,12 @@
-#include "server/farm_events.hpp"
+#include "server/api/farm_events.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "common/protocol/events.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/workers.hpp"
-#include "server/api_json.hpp"
+#include "server/api/api_json.hpp"
 
 namespace tessera {
 namespace {

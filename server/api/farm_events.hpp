@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "common/protocol/events.hpp"
-#include "server/clock.hpp"
-#include "server/event_hub.hpp"
-#include "server/scheduler.hpp"
+#include "server/api/event_hub.hpp"
+#include "server/farm/clock.hpp"
+#include "server/farm/scheduler.hpp"
 
 namespace tessera {
 

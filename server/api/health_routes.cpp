@@ -1,7 +1,7 @@
 #include "common/protocol/health.hpp"
 #include "common/protocol/paths.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
 
 namespace tessera {
 

@@ -7,21 +7,21 @@
 #include <malloc.h>
 #endif
 
-#include "common/frame_list.hpp"
-#include "common/image_file_loader.hpp"
-#include "common/image_format.hpp"
-#include "common/image_io.hpp"
+#include "common/image/image_file_loader.hpp"
+#include "common/image/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
+#include "common/protocol/image_format.hpp"
 #include "common/protocol/paths.hpp"
-#include "common/scene_limits_scan.hpp"
-#include "common/scene_parser.hpp"
-#include "common/scene_stream.hpp"
-#include "common/texture_images.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
-#include "server/asset_store.hpp"
-#include "server/submit_budget.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/scene_limits_scan.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/scene/scene_stream.hpp"
+#include "common/scene/texture_images.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/asset_store.hpp"
+#include "server/api/submit_budget.hpp"
 
 namespace tessera {
 namespace {
@@ -124,7 +124,7 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
 // The submission envelope around the scene (`JobSubmission`). Memory is bounded by the
 // body, not amplified by it: a first pass builds nothing and refuses a scene over a count
 // limit where it crosses it; only then are nodes made, and the scene's objects, by far its
-// largest part, are read and checked one at a time (common/scene_stream.hpp).
+// largest part, are read and checked one at a time (common/scene/scene_stream.hpp).
 void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   // Declared before the body, so that it gives memory back after the body is freed.
   auto memory = std::make_shared<SubmissionMemory>(request.body.size() >= kTrimAfterBytes);
@@ -407,7 +407,7 @@ void add_job_routes(Router& router, ApiContext& context) {
       [&context](HttpRequest&& request, Respond respond) {
         submit(context, request, std::move(respond));
       },
-      context.max_job_body_bytes, role_client);
+      RouteOptions{}.with_body_limit(context.max_job_body_bytes).with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::jobs),
       [&context](HttpRequest&& request, Respond respond) {
@@ -415,13 +415,13 @@ void add_job_routes(Router& router, ApiContext& context) {
             context.scheduler, std::move(respond),
             [&context, request = std::move(request)] { return list(context, request); });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::job),
       [&context](HttpRequest&& request, Respond respond) {
         status(context, request, std::move(respond));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "DELETE", std::string(protocol::route::job),
       [&context](HttpRequest&& request, Respond respond) {
@@ -443,25 +443,25 @@ void add_job_routes(Router& router, ApiContext& context) {
                                   "job " + id + " is still active; cancel it first");
                             });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::job_image),
       [&context](HttpRequest&& request, Respond respond) {
         image(context, request, std::move(respond));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::job_frame_image),
       [&context](HttpRequest&& request, Respond respond) {
         image(context, request, std::move(respond));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "GET", std::string(protocol::route::job_frames),
       [&context](HttpRequest&& request, Respond respond) {
         frame_list(context, request, std::move(respond));
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "POST", std::string(protocol::route::job_cancel),
       [&context](HttpRequest&& request, Respond respond) {
@@ -483,7 +483,7 @@ void add_job_routes(Router& router, ApiContext& context) {
               return error_response(409, "already_finished", "job " + id + " has already finished");
             });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
 }
 
 }  // namespace tessera

@@ -14,11 +14,11 @@
 
 #include "common/protocol/leases.hpp"
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
-#include "server/worker_identity.hpp"
-#include "server/worker_limits.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/worker_identity.hpp"
+#include "server/api/worker_limits.hpp"
 
 namespace tessera {
 namespace {
@@ -224,7 +224,7 @@ void add_lease_routes(Router& router, ApiContext& context) {
                              : lease_lost(id);
             });
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
   router.add(
       "POST", std::string(route::lease_extend),
       [&context](HttpRequest&& request, Respond respond) {
@@ -244,20 +244,22 @@ void add_lease_routes(Router& router, ApiContext& context) {
                               : lease_lost(id);
             });
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
   router.add(
       "PUT", std::string(route::lease_result),
       [&context](HttpRequest&& request, Respond respond) {
         upload(context, std::make_shared<HttpRequest>(std::move(request)), std::move(respond));
       },
-      protocol_limits(context).max_result_bytes, role_worker,
-      std::string(protocol::kPixelsContentType));
+      RouteOptions{}
+          .with_body_limit(protocol_limits(context).max_result_bytes)
+          .with_role(role_worker)
+          .with_content_type(std::string(protocol::kPixelsContentType)));
   router.add(
       "POST", std::string(route::lease_fail),
       [&context](HttpRequest&& request, Respond respond) {
         report_failure(context, request, std::move(respond));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
   router.add(
       "POST", std::string(route::lease_release),
       [&context](HttpRequest&& request, Respond respond) {
@@ -266,7 +268,7 @@ void add_lease_routes(Router& router, ApiContext& context) {
         respond_when_stored(context.scheduler, context.scheduler.release(request.params.at("id")),
                             std::move(respond), no_content_when_stored("the change"));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
 }
 
 }  // namespace tessera

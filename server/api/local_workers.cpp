@@ -1,4 +1,4 @@
-#include "server/local_workers.hpp"
+#include "server/api/local_workers.hpp"
 
 #include <sys/prctl.h>
 #include <sys/wait.h>

@@ -1,4 +1,4 @@
-#include "server/long_polls.hpp"
+#include "server/api/long_polls.hpp"
 
 #include <boost/asio/post.hpp>
 

@@ -1,4 +1,4 @@
-#include "server/memory_give_back.hpp"
+#include "server/api/memory_give_back.hpp"
 
 #include <malloc.h>
 

@@ -9,9 +9,9 @@
 #include <boost/asio/ip/address.hpp>
 
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_routes.hpp"
-#include "server/http_metrics.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/metrics/http_metrics.hpp"
 
 namespace tessera {
 namespace {
@@ -123,7 +123,7 @@ void add_metrics_route(Router& router, ApiContext& context) {
           respond(std::move(response));
         });
       },
-      std::nullopt, role_metrics);
+      RouteOptions{}.with_role(role_metrics));
 }
 
 }  // namespace tessera

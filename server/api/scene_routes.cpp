@@ -1,7 +1,7 @@
 #include "common/protocol/paths.hpp"
-#include "server/access.hpp"
-#include "server/api_routes.hpp"
-#include "server/worker_identity.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/worker_identity.hpp"
 
 namespace tessera {
 
@@ -20,7 +20,7 @@ void add_scene_routes(Router& router, ApiContext& context) {
                             : error_response(404, "not_found", "no scene " + digest));
             });
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
 }
 
 }  // namespace tessera

@@ -1,4 +1,4 @@
-#include "server/submit_budget.hpp"
+#include "server/api/submit_budget.hpp"
 
 namespace tessera {
 

@@ -4,19 +4,19 @@
 # the build tree and adds the command that writes it, which depends on every file of
 # server/web/, so that editing one rebuilds the server. Run as a script (cmake -P), with
 # -DWEB_DIR=... -DOUTPUT=..., it writes that source: each file's bytes, its content type and
-# the path it is served at (server/web_assets.hpp; server/web_routes.cpp serves them).
+# the path it is served at (server/api/web_assets.hpp; server/api/web_routes.cpp serves them).
 #
 # index.html is served at "/", every other file at "/ui/NAME". A file whose extension has no
 # content type below stops the build: the server must not guess one.
 
 if(NOT CMAKE_SCRIPT_MODE_FILE)
   # --- configure time: the rule ---
-  file(GLOB tessera_web_files CONFIGURE_DEPENDS "${CMAKE_CURRENT_LIST_DIR}/web/*")
+  file(GLOB tessera_web_files CONFIGURE_DEPENDS "${CMAKE_CURRENT_LIST_DIR}/../web/*")
   list(SORT tessera_web_files)
   set(TESSERA_WEB_ASSETS_SOURCE "${CMAKE_CURRENT_BINARY_DIR}/web_assets_data.cpp")
   add_custom_command(
     OUTPUT "${TESSERA_WEB_ASSETS_SOURCE}"
-    COMMAND "${CMAKE_COMMAND}" "-DWEB_DIR=${CMAKE_CURRENT_LIST_DIR}/web"
+    COMMAND "${CMAKE_COMMAND}" "-DWEB_DIR=${CMAKE_CURRENT_LIST_DIR}/../web"
             "-DOUTPUT=${TESSERA_WEB_ASSETS_SOURCE}" -P "${CMAKE_CURRENT_LIST_FILE}"
     DEPENDS ${tessera_web_files} "${CMAKE_CURRENT_LIST_FILE}"
     COMMENT "Building the web dashboard's files into tessera-server"
@@ -84,8 +84,8 @@ if(count EQUAL 0)
   message(FATAL_ERROR "web_assets.cmake: ${WEB_DIR} has no files")
 endif()
 
-set(text "// Written by server/web_assets.cmake from server/web/ at build time: do not edit.\n")
-string(APPEND text "#include \"server/web_assets.hpp\"\n\nnamespace tessera {\nnamespace {\n\n")
+set(text "// Written by server/api/web_assets.cmake from server/web/ at build time: do not edit.\n")
+string(APPEND text "#include \"server/api/web_assets.hpp\"\n\nnamespace tessera {\nnamespace {\n\n")
 string(APPEND text "${arrays}")
 string(APPEND text "}  // namespace\n\nstd::span<const WebAsset> web_assets() {\n")
 string(APPEND text "  static const WebAsset assets[] = {\n${entries}  };\n  return assets;\n}\n\n")

@@ -1,4 +1,4 @@
-// The web dashboard's files (server/web/), built into the server: server/web_assets.cmake
+// The web dashboard's files (server/web/), built into the server: server/api/web_assets.cmake
 // writes their bytes into a source of the build tree at build time.
 #pragma once
 

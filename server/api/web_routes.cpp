@@ -5,8 +5,8 @@
 #include <string>
 
 #include "common/protocol/paths.hpp"
-#include "server/api_routes.hpp"
-#include "server/web_assets.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/web_assets.hpp"
 
 namespace tessera {
 namespace {
@@ -25,31 +25,39 @@ const HttpResponse::Headers& page_headers() {
   return headers;
 }
 
-const WebAsset& asset_at(std::string_view path) {
+const WebAsset* asset_at(std::string_view path) {
   for (const WebAsset& asset : web_assets())
-    if (asset.path == path) return asset;
-  throw std::logic_error("the web dashboard has no file served at " + std::string(path));
+    if (asset.path == path) return &asset;
+  return nullptr;
 }
 
-void serve(Router& router, std::string_view pattern, const WebAsset& asset) {
-  router.add(
-      "GET", std::string(pattern),
-      [&asset](HttpRequest&&, Respond respond) {
-        respond(HttpResponse{200, std::string(asset.content_type), std::string(asset.bytes),
-                             page_headers()});
-      },
-      std::nullopt, "");
+HttpResponse file_response(const WebAsset& asset) {
+  return HttpResponse{200, std::string(asset.content_type), std::string(asset.bytes),
+                      page_headers()};
+}
+
+void serve_page(Router& router, std::string_view pattern, const WebAsset& page) {
+  router.add("GET", std::string(pattern),
+             [&page](HttpRequest&&, Respond respond) { respond(file_response(page)); });
 }
 
 }  // namespace
 
 void add_web_routes(Router& router, ApiContext&) {
-  const WebAsset& page = asset_at(protocol::route::ui_page);
-  serve(router, protocol::route::ui_page, page);
-  serve(router, protocol::route::ui_job, page);
-  serve(router, protocol::route::ui_workers, page);
-  serve(router, protocol::route::ui_script, asset_at(protocol::route::ui_script));
-  serve(router, protocol::route::ui_style, asset_at(protocol::route::ui_style));
+  const WebAsset* page = asset_at(protocol::route::ui_page);
+  if (!page) throw std::logic_error("the web dashboard has no page (server/web/index.html)");
+  serve_page(router, protocol::route::ui_page, *page);
+  serve_page(router, protocol::route::ui_job, *page);
+  serve_page(router, protocol::route::ui_workers, *page);
+  // Every other file of server/web/ by its name, which is data: it only ever picks one of
+  // the files built in (web_assets.cmake allows letters, digits, '.', '_' and '-').
+  router.add("GET", std::string(protocol::route::ui_file),
+             [](HttpRequest&& request, Respond respond) {
+               const WebAsset* asset = asset_at("/ui/" + request.params.at("name"));
+               if (!asset)
+                 return respond(error_response(404, "not_found", "the dashboard has no such file"));
+               respond(file_response(*asset));
+             });
 }
 
 }  // namespace tessera

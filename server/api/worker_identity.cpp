@@ -1,9 +1,9 @@
-#include "server/worker_identity.hpp"
+#include "server/api/worker_identity.hpp"
 
 #include <variant>
 
 #include "common/protocol/workers.hpp"
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
 namespace tessera {
 namespace {

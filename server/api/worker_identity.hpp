@@ -7,8 +7,8 @@
 #include <optional>
 #include <string>
 
-#include "server/http_types.hpp"
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "server/worker_limits.hpp"
+#include "server/api/worker_limits.hpp"
 
 #include "common/protocol/leases.hpp"
 #include "common/protocol/paths.hpp"

@@ -5,8 +5,8 @@
 #include <optional>
 
 #include "common/protocol/limits.hpp"
-#include "server/api_routes.hpp"
-#include "server/http_types.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

@@ -2,11 +2,11 @@
 
 #include "common/protocol/paths.hpp"
 #include "common/protocol/workers.hpp"
-#include "server/access.hpp"
-#include "server/api_json.hpp"
-#include "server/api_routes.hpp"
-#include "server/worker_identity.hpp"
-#include "server/worker_limits.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_json.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/worker_identity.hpp"
+#include "server/api/worker_limits.hpp"
 
 namespace tessera {
 namespace {
@@ -95,13 +95,13 @@ void add_worker_routes(Router& router, ApiContext& context) {
           return body_response(200, list);
         });
       },
-      std::nullopt, role_client);
+      RouteOptions{}.with_role(role_client));
   router.add(
       "POST", std::string(route::workers),
       [&context](HttpRequest&& request, Respond respond) {
         register_worker(context, request, std::move(respond));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
   router.add(
       "DELETE", std::string(route::worker),
       [&context](HttpRequest&& request, Respond respond) {
@@ -113,13 +113,13 @@ void add_worker_routes(Router& router, ApiContext& context) {
         respond_when_stored(context.scheduler, context.scheduler.worker_left(id),
                             std::move(respond), no_content_when_stored("the departure"));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
   router.add(
       "POST", std::string(route::worker_claim),
       [&context](HttpRequest&& request, Respond respond) {
         claim(context, request, std::move(respond));
       },
-      std::nullopt, role_worker);
+      RouteOptions{}.with_role(role_worker));
 }
 
 }  // namespace tessera

@@ -1,4 +1,4 @@
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
 #include <array>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "server/image_assembly.hpp"
+#include "server/farm/image_assembly.hpp"
 
 #include <fcntl.h>
 #include <sys/resource.h>
@@ -11,7 +11,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/store_error.hpp"
+#include "server/farm/store_error.hpp"
 
 namespace tessera {
 

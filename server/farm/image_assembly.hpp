@@ -20,9 +20,9 @@
 #include <utility>
 #include <vector>
 
-#include "common/image.hpp"
-#include "server/image_files.hpp"
-#include "server/store_thread.hpp"
+#include "common/image/image.hpp"
+#include "server/farm/image_files.hpp"
+#include "server/farm/store_thread.hpp"
 
 namespace tessera {
 

@@ -1,11 +1,11 @@
-#include "server/image_files.hpp"
+#include "server/farm/image_files.hpp"
 
 #include <stdexcept>
 
 #include <system_error>
 
-#include "common/image_io.hpp"
-#include "server/prune_files.hpp"
+#include "common/image/image_io.hpp"
+#include "server/farm/prune_files.hpp"
 
 namespace tessera {
 

@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-#include "common/image.hpp"
+#include "common/image/image.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "server/pending_tiles.hpp"
+#include "server/farm/pending_tiles.hpp"
 
 #include <algorithm>
 #include <bit>

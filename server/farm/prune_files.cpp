@@ -1,4 +1,4 @@
-#include "server/prune_files.hpp"
+#include "server/farm/prune_files.hpp"
 
 namespace tessera {
 

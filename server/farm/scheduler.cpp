@@ -4,7 +4,7 @@
 // images are ImageAssembly's.
 #include <spdlog/spdlog.h>
 
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -12,10 +12,10 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "common/frame_list.hpp"
-#include "server/ids.hpp"
-#include "server/scheduler_entries.hpp"
-#include "server/tile_order.hpp"
+#include "common/scene/frame_list.hpp"
+#include "server/farm/ids.hpp"
+#include "server/farm/scheduler_entries.hpp"
+#include "server/farm/tile_order.hpp"
 
 namespace tessera {
 

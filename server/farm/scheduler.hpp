@@ -24,18 +24,18 @@
 #include <variant>
 #include <vector>
 
-#include "common/image.hpp"
-#include "common/scene.hpp"
-#include "server/clock.hpp"
-#include "server/image_assembly.hpp"
-#include "server/scheduler_records.hpp"
-#include "server/shared_text.hpp"
-#include "server/store.hpp"
-#include "server/store_thread.hpp"
+#include "common/image/image.hpp"
+#include "common/scene/scene.hpp"
+#include "server/farm/clock.hpp"
+#include "server/farm/image_assembly.hpp"
+#include "server/farm/scheduler_records.hpp"
+#include "server/farm/shared_text.hpp"
+#include "server/farm/store.hpp"
+#include "server/farm/store_thread.hpp"
 
 namespace tessera {
 
-// Defined in server/scheduler_entries.hpp; only the scheduler's sources need them.
+// Defined in server/farm/scheduler_entries.hpp; only the scheduler's sources need them.
 struct JobEntry;
 struct TileSlot;
 struct WorkerEntry;

@@ -10,9 +10,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/scheduler.hpp"
-#include "server/scheduler_entries.hpp"
-#include "server/tile_order.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/scheduler_entries.hpp"
+#include "server/farm/tile_order.hpp"
 
 namespace tessera {
 

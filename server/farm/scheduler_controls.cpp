@@ -5,8 +5,8 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/scheduler.hpp"
-#include "server/scheduler_entries.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/scheduler_entries.hpp"
 
 namespace tessera {
 namespace {

@@ -1,13 +1,13 @@
-#include "server/scheduler_entries.hpp"
+#include "server/farm/scheduler_entries.hpp"
 
 #include <algorithm>
 #include <array>
 #include <limits>
 #include <memory>
 
-#include "common/frame_list.hpp"
-#include "common/output_transfer.hpp"
-#include "server/tile_order.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/output_transfer.hpp"
+#include "server/farm/tile_order.hpp"
 
 namespace tessera {
 namespace {

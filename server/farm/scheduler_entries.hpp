@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "common/protocol/workers.hpp"
-#include "server/pending_tiles.hpp"
-#include "server/scheduler.hpp"
-#include "server/shared_text.hpp"
-#include "server/store.hpp"
+#include "server/farm/pending_tiles.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/shared_text.hpp"
+#include "server/farm/store.hpp"
 
 namespace tessera {
 

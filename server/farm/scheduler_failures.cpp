@@ -5,10 +5,10 @@
 
 #include <spdlog/spdlog.h>
 
-#include "common/frame_list.hpp"
+#include "common/scene/frame_list.hpp"
 
-#include "server/scheduler.hpp"
-#include "server/scheduler_entries.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/scheduler_entries.hpp"
 
 namespace tessera {
 

@@ -13,10 +13,10 @@
 #include <set>
 
 #include <spdlog/spdlog.h>
-#include "server/ids.hpp"
+#include "server/farm/ids.hpp"
 
-#include "server/scheduler.hpp"
-#include "server/scheduler_entries.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/scheduler_entries.hpp"
 
 namespace tessera {
 namespace {

@@ -2,8 +2,8 @@
 // told once it is durable, on the store thread.
 #include <algorithm>
 
-#include "server/scheduler.hpp"
-#include "server/scheduler_entries.hpp"
+#include "server/farm/scheduler.hpp"
+#include "server/farm/scheduler_entries.hpp"
 
 namespace tessera {
 namespace {

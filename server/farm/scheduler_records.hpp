@@ -13,14 +13,14 @@
 #include <variant>
 #include <vector>
 
-#include "common/image.hpp"
+#include "common/image/image.hpp"
 #include "common/protocol/events.hpp"
 #include "common/protocol/job_state.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/limits.hpp"
-#include "common/scene.hpp"
-#include "server/histogram.hpp"
-#include "server/store_thread.hpp"
+#include "common/scene/scene.hpp"
+#include "server/farm/store_thread.hpp"
+#include "server/metrics/histogram.hpp"
 
 namespace tessera {
 
@@ -216,7 +216,7 @@ struct FarmGauges {
 
 // What the scheduler reports of its changes, for the coordinator's event streams: each
 // call comes on the store thread once its change is durable, in the order the changes
-// were made, and must not call the scheduler back under... anything but its const reads.
+// were made. It may call the scheduler's const reads, and nothing else of it.
 class FarmObserver {
  public:
   virtual ~FarmObserver() = default;

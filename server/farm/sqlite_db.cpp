@@ -1,9 +1,9 @@
-#include "server/sqlite_db.hpp"
+#include "server/farm/sqlite_db.hpp"
 
 #include <spdlog/spdlog.h>
 #include <sqlite3.h>
 
-#include "server/store_error.hpp"
+#include "server/farm/store_error.hpp"
 
 namespace tessera {
 namespace {

@@ -15,7 +15,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "server/wal_checkpointer.hpp"
+#include "server/farm/wal_checkpointer.hpp"
 
 struct sqlite3;
 struct sqlite3_stmt;

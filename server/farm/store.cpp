@@ -1,4 +1,4 @@
-#include "server/store.hpp"
+#include "server/farm/store.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "server/packed_blobs.hpp"
-#include "server/store_error.hpp"
+#include "server/farm/packed_blobs.hpp"
+#include "server/farm/store_error.hpp"
 
 namespace tessera {
 namespace {

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "common/image.hpp"
-#include "server/sqlite_db.hpp"
+#include "common/image/image.hpp"
+#include "server/farm/sqlite_db.hpp"
 
 namespace tessera {
 

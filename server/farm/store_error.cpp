@@ -1,4 +1,4 @@
-#include "server/store_error.hpp"
+#include "server/farm/store_error.hpp"
 
 #include <cerrno>
 #include <cstring>

@@ -12,10 +12,10 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "server/packed_blobs.hpp"
-#include "server/prune_files.hpp"
-#include "server/store.hpp"
-#include "server/store_error.hpp"
+#include "server/farm/packed_blobs.hpp"
+#include "server/farm/prune_files.hpp"
+#include "server/farm/store.hpp"
+#include "server/farm/store_error.hpp"
 
 namespace tessera {
 

@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "server/store.hpp"
+#include "server/farm/store.hpp"
 
 namespace tessera {
 namespace {

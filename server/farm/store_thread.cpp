@@ -1,4 +1,4 @@
-#include "server/store_thread.hpp"
+#include "server/farm/store_thread.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/store_error.hpp"
+#include "server/farm/store_error.hpp"
 
 namespace tessera {
 namespace {

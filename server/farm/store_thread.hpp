@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "server/store.hpp"
+#include "server/farm/store.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "server/tile_order.hpp"
+#include "server/farm/tile_order.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -4,7 +4,7 @@
 #include <span>
 #include <vector>
 
-#include "common/image.hpp"
+#include "common/image/image.hpp"
 
 namespace tessera {
 

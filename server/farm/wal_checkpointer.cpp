@@ -1,4 +1,4 @@
-#include "server/wal_checkpointer.hpp"
+#include "server/farm/wal_checkpointer.hpp"
 
 #include <sys/resource.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "server/body_budget.hpp"
+#include "server/http/body_budget.hpp"
 
 #include <vector>
 

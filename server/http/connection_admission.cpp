@@ -1,4 +1,4 @@
-#include "server/connection_admission.hpp"
+#include "server/http/connection_admission.hpp"
 
 #include <memory>
 

@@ -13,7 +13,7 @@
 
 #include <boost/asio/ip/tcp.hpp>
 
-#include "server/http_session.hpp"
+#include "server/http/http_session.hpp"
 
 namespace tessera {
 

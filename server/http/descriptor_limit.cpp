@@ -1,4 +1,4 @@
-#include "server/descriptor_limit.hpp"
+#include "server/http/descriptor_limit.hpp"
 
 #include <sys/resource.h>
 

@@ -1,4 +1,4 @@
-#include "server/http_errors.hpp"
+#include "server/http/http_errors.hpp"
 
 #include "common/protocol/limits.hpp"
 

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "server/http_types.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

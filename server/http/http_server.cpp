@@ -1,4 +1,4 @@
-#include "server/http_server.hpp"
+#include "server/http/http_server.hpp"
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 
@@ -6,9 +6,9 @@
 
 #include <boost/asio/ip/address.hpp>
 
-#include "server/http_session.hpp"
-#include "server/listener.hpp"
-#include "server/tls_context.hpp"
+#include "server/http/http_session.hpp"
+#include "server/http/listener.hpp"
+#include "server/http/tls_context.hpp"
 
 namespace tessera {
 

@@ -24,8 +24,8 @@
 #include <string>
 #include <string_view>
 
-#include "server/http_types.hpp"
-#include "server/origin_policy.hpp"
+#include "server/http/http_types.hpp"
+#include "server/http/origin_policy.hpp"
 
 namespace boost::asio {
 class io_context;

@@ -1,4 +1,4 @@
-#include "server/http_session.hpp"
+#include "server/http/http_session.hpp"
 
 #include <algorithm>
 #include <array>
@@ -20,14 +20,14 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
 
-#include "server/connection_admission.hpp"
-#include "server/http_errors.hpp"
-#include "server/http_metrics.hpp"
-#include "server/listener.hpp"
-#include "server/pending_response.hpp"
-#include "server/request_framing.hpp"
-#include "server/router.hpp"
-#include "server/wire_messages.hpp"
+#include "server/http/connection_admission.hpp"
+#include "server/http/http_errors.hpp"
+#include "server/http/listener.hpp"
+#include "server/http/pending_response.hpp"
+#include "server/http/request_framing.hpp"
+#include "server/http/router.hpp"
+#include "server/http/wire_messages.hpp"
+#include "server/metrics/http_metrics.hpp"
 
 namespace tessera {
 

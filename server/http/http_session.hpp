@@ -15,8 +15,8 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 
-#include "server/body_budget.hpp"
-#include "server/http_server.hpp"
+#include "server/http/body_budget.hpp"
+#include "server/http/http_server.hpp"
 
 namespace boost::asio::ssl {
 class context;

@@ -1,4 +1,4 @@
-#include "server/listener.hpp"
+#include "server/http/listener.hpp"
 
 #include <chrono>
 
@@ -7,7 +7,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/strand.hpp>
 
-#include "server/connection_admission.hpp"
+#include "server/http/connection_admission.hpp"
 
 namespace tessera {
 

@@ -11,7 +11,7 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/steady_timer.hpp>
 
-#include "server/http_session.hpp"
+#include "server/http/http_session.hpp"
 
 namespace tessera {
 

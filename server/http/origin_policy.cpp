@@ -1,4 +1,4 @@
-#include "server/origin_policy.hpp"
+#include "server/http/origin_policy.hpp"
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 

@@ -8,8 +8,8 @@
 #include <string_view>
 #include <vector>
 
-#include "server/http_types.hpp"
-#include "server/request_framing.hpp"
+#include "server/http/http_types.hpp"
+#include "server/http/request_framing.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "server/pending_response.hpp"
+#include "server/http/pending_response.hpp"
 
 #include <spdlog/spdlog.h>
 

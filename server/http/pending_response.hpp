@@ -9,7 +9,7 @@
 #include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/io_context.hpp>
 
-#include "server/http_types.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "server/http_types.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 

@@ -1,4 +1,4 @@
-#include "server/router.hpp"
+#include "server/http/router.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -71,9 +71,7 @@ std::optional<std::map<std::string, std::string>> parse_query(std::string_view q
   return values;
 }
 
-void Router::add(std::string method, std::string pattern, Handler handler,
-                 std::optional<std::size_t> body_limit, std::string role, std::string content_type,
-                 SinkFactory sink) {
+void Router::add(std::string method, std::string pattern, Handler handler, RouteOptions options) {
   if (method.empty()) throw std::invalid_argument("route " + pattern + ": empty method");
   if (pattern.empty() || pattern.front() != '/')
     throw std::invalid_argument("route pattern \"" + pattern + "\" must start with '/'");
@@ -114,7 +112,7 @@ void Router::add(std::string method, std::string pattern, Handler handler,
                              "\" with other parameter names");
   }
   routes_.push_back({std::move(method), std::move(pattern), std::move(segments), std::move(handler),
-                     body_limit, std::move(role), std::move(content_type), std::move(sink)});
+                     std::move(options)});
 }
 
 RouteMatch Router::match(std::string_view method, std::string_view path) const {
@@ -168,10 +166,10 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
     if (route.method == wanted) {
       result.handler = &route.handler;
       result.pattern = route.pattern;
-      result.body_limit = route.body_limit;
-      result.role = route.role;
-      result.sink = route.sink ? &route.sink : nullptr;
-      result.content_type = route.content_type;
+      result.body_limit = route.options.body_limit;
+      result.role = route.options.role;
+      result.sink = route.options.sink ? &route.options.sink : nullptr;
+      result.content_type = route.options.content_type;
       for (std::size_t i = 0; i < parts.size(); ++i)
         if (route.segments[i].is_param) result.params.emplace(route.segments[i].text, parts[i]);
       return result;
@@ -191,7 +189,7 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
 std::optional<std::string> Router::role_of(std::string_view method,
                                            std::string_view pattern) const {
   for (const Route& route : routes_)
-    if (route.method == method && route.pattern == pattern) return route.role;
+    if (route.method == method && route.pattern == pattern) return route.options.role;
   return std::nullopt;
 }
 

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "server/http_types.hpp"
+#include "server/http/http_types.hpp"
 
 namespace tessera {
 
@@ -28,18 +28,41 @@ struct RouteMatch {
   HttpResponse error;
 };
 
+// What a route asks of a request beyond its method and path, each set by name:
+// RouteOptions{}.with_role(role_client).with_body_limit(1024).
+struct RouteOptions {
+  std::optional<std::size_t> body_limit;  // nullopt: the server's default
+  // Who may call it, for HttpServerOptions::authorize; "" is anyone.
+  std::string role;
+  // What a POST or PUT to it must declare, bodiless or not (415 else); "" takes any.
+  std::string content_type = "application/json";
+  SinkFactory sink;  // set: the body streams to a sink, not memory
+
+  RouteOptions with_body_limit(std::size_t bytes) && {
+    body_limit = bytes;
+    return std::move(*this);
+  }
+  RouteOptions with_role(std::string name) && {
+    role = std::move(name);
+    return std::move(*this);
+  }
+  RouteOptions with_content_type(std::string type) && {
+    content_type = std::move(type);
+    return std::move(*this);
+  }
+  RouteOptions with_sink(SinkFactory factory) && {
+    sink = std::move(factory);
+    return std::move(*this);
+  }
+};
+
 // Routes are added before the server starts; match() is then safe from any thread.
 class Router {
  public:
   // Throws std::invalid_argument for a malformed pattern, and std::logic_error for a
   // (method, pattern) already added or a pattern that differs from an existing one only in
   // its parameter names (the two could never be told apart).
-  // `role` names who may call the route, for HttpServerOptions::authorize; "" is anyone.
-  // `content_type` is what a POST or PUT to it must declare, bodiless or not (415 else;
-  // "" takes any).
-  void add(std::string method, std::string pattern, Handler handler,
-           std::optional<std::size_t> body_limit = std::nullopt, std::string role = "",
-           std::string content_type = "application/json", SinkFactory sink = {});
+  void add(std::string method, std::string pattern, Handler handler, RouteOptions options = {});
 
   // `path` is the request target without its query, still percent-encoded. Where several
   // patterns fit, the one with a literal segment earliest wins ("/v1/jobs/stats" over
@@ -61,10 +84,7 @@ class Router {
     std::string pattern;
     std::vector<Segment> segments;
     Handler handler;
-    std::optional<std::size_t> body_limit;
-    std::string role;
-    std::string content_type;
-    SinkFactory sink;
+    RouteOptions options;
   };
 
   std::vector<Route> routes_;

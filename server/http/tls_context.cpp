@@ -1,4 +1,4 @@
-#include "server/tls_context.hpp"
+#include "server/http/tls_context.hpp"
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
 

@@ -1,4 +1,4 @@
-#include "server/wire_messages.hpp"
+#include "server/http/wire_messages.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -10,7 +10,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "server/http_errors.hpp"
+#include "server/http/http_errors.hpp"
 
 namespace tessera {
 

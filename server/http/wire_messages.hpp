@@ -12,8 +12,8 @@
 #include <boost/beast/http/message.hpp>
 #include <boost/beast/http/string_body.hpp>
 
-#include "server/http_types.hpp"
-#include "server/request_framing.hpp"
+#include "server/http/http_types.hpp"
+#include "server/http/request_framing.hpp"
 
 namespace tessera {
 

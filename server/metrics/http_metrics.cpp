@@ -1,4 +1,4 @@
-#include "server/http_metrics.hpp"
+#include "server/metrics/http_metrics.hpp"
 
 #include <array>
 

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <tuple>
 
-#include "server/histogram.hpp"
+#include "server/metrics/histogram.hpp"
 
 namespace tessera {
 

@@ -185,7 +185,7 @@ TEST(DeployDocker, TheBuildContextLeavesOutBuildTreesHistoryAndTokens) {
     EXPECT_TRUE(test::ignored_by(".dockerignore", path, true))
         << path << " would be sent to the build";
   for (const char* path :
-       {"CMakeLists.txt", "common/scene.cpp", "server/server_main.cpp", "worker/tracer.cpp",
+       {"CMakeLists.txt", "common/scene.cpp", "server/server_main.cpp", "tracer/tracer.cpp",
         "client/main.cpp", "tests/CMakeLists.txt", "examples/showcase.json", "bench/run",
         "deploy/install-deps.sh", "deploy/docker/healthcheck.sh"})
     EXPECT_FALSE(test::ignored_by(".dockerignore", path, true))

@@ -24,8 +24,8 @@
 #include <boost/asio/io_context.hpp>
 
 #include "common/protocol/jobs.hpp"
-#include "server/http_server.hpp"
-#include "server/router.hpp"
+#include "server/http/http_server.hpp"
+#include "server/http/router.hpp"
 #include "tests/farm/process.hpp"
 
 namespace tessera {
@@ -47,7 +47,7 @@ class Stranger {
                                                           {"POST", "/v1/jobs/{id}/cancel"},
                                                           {"GET", "/v1/jobs/{id}/image"},
                                                           {"GET", "/v1/workers"}})
-      router_.add(method, pattern, reply, std::nullopt, "", "");
+      router_.add(method, pattern, reply, RouteOptions{}.with_content_type(""));
     HttpServerOptions options;
     options.address = "127.0.0.1";
     options.port = 0;
@@ -235,7 +235,7 @@ TEST(CliAnswers, ASubmissionAnsweredBusyGoesAgainAfterRetryAfter) {
         job.created_at = "2026-12-05T00:00:00.000Z";
         respond(HttpResponse{201, "application/json", protocol::to_json(job).dump(), {}});
       },
-      std::nullopt, "", "");
+      RouteOptions{}.with_content_type(""));
   HttpServerOptions options;
   options.address = "127.0.0.1";
   options.port = 0;

@@ -45,7 +45,10 @@ std::vector<std::string> token_args(const fs::path& dir) {
 
 // "/v1/jobs/{id}/image" -> "/v1/jobs/x/image"
 std::string concrete(const std::string& pattern) {
-  return std::regex_replace(pattern, std::regex(R"(\{[a-z_]+\})"), "x");
+  // A dashboard file by a name the coordinator has: /ui/{name} answers 404 for any other.
+  const std::string named =
+      std::regex_replace(pattern, std::regex(R"(^/ui/\{name\}$)"), "/ui/app.js");
+  return std::regex_replace(named, std::regex(R"(\{[a-z_]+\})"), "x");
 }
 
 // The status of a request announcing a 1 GiB body that is never sent: only an answer from

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "tests/farm/farm_fixture.hpp"
 #include "tests/unit/server/raw_connection.hpp"
 

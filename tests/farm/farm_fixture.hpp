@@ -24,8 +24,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "common/image_io.hpp"
-#include "common/scene_parser.hpp"
+#include "common/image/image_io.hpp"
+#include "common/scene/scene_parser.hpp"
 #include "tests/farm/json_api.hpp"
 #include "tests/farm/process.hpp"
 #include "tests/unit/worker/render_helpers.hpp"

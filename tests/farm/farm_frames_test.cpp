@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 #include "tests/farm/farm_fixture.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
-#include "worker/local_render.hpp"
-#include "worker/renderer.hpp"
+#include "tracer/local_render.hpp"
+#include "tracer/renderer.hpp"
 
 namespace tessera {
 namespace {

@@ -1,5 +1,5 @@
 // The worker and `tessera render` start themselves over with glibc's malloc on transparent
-// huge pages (common/huge_page_malloc.hpp): checked on the real programs' environments.
+// huge pages (common/image/huge_page_malloc.hpp): checked on the real programs' environments.
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>

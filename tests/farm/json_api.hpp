@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/image_format.hpp"
 #include "common/net/coordinator_client.hpp"
+#include "common/protocol/image_format.hpp"
 #include "tests/farm/contract_check.hpp"
 
 namespace tessera::test {

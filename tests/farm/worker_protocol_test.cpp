@@ -18,8 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/protocol/limits.hpp"
-#include "server/http_server.hpp"
-#include "server/router.hpp"
+#include "server/http/http_server.hpp"
+#include "server/http/router.hpp"
 #include "tests/farm/process.hpp"
 
 namespace tessera {

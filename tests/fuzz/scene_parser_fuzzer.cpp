@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/json_fast_parse.hpp"
-#include "common/scene_error.hpp"
-#include "common/scene_parser.hpp"
+#include "common/scene/json_fast_parse.hpp"
+#include "common/scene/scene_error.hpp"
+#include "common/scene/scene_parser.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -14,8 +14,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image.hpp"
-#include "common/image_io.hpp"
+#include "common/image/image.hpp"
+#include "common/image/image_io.hpp"
 
 namespace tessera {
 namespace {

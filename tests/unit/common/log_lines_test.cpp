@@ -1,5 +1,5 @@
 // --log-format json: one JSON object per line, the ids a line names as fields.
-#include "common/log_lines.hpp"
+#include "common/text/log_lines.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

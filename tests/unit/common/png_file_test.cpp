@@ -1,4 +1,4 @@
-// PNGs written with libpng (common/png_file.hpp) through write_image(): the codes that come
+// PNGs written with libpng (common/image/png_file.hpp) through write_image(): the codes that come
 // back through OpenImageIO, the colour chunks, the errors, and that no PNG opens the
 // image-file module.
 #include <spawn.h>
@@ -22,9 +22,9 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image.hpp"
-#include "common/image_io.hpp"
-#include "common/png_file.hpp"
+#include "common/image/image.hpp"
+#include "common/image/image_io.hpp"
+#include "common/image/png_file.hpp"
 
 extern char** environ;
 

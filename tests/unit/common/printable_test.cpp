@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/printable.hpp"
+#include "common/text/printable.hpp"
 
 namespace tessera {
 namespace {

@@ -11,11 +11,11 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "common/image_format.hpp"
 #include "common/protocol/assets.hpp"
 #include "common/protocol/error.hpp"
 #include "common/protocol/events.hpp"
 #include "common/protocol/health.hpp"
+#include "common/protocol/image_format.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/leases.hpp"
 #include "common/protocol/paths.hpp"

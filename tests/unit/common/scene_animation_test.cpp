@@ -7,9 +7,9 @@
 
 #include <gtest/gtest.h>
 
-#include "common/frame_list.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scene_frames.hpp"
+#include "common/scene/frame_list.hpp"
+#include "common/scene/scene_frames.hpp"
 #include "scene_test_support.hpp"
 
 namespace tessera::scene_test {

@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/suggest.hpp"
-#include "common/transform.hpp"
+#include "common/scene/transform.hpp"
+#include "common/text/suggest.hpp"
 #include "scene_test_support.hpp"
 
 namespace tessera::scene_test {

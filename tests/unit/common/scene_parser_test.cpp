@@ -16,7 +16,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/json_fast_parse.hpp"
+#include "common/scene/json_fast_parse.hpp"
 #include "scene_test_support.hpp"
 
 namespace tessera::scene_test {

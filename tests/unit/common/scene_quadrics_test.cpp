@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/scene_limits_scan.hpp"
+#include "common/scene/scene_limits_scan.hpp"
 #include "scene_test_support.hpp"
 
 namespace tessera::scene_test {

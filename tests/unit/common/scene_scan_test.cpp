@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "common/scene_limits_scan.hpp"
-#include "common/scene_parser.hpp"
-#include "common/scene_stream.hpp"
+#include "common/scene/scene_limits_scan.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "common/scene/scene_stream.hpp"
 
 namespace tessera {
 namespace {

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 
 namespace tessera::scene_test {
 

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 #include "tests/unit/common/scn_test_support.hpp"
 
 namespace tessera::scn_test {

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "common/scn_import.hpp"
+#include "common/scn/scn_import.hpp"
 
 namespace tessera::scn_test {
 

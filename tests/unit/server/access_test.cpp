@@ -1,5 +1,5 @@
 // Who may call which route: the token check, on its own.
-#include "server/access.hpp"
+#include "server/api/access.hpp"
 
 #include <unistd.h>
 
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "common/secret.hpp"
+#include "common/text/secret.hpp"
 
 namespace tessera {
 namespace {

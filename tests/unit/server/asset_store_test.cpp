@@ -5,8 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "server/asset_collector.hpp"
-#include "server/asset_store.hpp"
+#include "common/protocol/asset_digest.hpp"
+#include "server/api/asset_collector.hpp"
+#include "server/api/asset_store.hpp"
 
 namespace tessera {
 namespace {
@@ -63,7 +64,24 @@ TEST(AssetCollector, FindsEveryDigestAStoredSceneNames) {
   const std::string scene =
       R"({"objects": [{"asset": "sha256:)" + a + R"(", "files": {"x": "sha256:)" + b +
       R"("}}, {"name": "sha256:short"}, {"name": "sha256:)" + std::string(64, 'G') + R"("}]})";
-  EXPECT_EQ(digests_named_in(scene), (std::set<std::string>{a, b}));
+  EXPECT_EQ(protocol::digests_named_in(scene), (std::set<std::string>{a, b}));
+}
+
+TEST(AssetDigest, ReadsOnlyItsFormAndWritesItBack) {
+  using protocol::AssetDigest;
+  const std::string hex = "0123456789abcdef" + std::string(48, 'f');
+  const auto digest = AssetDigest::parse("sha256:" + hex);
+  ASSERT_TRUE(digest);
+  EXPECT_EQ(digest->hex(), hex);
+  EXPECT_EQ(digest->text(), "sha256:" + hex);
+  EXPECT_EQ(digest->short_text(), "sha256:0123456789ab");
+  EXPECT_EQ(AssetDigest::of_hex(hex), *digest);
+  for (const std::string& bad :
+       {hex, "sha256:" + hex.substr(1), "SHA256:" + hex, "sha256:" + hex + "0",
+        "sha256:0123456789ABCDEF" + std::string(48, 'f'), "sha256:" + std::string(64, 'g'),
+        std::string("md5:") + hex})
+    EXPECT_FALSE(AssetDigest::parse(bad)) << bad;
+  EXPECT_THROW(AssetDigest::of_hex("abc"), std::invalid_argument);
 }
 
 }  // namespace

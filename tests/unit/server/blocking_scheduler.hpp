@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
 
 namespace tessera::test {
 

@@ -1,7 +1,7 @@
 // The event hub: each stream sees its own events, in order, resumes after the last one it
 // saw while that is kept, and a subscriber that falls behind is sent "resync" instead of
 // holding anything up.
-#include "server/event_hub.hpp"
+#include "server/api/event_hub.hpp"
 
 #include <gtest/gtest.h>
 

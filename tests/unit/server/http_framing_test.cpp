@@ -13,8 +13,8 @@
 #include <boost/asio/io_context.hpp>
 #include <nlohmann/json.hpp>
 
-#include "server/http_server.hpp"
-#include "server/router.hpp"
+#include "server/http/http_server.hpp"
+#include "server/http/router.hpp"
 #include "tests/unit/server/raw_connection.hpp"
 
 namespace tessera {
@@ -36,13 +36,14 @@ class HttpFramingTest : public ::testing::Test {
         [](HttpRequest&& request, Respond respond) {
           respond(json_response(200, {{"body", request.body}}));
         },
-        1024, "", "");  // any content type: framing is what is tested here
+        RouteOptions{}.with_body_limit(1024).with_content_type(
+            ""));  // any content type: framing is what is tested here
     router_.add(
         "POST", "/big",
         [](HttpRequest&& request, Respond respond) {
           respond(json_response(200, {{"size", request.body.size()}}));
         },
-        4 << 20, "", "");
+        RouteOptions{}.with_body_limit(4 << 20).with_content_type(""));
   }
 
   void start(HttpServerOptions options = {}) {

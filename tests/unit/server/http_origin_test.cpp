@@ -11,9 +11,9 @@
 #include <gtest/gtest.h>
 #include <boost/asio/io_context.hpp>
 
-#include "server/http_server.hpp"
-#include "server/origin_policy.hpp"
-#include "server/router.hpp"
+#include "server/http/http_server.hpp"
+#include "server/http/origin_policy.hpp"
+#include "server/http/router.hpp"
 #include "tests/unit/server/raw_connection.hpp"
 
 namespace tessera {
@@ -34,7 +34,7 @@ class HttpOriginTest : public ::testing::Test {
     });
     router_.add(
         "PUT", "/pixels", [](HttpRequest&&, Respond respond) { respond(json_response(200, {})); },
-        std::nullopt, "", "application/octet-stream");
+        RouteOptions{}.with_content_type("application/octet-stream"));
     HttpServerOptions options;
     options.address = "127.0.0.1";
     options.port = 0;

@@ -27,8 +27,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/net/http_client.hpp"
-#include "server/http_server.hpp"
-#include "server/router.hpp"
+#include "server/http/http_server.hpp"
+#include "server/http/router.hpp"
 #include "tests/unit/server/raw_connection.hpp"
 #include "tests/unused_port.hpp"
 
@@ -118,7 +118,8 @@ class HttpTest : public ::testing::Test {
                                       {"content_type", request.headers["content-type"]},
                                       {"x_test", request.headers["x-test"]}}));
         },
-        16, "", "");  // any content type: http_origin_test.cpp checks them
+        RouteOptions{}.with_body_limit(16).with_content_type(
+            ""));  // any content type: http_origin_test.cpp checks them
     router_.add("GET", "/whoami", [](HttpRequest&& request, Respond respond) {
       respond(json_response(200, {{"remote", request.remote_address}}));
     });
@@ -167,7 +168,7 @@ TEST(RouterTest, MatchesLiteralsAndParameters) {
   Router router;
   const Handler noop = [](HttpRequest&&, Respond) {};
   router.add("GET", "/v1/jobs/{id}", noop);
-  router.add("GET", "/v1/jobs/{id}/image", noop, 123);
+  router.add("GET", "/v1/jobs/{id}/image", noop, RouteOptions{}.with_body_limit(123));
   router.add("GET", "/v1/jobs/stats", noop);
   router.add("DELETE", "/v1/jobs/{id}", noop);
   router.add("GET", "/", noop);
@@ -354,13 +355,13 @@ TEST_F(HttpTest, LargeBodiesAreReadOnlyWithinTheBodyBudget) {
         later = std::move(respond);
         holding = true;
       },
-      1 << 20);
+      RouteOptions{}.with_body_limit(1 << 20));
   router_.add(
       "POST", "/big",
       [](HttpRequest&& request, Respond respond) {
         respond(json_response(200, {{"size", request.body.size()}}));
       },
-      1 << 20);
+      RouteOptions{}.with_body_limit(1 << 20));
   HttpServerOptions options;
   options.budgeted_body_bytes = 100;
   options.body_budget_bytes = 1000;

@@ -1,7 +1,7 @@
 // ImageAssembly on its own, over a real Store: tiles durable before a job's canvas exists
 // come into it from the store, later ones are pasted, and a completed job's image file
 // holds every tile; an ended job's image comes from the store; a removed job's file goes.
-#include "server/image_assembly.hpp"
+#include "server/farm/image_assembly.hpp"
 
 #include <unistd.h>
 
@@ -16,7 +16,7 @@
 
 #include "tests/unit/server/test_dir.hpp"
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 
 namespace tessera {
 namespace {

@@ -7,10 +7,10 @@
 #include <gtest/gtest.h>
 #include <boost/asio/io_context.hpp>
 
-#include "server/access.hpp"
-#include "server/api_routes.hpp"
-#include "server/histogram.hpp"
-#include "server/http_metrics.hpp"
+#include "server/api/access.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/metrics/histogram.hpp"
+#include "server/metrics/http_metrics.hpp"
 
 namespace tessera {
 namespace {

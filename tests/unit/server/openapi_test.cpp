@@ -12,8 +12,8 @@
 #include <gtest/gtest.h>
 #include <boost/asio/io_context.hpp>
 
-#include "server/api_routes.hpp"
-#include "server/asset_store.hpp"
+#include "server/api/api_routes.hpp"
+#include "server/api/asset_store.hpp"
 #include "tests/unit/server/openapi_routes.hpp"
 
 namespace tessera {

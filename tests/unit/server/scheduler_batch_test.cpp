@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
-#include "server/sqlite_db.hpp"
+#include "common/image/image_io.hpp"
+#include "server/farm/sqlite_db.hpp"
 #include "tests/unit/server/scheduler_fixture.hpp"
 
 namespace tessera {

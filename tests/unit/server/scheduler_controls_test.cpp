@@ -3,7 +3,7 @@
 // a restart, and refuse what makes no sense with a reason.
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "tests/unit/server/scheduler_fixture.hpp"
 
 namespace tessera {

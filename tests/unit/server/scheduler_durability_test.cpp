@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "server/sqlite_db.hpp"
+#include "server/farm/sqlite_db.hpp"
 #include "tests/unit/server/scheduler_fixture.hpp"
 
 namespace tessera {

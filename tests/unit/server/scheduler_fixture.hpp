@@ -15,7 +15,7 @@
 
 #include "tests/unit/server/test_dir.hpp"
 
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
 #include "tests/unit/server/blocking_scheduler.hpp"
 
 namespace tessera::test {

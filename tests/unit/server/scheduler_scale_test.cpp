@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
-#include "server/pending_tiles.hpp"
+#include "common/image/image_io.hpp"
+#include "server/farm/pending_tiles.hpp"
 #include "tests/unit/server/scheduler_fixture.hpp"
 
 namespace tessera {

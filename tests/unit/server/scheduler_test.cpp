@@ -1,4 +1,4 @@
-#include "server/scheduler.hpp"
+#include "server/farm/scheduler.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
-#include "server/tile_order.hpp"
+#include "common/image/image_io.hpp"
+#include "server/farm/tile_order.hpp"
 #include "tests/unit/server/scheduler_fixture.hpp"
 
 namespace tessera {

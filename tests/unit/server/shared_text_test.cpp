@@ -1,5 +1,5 @@
-// SharedText: the ids that millions of tiles name are held once (server/shared_text.hpp).
-#include "server/shared_text.hpp"
+// SharedText: the ids that millions of tiles name are held once (server/farm/shared_text.hpp).
+#include "server/farm/shared_text.hpp"
 
 #include <string>
 

@@ -10,10 +10,10 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
-#include "server/sqlite_db.hpp"
-#include "server/store.hpp"
-#include "server/store_error.hpp"
-#include "server/store_thread.hpp"
+#include "server/farm/sqlite_db.hpp"
+#include "server/farm/store.hpp"
+#include "server/farm/store_error.hpp"
+#include "server/farm/store_thread.hpp"
 #include "tests/unit/server/faulty_vfs.hpp"
 #include "tests/unit/server/test_dir.hpp"
 

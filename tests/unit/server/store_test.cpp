@@ -1,4 +1,4 @@
-#include "server/store.hpp"
+#include "server/farm/store.hpp"
 
 #include <chrono>
 #include <cstring>
@@ -12,9 +12,9 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
-#include "server/image_files.hpp"
-#include "server/sqlite_db.hpp"
+#include "common/image/image_io.hpp"
+#include "server/farm/image_files.hpp"
+#include "server/farm/sqlite_db.hpp"
 
 namespace tessera {
 namespace {

@@ -16,7 +16,7 @@
 
 #include "tests/unit/server/test_dir.hpp"
 
-#include "server/store_thread.hpp"
+#include "server/farm/store_thread.hpp"
 
 namespace tessera {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "server/submit_budget.hpp"
+#include "server/api/submit_budget.hpp"
 
 namespace tessera {
 namespace {

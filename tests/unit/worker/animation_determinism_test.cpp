@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scene_frames.hpp"
+#include "common/scene/scene_frames.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
 
 namespace tessera {

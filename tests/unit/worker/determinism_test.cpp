@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/unit/worker/render_helpers.hpp"
-#include "worker/pixel_sampler.hpp"
+#include "tracer/pixel_sampler.hpp"
 
 namespace tessera {
 namespace {

@@ -402,7 +402,7 @@ TEST(Geometry, AMeshHitHasTheNormalOfTheFloatCornersEmbreeIntersected) {
       renderer.geometry().intersect(renderer.camera().ray_through(0.5, 0.5), kInfinity);
   ASSERT_TRUE(hit.has_value());
   // Rounded through memory the compiler must really write: GCC 12's vectoriser was seen to
-  // drop a float rounding it could see through (worker/scene_geometry.cpp).
+  // drop a float rounding it could see through (tracer/scene_geometry.cpp).
   auto rounded = [](double value) {
     volatile float f = static_cast<float>(value);
     return static_cast<double>(f);

@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scn_import.hpp"
+#include "common/scn/scn_import.hpp"
 #include "tests/unit/worker/render_helpers.hpp"
 
 namespace tessera {

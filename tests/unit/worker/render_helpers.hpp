@@ -5,10 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/image.hpp"
-#include "common/scene_parser.hpp"
-#include "worker/local_render.hpp"
-#include "worker/renderer.hpp"
+#include "common/image/image.hpp"
+#include "common/scene/scene_parser.hpp"
+#include "tracer/local_render.hpp"
+#include "tracer/renderer.hpp"
 
 namespace tessera::test {
 
@@ -89,7 +89,7 @@ inline json busy_scene() {
 }
 
 // An inline torus around y of 2·rings·sides triangles, big enough for a BVH of its own
-// (worker/mesh_bvh.hpp), with smooth normals or flat.
+// (tracer/mesh_bvh.hpp), with smooth normals or flat.
 inline json torus(int rings, int sides, double major, double minor, bool smooth) {
   constexpr double pi = 3.14159265358979323846;
   json positions = json::array();

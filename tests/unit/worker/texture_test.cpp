@@ -9,7 +9,7 @@
 
 #include <gmock/gmock.h>
 
-#include "common/image_io.hpp"
+#include "common/image/image_io.hpp"
 #include "common/mesh_files/folder_scene_files.hpp"
 #include "tests/png_header_only.hpp"
 #include "tests/unit/worker/render_helpers.hpp"

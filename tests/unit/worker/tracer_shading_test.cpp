@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/unit/worker/render_helpers.hpp"
-#include "worker/tracer_shading.hpp"
+#include "tracer/tracer_shading.hpp"
 
 namespace tessera {
 namespace {

@@ -4,7 +4,7 @@
 #include <gmock/gmock.h>
 #include <nlohmann/json.hpp>
 
-#include "common/scene_parser.hpp"
+#include "common/scene/scene_parser.hpp"
 #include "mesh_file_support.hpp"
 
 namespace tessera {

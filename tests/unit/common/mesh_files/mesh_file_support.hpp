@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "common/mesh_files/folder_scene_files.hpp"
-#include "common/scene_files.hpp"
+#include "common/scene/scene_files.hpp"
 
 namespace tessera::test {
 
