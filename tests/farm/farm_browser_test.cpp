@@ -2,7 +2,10 @@
 // and text/plain get 415, other sites' pages 403, and a tokenless coordinator on loopback
 // answers no name but loopback ones (DNS rebinding); its own pages and the origins named
 // with --allowed-origin still may call.
+#include <regex>
+#include <set>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -42,6 +45,44 @@ TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
                 .status,
             201);
   EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
+}
+
+// The page's files are served under /ui/{name}: the style sheet and the script the page
+// names, and every module the script imports, each with its type and the page's policy;
+// a name that is none of them, or that tries to leave the folder, is nothing.
+TEST(FarmBrowser, EveryFileThePageLoadsIsServedAndNothingElse) {
+  Farm farm("browser-files", 0);
+  HttpClient http = farm.http(10s);
+  const HttpResult page = http.request("GET", "/");
+  ASSERT_EQ(page.status, 200);
+  std::vector<std::string> wanted;
+  const std::regex linked(R"re((?:src|href)="/ui/([A-Za-z0-9_.-]+)")re");
+  for (std::sregex_iterator at(page.body.begin(), page.body.end(), linked), end; at != end; ++at)
+    wanted.push_back((*at)[1]);
+  ASSERT_EQ(wanted.size(), 2u) << page.body;  // app.css and app.js
+  std::set<std::string> served;
+  const std::regex imported(R"re(from '\./([A-Za-z0-9_.-]+)')re");
+  while (!wanted.empty()) {
+    const std::string name = wanted.back();
+    wanted.pop_back();
+    if (!served.insert(name).second) continue;
+    const HttpResult file = http.request("GET", "/ui/" + name);
+    ASSERT_EQ(file.status, 200) << name;
+    const bool script = name.ends_with(".js");
+    EXPECT_EQ(
+        file.headers.at("content-type").rfind(script ? "application/javascript" : "text/css", 0),
+        0u)
+        << name << ": " << file.headers.at("content-type");
+    EXPECT_NE(file.headers.at("content-security-policy").find("script-src 'self'"),
+              std::string::npos);
+    for (std::sregex_iterator at(file.body.begin(), file.body.end(), imported), end; at != end;
+         ++at)
+      wanted.push_back((*at)[1]);
+  }
+  EXPECT_GE(served.size(), 10u) << "the script is ES modules, one per view and part";
+  for (const char* missing :
+       {"/ui/nothing.js", "/ui/index.html", "/ui/..%2Fweb_routes.cpp", "/ui/%2E%2E%2Fapp.js"})
+    EXPECT_EQ(http.request("GET", missing).status, 404) << missing;
 }
 
 TEST(FarmBrowser, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
