@@ -30,6 +30,8 @@
 #include <boost/beast/http/file_body.hpp>
 #include <boost/beast/ssl.hpp>
 
+#include "common/net/client_tls.hpp"
+
 namespace tessera {
 
 namespace net = boost::asio;
@@ -50,10 +52,6 @@ std::string lower(beast::string_view text) {
   return out;
 }
 
-[[noreturn]] void bad_url(std::string_view url, std::string_view why) {
-  throw BadServerUrl("invalid server URL \"" + std::string(url) + "\": " + std::string(why));
-}
-
 // The server closed a kept-alive connection before (or while) we reused it: harmless,
 // the request can go again on a new connection.
 bool is_closed_by_peer(const error_code& ec) {
@@ -63,59 +61,6 @@ bool is_closed_by_peer(const error_code& ec) {
 }
 
 }  // namespace
-
-BaseUrl parse_base_url(std::string_view url) {
-  BaseUrl result;
-  // A bare "host:port" means http://, as for curl.
-  const std::size_t scheme_end = url.find("://");
-  if (scheme_end != std::string_view::npos) {
-    const std::string scheme = lower(to_beast(url.substr(0, scheme_end)));
-    if (scheme != "http" && scheme != "https")
-      bad_url(url, "expected http://host[:port] or https://host[:port]");
-    result.tls = scheme == "https";
-    if (result.tls) result.port = 443;
-  }
-  std::string_view authority =
-      scheme_end == std::string_view::npos ? url : url.substr(scheme_end + 3);
-  const std::size_t slash = authority.find('/');
-  if (slash != std::string_view::npos) {
-    if (authority.substr(slash) != "/")
-      bad_url(url, "a path is not allowed; expected http://host[:port]");
-    authority = authority.substr(0, slash);
-  }
-
-  std::string_view port_text;
-  if (authority.starts_with('[')) {  // IPv6 literal
-    const std::size_t close = authority.find(']');
-    if (close == std::string_view::npos) bad_url(url, "unterminated [IPv6 address]");
-    result.host = std::string(authority.substr(1, close - 1));
-    const std::string_view after = authority.substr(close + 1);
-    if (!after.empty()) {
-      if (after.front() != ':') bad_url(url, "expected :port after ]");
-      port_text = after.substr(1);
-      if (port_text.empty()) bad_url(url, "empty port");
-    }
-  } else {
-    const std::size_t colon = authority.find(':');
-    result.host = std::string(authority.substr(0, colon));
-    if (colon != std::string_view::npos) {
-      port_text = authority.substr(colon + 1);
-      if (port_text.empty()) bad_url(url, "empty port");
-    }
-  }
-  if (result.host.empty()) bad_url(url, "no host");
-  if (result.host.find('@') != std::string::npos) bad_url(url, "user information is not supported");
-  if (!port_text.empty()) {
-    unsigned value = 0;
-    const auto [end, ec] =
-        std::from_chars(port_text.data(), port_text.data() + port_text.size(), value);
-    if (ec != std::errc() || end != port_text.data() + port_text.size() || value == 0 ||
-        value > 65535)
-      bad_url(url, "the port must be a number from 1 to 65535");
-    result.port = static_cast<std::uint16_t>(value);
-  }
-  return result;
-}
 
 namespace {
 
@@ -128,50 +73,7 @@ std::string where_of(const BaseUrl& url) {
   return (url.tls ? "https://" : "http://") + host_header_of(url);
 }
 
-// Peers are verified against `ca_file`, or the system's store; TLS 1.2 at least.
-std::shared_ptr<net::ssl::context> client_tls_context(const std::string& ca_file) {
-  auto context = std::make_shared<net::ssl::context>(net::ssl::context::tls_client);
-  context->set_options(net::ssl::context::default_workarounds | net::ssl::context::no_sslv2 |
-                       net::ssl::context::no_sslv3 | net::ssl::context::no_tlsv1 |
-                       net::ssl::context::no_tlsv1_1);
-  context->set_verify_mode(net::ssl::verify_peer);
-  error_code ec;
-  if (ca_file.empty())
-    context->set_default_verify_paths(ec);
-  else
-    context->load_verify_file(ca_file, ec);
-  if (ec)
-    throw std::runtime_error(
-        ca_file.empty() ? "cannot load the system's CA certificates: " + ec.message()
-                        : "cannot read CA certificates from " + ca_file + ": " + ec.message());
-  return context;
-}
-
-// Why a handshake failed, in words a user can act on.
-std::string handshake_failure(SSL* ssl, const error_code& ec, const std::string& where) {
-  const long verified = SSL_get_verify_result(ssl);
-  if (verified != X509_V_OK)
-    return "the certificate of " + where +
-           " is not trusted: " + X509_verify_cert_error_string(verified) +
-           (verified == X509_V_ERR_HOSTNAME_MISMATCH || verified == X509_V_ERR_IP_ADDRESS_MISMATCH
-                ? ""
-                : " (give the CA that signed it with --ca-file or $TESSERA_CA_FILE)");
-  std::string reason = ec.message();
-  // OpenSSL's words for a server that answered in plain HTTP.
-  const bool plain = reason.find("wrong version number") != std::string::npos ||
-                     reason.find("http request") != std::string::npos ||
-                     reason.find("packet length too long") != std::string::npos;
-  return "TLS handshake with " + where + " failed: " + reason +
-         (plain ? " (the server speaks plain http:// there, not https://)" : "");
-}
-
 }  // namespace
-
-std::string ca_file_or_env(const std::string& option) {
-  if (!option.empty()) return option;
-  if (const char* env = std::getenv("TESSERA_CA_FILE"); env && *env) return env;
-  return "";
-}
 
 struct HttpClient::Connection {
   Connection(BaseUrl base, std::chrono::milliseconds limit,
