@@ -1,4 +1,5 @@
 #include "client/movie_file.hpp"
+#include "common/text/ascii_case.hpp"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -96,9 +97,7 @@ TemporaryFolder::~TemporaryFolder() {
 }
 
 bool is_movie_path(const fs::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = ascii_lower(path.extension().string());
   return extension == ".mp4" || extension == ".mkv" || extension == ".mov";
 }
 

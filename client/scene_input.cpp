@@ -5,15 +5,13 @@
 
 #include "common/scene/scene_parser.hpp"
 #include "common/scn/scn_import.hpp"
+#include "common/text/ascii_case.hpp"
 
 namespace tessera {
 
 std::string read_scene_text(const std::filesystem::path& path, std::optional<int> width,
                             std::optional<int> height) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".scn") return read_text_file(path);
+  if (ascii_lower(path.extension().string()) != ".scn") return read_text_file(path);
   ScnImportOptions options;
   if (width) options.width = *width;
   if (height) options.height = *height;

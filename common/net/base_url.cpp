@@ -1,10 +1,9 @@
 // A coordinator's base URL, as --server and $TESSERA_SERVER give it (common/net/http_client.hpp).
-#include <algorithm>
-#include <cctype>
 #include <charconv>
 #include <string>
 
 #include "common/net/http_client.hpp"
+#include "common/text/ascii_case.hpp"
 
 namespace tessera {
 namespace {
@@ -20,9 +19,7 @@ BaseUrl parse_base_url(std::string_view url) {
   // A bare "host:port" means http://, as for curl.
   const std::size_t scheme_end = url.find("://");
   if (scheme_end != std::string_view::npos) {
-    std::string scheme(url.substr(0, scheme_end));
-    std::transform(scheme.begin(), scheme.end(), scheme.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string scheme = ascii_lower(url.substr(0, scheme_end));
     if (scheme != "http" && scheme != "https")
       bad_url(url, "expected http://host[:port] or https://host[:port]");
     result.tls = scheme == "https";

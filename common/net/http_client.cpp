@@ -31,6 +31,7 @@
 #include <boost/beast/ssl.hpp>
 
 #include "common/net/client_tls.hpp"
+#include "common/text/ascii_case.hpp"
 
 namespace tessera {
 
@@ -46,10 +47,7 @@ namespace {
 beast::string_view to_beast(std::string_view text) { return {text.data(), text.size()}; }
 
 std::string lower(beast::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
+  return ascii_lower(std::string_view(text.data(), text.size()));
 }
 
 // The server closed a kept-alive connection before (or while) we reused it: harmless,

@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/text/ascii_case.hpp"
 #include "common/text/or_list.hpp"
 
 namespace tessera {
@@ -39,9 +40,7 @@ inline const ImageFormat* image_format_named(std::string_view name) {
 
 // By the path's extension, in any case; nullptr for none of them.
 inline const ImageFormat* image_format_of_path(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = ascii_lower(path.extension().string());
   for (const ImageFormat& format : kImageFormats)
     if (!ext.empty() && (ext == format.extension || ext == format.alias)) return &format;
   return nullptr;

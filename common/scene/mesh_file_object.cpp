@@ -4,6 +4,7 @@
 
 #include "common/protocol/asset_digest.hpp"
 #include "common/scene/scene_parser_parts.hpp"
+#include "common/text/ascii_case.hpp"
 
 namespace tessera {
 namespace {
@@ -70,10 +71,7 @@ std::optional<MeshFormat> mesh_format_of(std::string_view file) {
   const auto dot = file.rfind('.');
   if (dot == std::string_view::npos || file.find('/', dot) != std::string_view::npos)
     return std::nullopt;
-  std::string extension(file.substr(dot + 1));
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return mesh_format_named(extension);
+  return mesh_format_named(ascii_lower(file.substr(dot + 1)));
 }
 
 bool is_mesh_file(const ObjectReader& object) {
