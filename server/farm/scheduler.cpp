@@ -78,8 +78,9 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
                        std::string scene_json, Submitted then, std::vector<int> frames) {
   // Outside the lock: hashing a large mesh scene takes a while.
   const std::string digest = sha256_hex(scene_json);
-  const std::vector<TileRect> rects =
-      split_into_tiles(scene.width, scene.height, scene.render.tile_size);
+  // Made once, and shared by the job: every frame is cut alike.
+  auto rects = std::make_shared<const std::vector<TileRect>>(
+      split_into_tiles(scene.width, scene.height, scene.render.tile_size));
   auto job_frames = std::make_shared<JobFrames>();
   if (frames.empty()) {
     job_frames->numbers = {0};
@@ -89,7 +90,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   }
   const int frame_count = static_cast<int>(job_frames->numbers.size());
   // Also outside: sorting a million tiles takes a while too.
-  std::vector<int> order = hand_out_order(rects, scene.width, scene.height, frame_count);
+  std::vector<int> order = hand_out_order(*rects, scene.width, scene.height, frame_count);
 
   auto job = std::make_shared<JobEntry>();
   JobStatus& s = job->status;
@@ -103,9 +104,9 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   s.scene_digest = digest;
   s.output_transfer = scene.render.output_transfer;
   s.frames = std::move(job_frames);
-  job->tiles_per_frame = static_cast<int>(rects.size());
-  job->tiles.resize(rects.size() * frame_count);
-  job->rects = std::make_shared<const std::vector<TileRect>>(rects);
+  job->tiles_per_frame = static_cast<int>(rects->size());
+  job->tiles.resize(rects->size() * frame_count);
+  job->rects = std::move(rects);
 
   StoreTicket ticket = 0;
   {

@@ -67,9 +67,10 @@ std::string Scheduler::failed_frames_error(const JobEntry& job, const std::vecto
     const auto staged = change.tiles.find({const_cast<JobEntry*>(&job), index});
     const TileSlot& tile = staged != change.tiles.end() ? staged->second : job.tiles[index];
     if (tile.state == TileState::done || tile.attempts < config_.max_tile_attempts) continue;
+    const TileRect& rect = job.rect(index);
     error += "; frame " + std::to_string(failed.front()) + ", tile " +
-             std::to_string(index - first) + " at (" + std::to_string(job.rect(index).x) + ", " +
-             std::to_string(job.rect(index).y) + "): " + tile.last_error;
+             std::to_string(index - first) + " at (" + std::to_string(rect.x) + ", " +
+             std::to_string(rect.y) + "): " + tile.last_error;
     break;
   }
   return error;

@@ -143,10 +143,10 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
       if (!is_finished(s.state)) not_loaded_[s.id] = "not loaded at start: " + *refusal;
       continue;
     }
-    const std::vector<TileRect> rects = split_into_tiles(s.width, s.height, s.tile_size);
-    job->tiles_per_frame = static_cast<int>(rects.size());
-    job->tiles.resize(rects.size() * s.frames->numbers.size());
-    job->rects = std::make_shared<const std::vector<TileRect>>(rects);
+    job->rects = std::make_shared<const std::vector<TileRect>>(
+        split_into_tiles(s.width, s.height, s.tile_size));
+    job->tiles_per_frame = static_cast<int>(job->rects->size());
+    job->tiles.resize(job->rects->size() * s.frames->numbers.size());
     job_memory_ += job->tiles.size() * kTileBytes;
   }
   return unknown_state;
