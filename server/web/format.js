@@ -1,5 +1,7 @@
 // Numbers and times, as people read them
 
+import {FINISHED} from './contract.js';
+
 export function formatDuration(seconds) {
   if (seconds === null || seconds === undefined || !Number.isFinite(seconds)) return '—';
   const s = Math.max(0, Math.round(seconds));
@@ -7,6 +9,11 @@ export function formatDuration(seconds) {
   if (s < 3600) return s % 60 ? `${Math.floor(s / 60)} min ${s % 60} s` : `${s / 60} min`;
   const minutes = Math.round((s % 3600) / 60);
   return minutes ? `${Math.floor(s / 3600)} h ${minutes} min` : `${Math.floor(s / 3600)} h`;
+}
+
+// A job's time left: none once it ended or while it is paused.
+export function formatEta(job) {
+  return FINISHED.has(job.state) || job.state === 'paused' ? '—' : formatDuration(job.eta_s);
 }
 
 export function formatAgo(iso) {

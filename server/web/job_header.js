@@ -2,9 +2,8 @@
 // times, rate, troubles) and its actions (pause, resume, retry, cancel, delete, priority).
 // It shows the job it is given; the actions' answers go back to the view.
 
-import {FINISHED} from './contract.js';
 import {fill, h, setText} from './dom.js';
-import {formatAgo, formatCount, formatDuration, formatRate} from './format.js';
+import {formatAgo, formatCount, formatDuration, formatEta, formatRate} from './format.js';
 import {jobButtons, priorityInput, stateBadge, syncPriority} from './job_actions.js';
 
 export class JobHeader {
@@ -52,7 +51,7 @@ export class JobHeader {
       animated ? ['Frames', `${formatCount(frames.done)} / ${formatCount(frames.total)}`] : null,
       ['Rendering', formatCount(job.tiles.rendering)],
       ['Elapsed', formatDuration(job.elapsed_s)],
-      ['ETA', FINISHED.has(job.state) || job.state === 'paused' ? '—' : formatDuration(job.eta_s)],
+      ['ETA', formatEta(job)],
       ['Rays/s', formatRate(job.stats?.rays_per_s)],
       ['Size', `${job.width} × ${job.height}`],
       ['Submitted', formatAgo(job.created_at)],

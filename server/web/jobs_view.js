@@ -2,10 +2,10 @@
 
 import {api, jobPage} from './api.js';
 import {PAGE_SIZE} from './constants.js';
-import {FINISHED, JOB_STATES} from './contract.js';
+import {JOB_STATES} from './contract.js';
 import {append, fill, h, setText} from './dom.js';
 import {liveStream} from './events.js';
-import {formatAgo, formatCount, formatDuration, formatRate, shortId} from './format.js';
+import {formatAgo, formatCount, formatEta, formatRate, shortId} from './format.js';
 import {jobButtons, priorityInput, stateBadge, syncPriority} from './job_actions.js';
 
 export function jobsView(main) {
@@ -140,10 +140,7 @@ export function jobsView(main) {
     row.bar.value = job.progress ?? 0;
     setText(row.percent, `${Math.floor((job.progress ?? 0) * 100)}%`);
     setText(row.tiles, `${formatCount(job.tiles?.done)} / ${formatCount(job.tiles?.total)}`);
-    setText(
-      row.eta,
-      FINISHED.has(job.state) || job.state === 'paused' ? '—' : formatDuration(job.eta_s),
-    );
+    setText(row.eta, formatEta(job));
     syncPriority(row.priority, job);
     setText(row.submitted, formatAgo(job.created_at));
     row.submitted.title = job.created_at ?? '';
