@@ -31,6 +31,7 @@
 #include "server/api/farm_events.hpp"
 #include "server/api/local_workers.hpp"
 #include "server/api/memory_give_back.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "server/http/descriptor_limit.hpp"
 #include "server/http/http_server.hpp"
 #include "server/metrics/http_metrics.hpp"
@@ -204,7 +205,7 @@ int run(const ServerOptions& options) {
 
   // Before anything opens a file: connections must leave the store its descriptors.
   const DescriptorLimit descriptors = raise_descriptor_limit();
-  Store store(options.data_dir);
+  SqliteStore store(options.data_dir);
   SystemClock clock;
   // Before the scheduler, whose store thread tells them of changes until it stops.
   EventLimits event_limits;

@@ -1,7 +1,6 @@
-// The coordinator's durable state: one SQLite database (WAL) and the finished images,
-// both under one data directory. Rows mirror the Scheduler's records; states are stored
-// as the words the Scheduler uses, so that the database reads well with the sqlite3 tool.
-// Not thread-safe: once the coordinator serves, only its store thread (StoreThread) calls it.
+// The coordinator's durable state, as rows, and Store, the seam between the Scheduler and
+// what keeps them. Rows mirror the Scheduler's records; states are stored as the protocol's
+// words, so that a database reads well with its own tools.
 #pragma once
 
 #include <cstdint>
@@ -13,7 +12,6 @@
 #include <vector>
 
 #include "common/image/image.hpp"
-#include "server/farm/sqlite_db.hpp"
 
 namespace tessera {
 
@@ -95,83 +93,60 @@ struct StoredState {
   std::vector<WorkerRow> workers;
 };
 
+// What the Scheduler needs of durable state, whatever holds it: SqliteStore on a coordinator,
+// MemoryStore in unit tests. A write that throws has stored nothing of itself; within
+// atomically(), nothing of the whole group. Not thread-safe: once the coordinator serves,
+// only its store thread (StoreThread) calls it.
 class Store {
  public:
-  // Creates the directory and the database when they do not exist yet.
-  explicit Store(const std::filesystem::path& data_dir);
+  virtual ~Store() = default;
 
-  const std::filesystem::path& data_dir() const { return data_dir_; }
-  // data_dir/pixels/<job_id>.f32: the pixels of the job's results, each appended as it
-  // is accepted, float32 RGB little-endian, tile after tile. Append-only, so that a backup
-  // of the database taken before a copy of these files finds every pixel it points to.
-  std::filesystem::path pixel_path(const std::string& job_id) const;
-  // The same within the data dir ("pixels/JOB.f32"): how errors that reach clients name it.
-  static std::string pixel_name(const std::string& job_id);
+  // Where the coordinator keeps the files beside the store: the finished images (ImageFiles).
+  virtual const std::filesystem::path& data_dir() const = 0;
 
   // Everything but pixels and scene texts, for the Scheduler to start from.
-  StoredState load();
-
-  // Groups several operations into one atomic change.
-  Transaction transaction() { return Transaction(db_); }
+  virtual StoredState load() = 0;
+  // Runs `writes` as one atomic change: all of what it stores is durable once this returns,
+  // and none of it when this throws (it rethrows what `writes` threw, or its own error).
+  virtual void atomically(const std::function<void()>& writes) = 0;
 
   // The job and (unless already stored under the digest) its scene, atomically. Its tiles
   // follow from its size and tile size; they have no rows until something happens to them.
-  void insert_job(const JobRow& job, const std::string& scene_json);
-  void update_job(const JobRow& job);
+  virtual void insert_job(const JobRow& job, const std::string& scene_json) = 0;
+  // Its name, priority, state, times, error and rays; the rest never changes.
+  virtual void update_job(const JobRow& job) = 0;
   // Deletes the job, its leases, results and failures, its scene when no other job uses
-  // it, and its pixel file (not its image: ImageFiles keeps those).
-  void delete_job(const std::string& job_id);
-  std::optional<std::string> scene_json(const std::string& digest);
+  // it, and its pixels (not its image: ImageFiles keeps those).
+  virtual void delete_job(const std::string& job_id) = 0;
+  virtual std::optional<std::string> scene_json(const std::string& digest) = 0;
 
   // Stores the lease with the tiles it now owes, replacing what was stored of it.
-  void put_lease(const LeaseRow& lease);
-  void delete_lease(const std::string& lease_id);
-  // Stores an accepted upload, `pixels` holding one span per tile of `result.tiles`:
-  // appends them to the job's pixel file, then inserts the row that points to them (in the
-  // caller's transaction, if any; a rollback leaves bytes in the file that nothing points
-  // to). Returns the result's id.
-  std::int64_t insert_result(const ResultRow& result,
-                             std::span<const std::span<const float>> pixels);
+  virtual void put_lease(const LeaseRow& lease) = 0;
+  virtual void delete_lease(const std::string& lease_id) = 0;
+  // Stores an accepted upload, `pixels` holding one span per tile of `result.tiles`.
+  // Returns the result's id, which grows with every result stored.
+  virtual std::int64_t insert_result(const ResultRow& result,
+                                     std::span<const std::span<const float>> pixels) = 0;
   // Forgets a result whose pixels cannot be used (load() found them cut short).
-  void delete_result(std::int64_t result_id);
+  virtual void delete_result(std::int64_t result_id) = 0;
   // Stores how often the tile failed and why, replacing what was stored of it.
-  void put_tile_failure(const TileFailureRow& failure);
+  virtual void put_tile_failure(const TileFailureRow& failure) = 0;
   // Calls `visit` for each tile of the job's results, in the order they were stored;
   // `floats_of(tile_index)` says how many floats each tile has (load() has checked that
   // they add up). The span is valid during the call. With `wanted`, a result none of whose
   // tiles it wants is not read at all: one frame of an animation is read without the
   // pixels of the others.
-  void for_each_tile_pixels(
+  virtual void for_each_tile_pixels(
       const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
       const std::function<void(int tile_index, std::span<const float>)>& visit,
-      const std::function<bool(int tile_index)>& wanted = {});
+      const std::function<bool(int tile_index)>& wanted = {}) = 0;
 
-  void upsert_worker(const WorkerRow& worker);
-  void delete_worker(const std::string& id);
-  void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms);
+  virtual void upsert_worker(const WorkerRow& worker) = 0;
+  virtual void delete_worker(const std::string& id) = 0;
+  virtual void update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms) = 0;
 
-  // Deletes pixel files whose job is not kept (left by a removal that stopped half-way).
-  void prune_pixels(const std::function<bool(const std::string& job_id)>& keep);
-
- private:
-  // The tables of load(), each read in load()'s transaction.
-  std::vector<JobRow> job_rows();
-  std::vector<LeaseRow> lease_rows();
-  // With each result's pixel_bytes cut to what its job's pixel file holds.
-  std::vector<ResultRow> result_rows();
-  std::vector<TileFailureRow> failure_rows();
-  std::vector<WorkerRow> worker_rows();
-  void create_schema();
-  // Version 3 kept a row per tile; version 4 keeps leases, results and failures.
-  void migrate_tile_rows();
-  // Appends the parts to the job's pixel file; returns where the first starts.
-  std::int64_t append_pixels(const std::string& job_id,
-                             std::span<const std::span<const std::byte>> parts);
-  std::int64_t insert_result_at(const ResultRow& result, std::int64_t pixels_at,
-                                std::size_t pixel_bytes);
-
-  std::filesystem::path data_dir_;
-  SqliteDb db_;
+  // Forgets pixels whose job is not kept (left by a removal that stopped half-way).
+  virtual void prune_pixels(const std::function<bool(const std::string& job_id)>& keep) = 0;
 };
 
 }  // namespace tessera

@@ -153,10 +153,10 @@ bool StoreThread::wait_out(const std::exception& error, int attempt) {
 std::optional<std::string> StoreThread::write_together(std::vector<Item>& items, bool alone) {
   for (int attempt = 0;; ++attempt) {
     try {
-      Transaction tx = store_.transaction();
-      for (Item& item : items)
-        if (item.ticket != 0) item.work(store_);
-      tx.commit();
+      store_.atomically([&] {
+        for (Item& item : items)
+          if (item.ticket != 0) item.work(store_);
+      });
       ++transactions_;
       return std::nullopt;
     } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 // come into it from the store, later ones are pasted, and a completed job's image file
 // holds every tile; an ended job's image comes from the store; a removed job's file goes.
 #include "server/farm/image_assembly.hpp"
+#include "server/farm/sqlite_store.hpp"
 
 #include <unistd.h>
 
@@ -42,7 +43,7 @@ class ImageAssemblyTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = test::fresh_test_dir("tessera-image-assembly-test");
-    store_ = std::make_unique<Store>(dir_);
+    store_ = std::make_unique<SqliteStore>(dir_);
     thread_ = std::make_unique<StoreThread>(*store_);
     images_ = std::make_unique<ImageAssembly>(
         dir_, *thread_, [this](const std::string&, const std::string& error) { failed_ = error; });
@@ -99,7 +100,7 @@ class ImageAssemblyTest : public ::testing::Test {
   }
 
   std::filesystem::path dir_;
-  std::unique_ptr<Store> store_;
+  std::unique_ptr<SqliteStore> store_;
   std::unique_ptr<StoreThread> thread_;
   std::unique_ptr<ImageAssembly> images_;
   std::shared_ptr<Frame> frame_;

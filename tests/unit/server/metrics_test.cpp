@@ -9,6 +9,7 @@
 
 #include "server/api/access.hpp"
 #include "server/api/api_routes.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "server/metrics/histogram.hpp"
 #include "server/metrics/http_metrics.hpp"
 
@@ -98,7 +99,7 @@ class MetricsRoute : public ::testing::Test {
   }
 
   fs::path dir_;
-  Store store_;
+  SqliteStore store_;
   ManualClock clock_;
   Scheduler scheduler_;
   boost::asio::io_context io_;

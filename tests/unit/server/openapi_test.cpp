@@ -14,6 +14,7 @@
 
 #include "server/api/api_routes.hpp"
 #include "server/api/asset_store.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "tests/unit/server/openapi_routes.hpp"
 
 namespace tessera {
@@ -28,7 +29,7 @@ TEST(OpenApi, ServerRoutesAndTheContractAgree) {
       fs::temp_directory_path() / ("tessera-openapi-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   {
-    Store store(dir);
+    SqliteStore store(dir);
     ManualClock clock;
     Scheduler scheduler(store, clock);
     boost::asio::io_context io;

@@ -295,7 +295,7 @@ TEST_F(SchedulerBatchTest, ARetryWritesTheImageThatCouldNotBeWritten) {
 }
 
 // What the store writes per operation: a row per lease and per upload, whatever the tiles.
-TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
+TEST_F(SqliteSchedulerTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   const std::string job = submit(96, 96, 8).id;  // 144 tiles
   const std::string w = worker();
   const Lease lease = *s().claim(w, 16);
@@ -344,7 +344,7 @@ TEST_F(SchedulerBatchTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   EXPECT_TRUE(same_bits(s().assemble(job)->pixels(), expected.pixels()));
 }
 
-TEST_F(SchedulerBatchTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRendersItsTilesAgain) {
+TEST_F(SqliteSchedulerTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRendersItsTilesAgain) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
   const Lease first = *s().claim(w, 100);  // 4 1 3 5
@@ -355,7 +355,7 @@ TEST_F(SchedulerBatchTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRender
   scheduler_.reset();
   // What a power loss may leave: the rows of both uploads, the pixels of the first only
   // and of the second in part.
-  const std::filesystem::path pixels = store_->pixel_path(job);
+  const std::filesystem::path pixels = sqlite().pixel_path(job);
   store_.reset();
   ASSERT_EQ(std::filesystem::file_size(pixels), 6u * 32 * 32 * 12);
   std::filesystem::resize_file(pixels, 5u * 32 * 32 * 12 + 100);

@@ -15,8 +15,9 @@ namespace tessera {
 namespace {
 
 using test::SchedulerTest;
+using test::SqliteSchedulerTest;
 
-class SchedulerDurabilityTest : public SchedulerTest {
+class SchedulerDurabilityTest : public SqliteSchedulerTest {
  protected:
   // Counts `table`'s rows from a connection of its own when `pending` may be answered.
   template <class T>
@@ -66,8 +67,8 @@ TEST_F(SchedulerDurabilityTest, ALastResultTheStoreRefusesFailsTheJobBeforeAnyon
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
   const std::string job = submit(32, 32, 32).id;  // 1 tile: its result completes the job
   const std::string w = worker();
-  std::filesystem::create_directories(store_->pixel_path(job).parent_path());
-  std::filesystem::create_symlink("/dev/full", store_->pixel_path(job));
+  std::filesystem::create_directories(sqlite().pixel_path(job).parent_path());
+  std::filesystem::create_symlink("/dev/full", sqlite().pixel_path(job));
   const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
   ASSERT_TRUE(claimed.value);
   const std::uint64_t refusals = scheduler_->refusals();
@@ -92,8 +93,8 @@ TEST_F(SchedulerDurabilityTest,
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
   const std::string job = submit(64, 32, 32).id;  // 2 tiles
   const std::string w = worker();
-  std::filesystem::create_directories(store_->pixel_path(job).parent_path());
-  std::filesystem::create_symlink("/dev/full", store_->pixel_path(job));
+  std::filesystem::create_directories(sqlite().pixel_path(job).parent_path());
+  std::filesystem::create_symlink("/dev/full", sqlite().pixel_path(job));
   const auto first = s().claim(w);
   ASSERT_TRUE(first);
   EXPECT_NE(deliver(*first), ResultOutcome::accepted);  // refused once stored
@@ -103,7 +104,7 @@ TEST_F(SchedulerDurabilityTest,
   EXPECT_EQ(s().job(job)->tiles_done, 0);
   EXPECT_EQ(s().job(job)->rays, 0u);
 
-  std::filesystem::remove(store_->pixel_path(job));  // space back
+  std::filesystem::remove(sqlite().pixel_path(job));  // space back
   EXPECT_EQ(s().retry(job).result, ControlOutcome::Result::done);
   finish(job, w, 7.0f);
   reopen();
@@ -113,6 +114,29 @@ TEST_F(SchedulerDurabilityTest,
   int tiles = 0;
   for (const ResultRow& row : store_->load().results) tiles += static_cast<int>(row.tiles.size());
   EXPECT_EQ(tiles, 2);
+}
+
+// The same refusal on the memory store, whatever the machine has of /dev/full: the job
+// fails as the store left it, and renders the refused tiles again once retried.
+TEST_F(SchedulerTest, AResultTheMemoryStoreRefusesFailsItsJobUntilRetried) {
+  const std::string job = submit(64, 32, 32).id;  // 2 tiles
+  const std::string w = worker();
+  const auto first = s().claim(w);
+  ASSERT_TRUE(first);
+  memory().refuse_writes("store: the disk is full");
+  EXPECT_EQ(deliver(*first), ResultOutcome::unstored);
+  EXPECT_EQ(s().job(job)->state, JobState::failed);
+  EXPECT_NE(s().job(job)->error.find("the disk is full"), std::string::npos) << s().job(job)->error;
+  EXPECT_EQ(s().job(job)->tiles_done, 0);
+  EXPECT_EQ(scheduler_->refusals(), 1u);
+
+  memory().refuse_writes(std::nullopt);
+  EXPECT_EQ(s().retry(job).result, ControlOutcome::Result::done);
+  finish(job, w, 7.0f);
+  reopen();
+  EXPECT_EQ(s().job(job)->state, JobState::completed);
+  EXPECT_EQ(s().job(job)->tiles_done, 2);
+  EXPECT_EQ(store_->load().results.size(), 2u);
 }
 
 }  // namespace

@@ -1,11 +1,14 @@
-// The Scheduler's unit-test fixture: a real Store in a temporary directory, a manual clock,
-// and helpers that fill tiles with values that show any misplaced pixel.
+// The Scheduler's unit-test fixtures: the state machine on a MemoryStore (SchedulerTest) or,
+// for what the database holds, on a SqliteStore in the same temporary directory
+// (SqliteSchedulerTest); a manual clock; and helpers that fill tiles with values that show
+// any misplaced pixel.
 #pragma once
 
 #include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -15,7 +18,9 @@
 
 #include "tests/unit/server/test_dir.hpp"
 
+#include "server/farm/memory_store.hpp"
 #include "server/farm/scheduler.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "tests/unit/server/blocking_scheduler.hpp"
 
 namespace tessera::test {
@@ -84,18 +89,30 @@ class SchedulerTest : public ::testing::Test {
     std::filesystem::remove_all(dir_);
   }
 
+  // The store the scheduler keeps its state in; it outlives the scheduler.
+  virtual std::unique_ptr<Store> make_store() { return std::make_unique<MemoryStore>(dir_); }
+  // Whether a restart opens the store again, as from a file.
+  virtual bool reopens_store() const { return false; }
+
   void open() {
-    store_ = std::make_unique<Store>(dir_);
+    if (!store_) store_ = make_store();
     scheduler_ = std::make_unique<Scheduler>(*store_, clock_, config_);
   }
-  // What a coordinator restart does: everything in memory is lost.
-  void reopen() {
+  // What a coordinator restart does: everything in memory is lost, what is stored stays.
+  // `while_down` changes what the next start finds, as a crash at a bad moment would.
+  void reopen(const std::function<void(Store&)>& while_down = {}) {
     scheduler_.reset();
-    store_.reset();
+    if (reopens_store()) store_.reset();
+    if (while_down) {
+      if (!store_) store_ = make_store();
+      while_down(*store_);
+    }
     open();
   }
 
   BlockingScheduler& s() { return blocking_; }
+  // The memory store, to make it refuse writes (SchedulerTest only).
+  MemoryStore& memory() { return dynamic_cast<MemoryStore&>(*store_); }
   std::string worker(const std::string& name = "w") {
     return s().register_worker(name, "host", 4).id;
   }
@@ -139,6 +156,15 @@ class SchedulerTest : public ::testing::Test {
   std::unique_ptr<Store> store_;
   std::unique_ptr<Scheduler> scheduler_;
   BlockingScheduler blocking_{scheduler_};
+};
+
+// For what the SQLite store writes, and what it finds after a crash: a restart opens the
+// database again from its file.
+class SqliteSchedulerTest : public SchedulerTest {
+ protected:
+  std::unique_ptr<Store> make_store() override { return std::make_unique<SqliteStore>(dir_); }
+  bool reopens_store() const override { return true; }
+  SqliteStore& sqlite() { return static_cast<SqliteStore&>(*store_); }
 };
 
 }  // namespace tessera::test

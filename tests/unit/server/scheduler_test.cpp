@@ -369,11 +369,12 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
   // and the image write.
   JobRow row = row_of(*s().job(job.id), "running");
   row.started_at_ms = job.created_at_ms;
-  store_->update_job(row);
   s().wait_for_images();
-  std::filesystem::remove(ImageFiles(store_->data_dir()).path(job.id));
   clock_.advance_ms(100);
-  reopen();
+  reopen([&](Store& store) {
+    store.update_job(row);
+    std::filesystem::remove(ImageFiles(store.data_dir()).path(job.id));
+  });
   const JobStatus after = *s().job(job.id);
   EXPECT_EQ(after.state, JobState::completed);
   EXPECT_EQ(after.finished_at_ms, clock_.now_ms());
@@ -386,8 +387,8 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
 TEST_F(SchedulerTest, ReconcileStartsAQueuedJobWithDoneTiles) {
   const JobStatus job = submit(64, 32, 32);
   ASSERT_EQ(deliver(*s().claim(worker())), ResultOutcome::accepted);
-  store_->update_job(row_of(*s().job(job.id), "queued"));
-  reopen();
+  const JobRow queued = row_of(*s().job(job.id), "queued");
+  reopen([&](Store& store) { store.update_job(queued); });
   EXPECT_EQ(s().job(job.id)->state, JobState::running);
   EXPECT_NE(s().job(job.id)->started_at_ms, 0);
   EXPECT_TRUE(s().claim(worker()));

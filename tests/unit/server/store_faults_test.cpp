@@ -11,7 +11,7 @@
 #include <sqlite3.h>
 
 #include "server/farm/sqlite_db.hpp"
-#include "server/farm/store.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "server/farm/store_error.hpp"
 #include "server/farm/store_thread.hpp"
 #include "tests/unit/server/faulty_vfs.hpp"
@@ -204,7 +204,7 @@ class StoreThreadFaultsTest : public ::testing::Test {
     return [id](Store& store) { store.upsert_worker({id, "name", "host", 1, "idle", 0, 0, ""}); };
   }
   std::vector<std::string> stored_workers() {
-    Store store(dir_);
+    SqliteStore store(dir_);
     std::vector<std::string> ids;
     for (const WorkerRow& row : store.load().workers) ids.push_back(row.id);
     std::sort(ids.begin(), ids.end());
@@ -217,7 +217,7 @@ class StoreThreadFaultsTest : public ::testing::Test {
 
 TEST_F(StoreThreadFaultsTest, AfterAFullDiskRefusedAWriteTheNextWritesAreStoredAgain) {
   {
-    Store store(dir_);
+    SqliteStore store(dir_);
     StoreThread thread(store);
     // A write that dirties pages and then fails, as an upload whose pixel file the full
     // disk refuses does; the disk stays full while it is rolled back.
@@ -238,7 +238,7 @@ TEST_F(StoreThreadFaultsTest, AfterAFullDiskRefusedAWriteTheNextWritesAreStoredA
 }
 
 TEST_F(StoreThreadFaultsTest, AShortageThatPassesIsWaitedOutAndFailsNothing) {
-  Store store(dir_);
+  SqliteStore store(dir_);
   StoreThread thread(store);
   int tries = 0;
   // No descriptor left for the first three tries (EMFILE), as under a flood of connections.

@@ -1,4 +1,4 @@
-#include "server/farm/store.hpp"
+#include "server/farm/sqlite_store.hpp"
 
 #include <chrono>
 #include <cstring>
@@ -157,7 +157,7 @@ class StoreTest : public ::testing::Test {
     dir_ = std::filesystem::temp_directory_path() /
            ("tessera-store-test-" + std::to_string(::getpid()) + "-" + info->name()) / "data";
     std::filesystem::remove_all(dir_.parent_path());
-    store_ = std::make_unique<Store>(dir_);
+    store_ = std::make_unique<SqliteStore>(dir_);
   }
   void TearDown() override {
     store_.reset();
@@ -165,11 +165,11 @@ class StoreTest : public ::testing::Test {
   }
   void reopen() {
     store_.reset();
-    store_ = std::make_unique<Store>(dir_);
+    store_ = std::make_unique<SqliteStore>(dir_);
   }
 
   std::filesystem::path dir_;
-  std::unique_ptr<Store> store_;
+  std::unique_ptr<SqliteStore> store_;
 };
 
 // The pixels the store has for each tile of job "j-1", 20 x 20 tiles, in stored order.
@@ -200,7 +200,7 @@ TEST_F(StoreTest, RefusesADatabaseFromANewerVersion) {
   store_.reset();
   SqliteDb(dir_ / "tessera.db").exec("PRAGMA user_version=99");
   try {
-    Store store(dir_);
+    SqliteStore store(dir_);
     FAIL() << "opened a database of schema version 99";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("schema version 99"), std::string::npos) << e.what();
@@ -248,7 +248,7 @@ TEST_F(StoreTest, UpgradesAVersion3DatabaseIntoLeasesResultsAndFailures) {
     SqliteDb db(dir_ / "tessera.db");
     make_version_3(db, "j-1", pixels);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   expect_upgraded(*store_, dir_ / "tessera.db", pixels, true);
 }
 
@@ -261,7 +261,7 @@ TEST_F(StoreTest, UpgradesAVersion2DatabaseWithThePixelsInTheTileRows) {
     make_version_3(db, "j-1", pixels);
     make_version_2(db);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   expect_upgraded(*store_, dir_ / "tessera.db", pixels, true);
 }
 
@@ -276,7 +276,7 @@ TEST_F(StoreTest, UpgradesAVersion1DatabaseWhoseTilesHadNoErrors) {
     db.exec("ALTER TABLE tiles DROP COLUMN last_error");
     db.exec("PRAGMA user_version=1");
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   expect_upgraded(*store_, dir_ / "tessera.db", pixels, false);
   const StoredState state = store_->load();
   ASSERT_EQ(state.failures.size(), 1u);  // attempts were kept, with no error to say
@@ -292,7 +292,7 @@ TEST_F(StoreTest, UpgradesAVersion4DatabaseReadingEachJobsOutputTransferFromItsS
     SqliteDb db(dir_ / "tessera.db");
     make_version_4(db);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   std::map<std::string, std::string> transfers;
   for (const JobRow& job : store_->load().jobs) transfers[job.id] = job.output_transfer;
@@ -309,7 +309,7 @@ TEST_F(StoreTest, UpgradesAVersion5DatabaseWhoseWorkersHadNoSecrets) {
     SqliteDb db(dir_ / "tessera.db");
     make_version_5(db);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   const StoredState state = store_->load();
   ASSERT_EQ(state.workers.size(), 1u);
@@ -326,7 +326,7 @@ TEST_F(StoreTest, UpgradesAVersion6DatabaseWhoseWorkersWereNeverDrained) {
     SqliteDb db(dir_ / "tessera.db");
     make_version_6(db);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   const StoredState state = store_->load();
   ASSERT_EQ(state.workers.size(), 1u);
@@ -344,7 +344,7 @@ TEST_F(StoreTest, UpgradesAVersion7DatabaseWhoseJobsWereStills) {
     SqliteDb db(dir_ / "tessera.db");
     make_version_7(db);
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("PRAGMA user_version"), "8");
   ASSERT_EQ(store_->load().jobs.size(), 1u);
   EXPECT_EQ(store_->load().jobs[0].frames, "");
@@ -489,7 +489,7 @@ TEST_F(StoreTest, PixelsGoToTheJobsOwnFileAndLoadSaysHowMuchOfThemItHolds) {
   // Power lost before the second upload's pixels were all on disk.
   store_.reset();
   std::filesystem::resize_file(file, 1200 * 4 + 10);
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   const StoredState state = store_->load();
   ASSERT_EQ(state.results.size(), 2u);
   EXPECT_EQ(state.results[0].pixel_bytes, 1200 * 4);
@@ -518,7 +518,7 @@ TEST_F(StoreTest, ARowThatPointsOutsideItsFileIsReportedAsHoldingNothing) {
     db.exec("UPDATE results SET pixels_at = -4 WHERE id = (SELECT min(id) FROM results)");
     db.exec("UPDATE results SET pixel_bytes = -1 WHERE id = (SELECT max(id) FROM results)");
   }
-  store_ = std::make_unique<Store>(dir_);
+  store_ = std::make_unique<SqliteStore>(dir_);
   const StoredState state = store_->load();
   ASSERT_EQ(state.results.size(), 2u);
   EXPECT_EQ(state.results[0].pixel_bytes, 0);
@@ -615,18 +615,15 @@ TEST_F(StoreTest, DeleteJobTakesItsRowsPixelsAndOrphanedSceneOnly) {
   EXPECT_EQ(state.failures[0].job_id, "j-2");
 }
 
-TEST_F(StoreTest, TransactionsRollBackUnlessCommitted) {
-  {
-    Transaction tx = store_->transaction();
-    store_->insert_job(job_row("j-1", "d1"), "{}");  // nested
-  }
+TEST_F(StoreTest, AChangeThatThrowsRollsBackWhole) {
+  EXPECT_THROW(store_->atomically([&] {
+    store_->insert_job(job_row("j-1", "d1"), "{}");  // a savepoint within
+    throw std::runtime_error("refused");
+  }),
+               std::runtime_error);
   EXPECT_TRUE(store_->load().jobs.empty());
   EXPECT_FALSE(store_->scene_json("d1"));
-  {
-    Transaction tx = store_->transaction();
-    store_->insert_job(job_row("j-1", "d1"), "{}");
-    tx.commit();
-  }
+  store_->atomically([&] { store_->insert_job(job_row("j-1", "d1"), "{}"); });
   EXPECT_EQ(store_->load().jobs.size(), 1u);
 }
 

@@ -16,6 +16,7 @@
 
 #include "tests/unit/server/test_dir.hpp"
 
+#include "server/farm/sqlite_store.hpp"
 #include "server/farm/store_thread.hpp"
 
 namespace tessera {
@@ -25,7 +26,7 @@ class StoreThreadTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = test::fresh_test_dir("tessera-store-thread-test");
-    store_ = std::make_unique<Store>(dir_);
+    store_ = std::make_unique<SqliteStore>(dir_);
   }
   void TearDown() override {
     store_.reset();
@@ -43,7 +44,7 @@ class StoreThreadTest : public ::testing::Test {
   }
 
   std::filesystem::path dir_;
-  std::unique_ptr<Store> store_;
+  std::unique_ptr<SqliteStore> store_;
 };
 
 TEST_F(StoreThreadTest, WritesQueuedWhileItIsBusyCommitInOneTransactionInOrder) {

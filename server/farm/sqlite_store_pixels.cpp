@@ -1,4 +1,4 @@
-// The store's pixel files: each job's accepted pixels appended to data_dir/pixels/JOB.f32,
+// The SQLite store's pixel files: each job's accepted pixels appended to data_dir/pixels/JOB.f32,
 // where its result rows point.
 #include <fcntl.h>
 #include <limits.h>
@@ -14,19 +14,21 @@
 
 #include "server/farm/packed_blobs.hpp"
 #include "server/farm/prune_files.hpp"
-#include "server/farm/store.hpp"
+#include "server/farm/sqlite_store.hpp"
 #include "server/farm/store_error.hpp"
 
 namespace tessera {
 
-std::filesystem::path Store::pixel_path(const std::string& job_id) const {
+std::filesystem::path SqliteStore::pixel_path(const std::string& job_id) const {
   return data_dir_ / pixel_name(job_id);
 }
 
-std::string Store::pixel_name(const std::string& job_id) { return "pixels/" + job_id + ".f32"; }
+std::string SqliteStore::pixel_name(const std::string& job_id) {
+  return "pixels/" + job_id + ".f32";
+}
 
-std::int64_t Store::append_pixels(const std::string& job_id,
-                                  std::span<const std::span<const std::byte>> parts) {
+std::int64_t SqliteStore::append_pixels(const std::string& job_id,
+                                        std::span<const std::span<const std::byte>> parts) {
   const std::filesystem::path path = pixel_path(job_id);
   // Named within the data dir: the message reaches clients as the job's error, and the
   // server's paths are none of theirs.
@@ -71,7 +73,7 @@ std::int64_t Store::append_pixels(const std::string& job_id,
   return start;
 }
 
-void Store::for_each_tile_pixels(
+void SqliteStore::for_each_tile_pixels(
     const std::string& job_id, const std::function<std::size_t(int tile_index)>& floats_of,
     const std::function<void(int tile_index, std::span<const float>)>& visit,
     const std::function<bool(int tile_index)>& wanted) {
@@ -121,7 +123,7 @@ void Store::for_each_tile_pixels(
   }
 }
 
-void Store::prune_pixels(const std::function<bool(const std::string& job_id)>& keep) {
+void SqliteStore::prune_pixels(const std::function<bool(const std::string& job_id)>& keep) {
   prune_files(data_dir_ / "pixels", ".f32", keep);
 }
 

@@ -1,4 +1,4 @@
-#include "server/farm/store.hpp"
+#include "server/farm/sqlite_store.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -44,20 +44,26 @@ std::vector<std::string> connection_setup() {
 
 }  // namespace
 
-Store::Store(const std::filesystem::path& data_dir)
+SqliteStore::SqliteStore(const std::filesystem::path& data_dir)
     : data_dir_(data_dir), db_(prepare_data_dir(data_dir), connection_setup()) {
   create_schema();
   db_.checkpoint_in_background();
 }
 
-StoredState Store::load() {
+StoredState SqliteStore::load() {
   Transaction tx(db_);  // one snapshot for every table
   StoredState state{job_rows(), lease_rows(), result_rows(), failure_rows(), worker_rows()};
   tx.commit();
   return state;
 }
 
-std::vector<JobRow> Store::job_rows() {
+void SqliteStore::atomically(const std::function<void()>& writes) {
+  Transaction tx(db_);
+  writes();
+  tx.commit();
+}
+
+std::vector<JobRow> SqliteStore::job_rows() {
   std::vector<JobRow> rows;
   auto s = db_.statement(
       "SELECT id, name, priority, state, width, height, tile_size, scene_digest, "
@@ -84,7 +90,7 @@ std::vector<JobRow> Store::job_rows() {
   return rows;
 }
 
-std::vector<LeaseRow> Store::lease_rows() {
+std::vector<LeaseRow> SqliteStore::lease_rows() {
   std::vector<LeaseRow> rows;
   auto s = db_.statement("SELECT id, job_id, worker_id, tiles FROM leases");
   while (s->step()) {
@@ -97,7 +103,7 @@ std::vector<LeaseRow> Store::lease_rows() {
   return rows;
 }
 
-std::vector<ResultRow> Store::result_rows() {
+std::vector<ResultRow> SqliteStore::result_rows() {
   std::vector<ResultRow> rows;
   // What each job's pixel file holds: a result whose pixels it does not hold whole (the
   // machine lost power before they reached the disk) is reported with the bytes there are.
@@ -132,7 +138,7 @@ std::vector<ResultRow> Store::result_rows() {
   return rows;
 }
 
-std::vector<TileFailureRow> Store::failure_rows() {
+std::vector<TileFailureRow> SqliteStore::failure_rows() {
   std::vector<TileFailureRow> rows;
   auto s = db_.statement("SELECT job_id, tile_index, attempts, last_error FROM tile_failures");
   while (s->step()) {
@@ -145,7 +151,7 @@ std::vector<TileFailureRow> Store::failure_rows() {
   return rows;
 }
 
-std::vector<WorkerRow> Store::worker_rows() {
+std::vector<WorkerRow> SqliteStore::worker_rows() {
   std::vector<WorkerRow> rows;
   auto s = db_.statement(
       "SELECT id, name, host, threads, state, tiles_rendered, last_seen_ms, secret_sha256, "
@@ -165,7 +171,7 @@ std::vector<WorkerRow> Store::worker_rows() {
   return rows;
 }
 
-void Store::insert_job(const JobRow& job, const std::string& scene_json) {
+void SqliteStore::insert_job(const JobRow& job, const std::string& scene_json) {
   Transaction tx(db_);
   db_.statement("INSERT OR IGNORE INTO scenes (digest, json) VALUES (?, ?)")
       ->bind(1, job.scene_digest)
@@ -194,7 +200,7 @@ void Store::insert_job(const JobRow& job, const std::string& scene_json) {
   tx.commit();
 }
 
-void Store::update_job(const JobRow& job) {
+void SqliteStore::update_job(const JobRow& job) {
   db_.statement(
          "UPDATE jobs SET name = ?, priority = ?, state = ?, started_at_ms = ?, "
          "finished_at_ms = ?, error = ?, rays = ? WHERE id = ?")
@@ -209,7 +215,7 @@ void Store::update_job(const JobRow& job) {
       .run();
 }
 
-void Store::delete_job(const std::string& job_id) {
+void SqliteStore::delete_job(const std::string& job_id) {
   Transaction tx(db_);
   std::string digest;
   {
@@ -234,14 +240,14 @@ void Store::delete_job(const std::string& job_id) {
   std::filesystem::remove(pixel_path(job_id), ignored);
 }
 
-std::optional<std::string> Store::scene_json(const std::string& digest) {
+std::optional<std::string> SqliteStore::scene_json(const std::string& digest) {
   auto s = db_.statement("SELECT json FROM scenes WHERE digest = ?");
   s->bind(1, digest);
   if (!s->step()) return std::nullopt;
   return s->column_text(0);
 }
 
-void Store::put_lease(const LeaseRow& lease) {
+void SqliteStore::put_lease(const LeaseRow& lease) {
   db_.statement(
          "INSERT INTO leases (id, job_id, worker_id, tiles) VALUES (?, ?, ?, ?) "
          "ON CONFLICT (id) DO UPDATE SET worker_id = excluded.worker_id, tiles = excluded.tiles")
@@ -252,12 +258,12 @@ void Store::put_lease(const LeaseRow& lease) {
       .run();
 }
 
-void Store::delete_lease(const std::string& lease_id) {
+void SqliteStore::delete_lease(const std::string& lease_id) {
   db_.statement("DELETE FROM leases WHERE id = ?")->bind(1, lease_id).run();
 }
 
-std::int64_t Store::insert_result(const ResultRow& result,
-                                  std::span<const std::span<const float>> pixels) {
+std::int64_t SqliteStore::insert_result(const ResultRow& result,
+                                        std::span<const std::span<const float>> pixels) {
   std::vector<std::span<const std::byte>> bytes;
   bytes.reserve(pixels.size());
   std::size_t total = 0;
@@ -268,8 +274,8 @@ std::int64_t Store::insert_result(const ResultRow& result,
   return insert_result_at(result, append_pixels(result.job_id, bytes), total);
 }
 
-std::int64_t Store::insert_result_at(const ResultRow& result, std::int64_t pixels_at,
-                                     std::size_t pixel_bytes) {
+std::int64_t SqliteStore::insert_result_at(const ResultRow& result, std::int64_t pixels_at,
+                                           std::size_t pixel_bytes) {
   auto s = db_.statement(
       "INSERT INTO results (job_id, lease_id, worker_id, tiles, rays, pixels_at, pixel_bytes) "
       "VALUES (?, ?, ?, ?, ?, ?, ?) RETURNING id");
@@ -286,11 +292,11 @@ std::int64_t Store::insert_result_at(const ResultRow& result, std::int64_t pixel
   return id;
 }
 
-void Store::delete_result(std::int64_t result_id) {
+void SqliteStore::delete_result(std::int64_t result_id) {
   db_.statement("DELETE FROM results WHERE id = ?")->bind(1, result_id).run();
 }
 
-void Store::put_tile_failure(const TileFailureRow& failure) {
+void SqliteStore::put_tile_failure(const TileFailureRow& failure) {
   db_.statement(
          "INSERT INTO tile_failures (job_id, tile_index, attempts, last_error) VALUES (?, ?, ?, ?) "
          "ON CONFLICT (job_id, tile_index) DO UPDATE SET attempts = excluded.attempts, "
@@ -302,11 +308,11 @@ void Store::put_tile_failure(const TileFailureRow& failure) {
       .run();
 }
 
-void Store::delete_worker(const std::string& id) {
+void SqliteStore::delete_worker(const std::string& id) {
   db_.statement("DELETE FROM workers WHERE id = ?")->bind(1, id).run();
 }
 
-void Store::upsert_worker(const WorkerRow& worker) {
+void SqliteStore::upsert_worker(const WorkerRow& worker) {
   db_.statement(
          "INSERT INTO workers (id, name, host, threads, state, tiles_rendered, last_seen_ms, "
          "secret_sha256, draining) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO "
@@ -326,7 +332,7 @@ void Store::upsert_worker(const WorkerRow& worker) {
       .run();
 }
 
-void Store::update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms) {
+void SqliteStore::update_worker_seen(const std::string& worker_id, std::int64_t last_seen_ms) {
   db_.statement("UPDATE workers SET last_seen_ms = ? WHERE id = ?")
       ->bind(1, last_seen_ms)
       .bind(2, worker_id)

@@ -1,9 +1,9 @@
-// The store's schema, and the upgrades from each older version of it.
+// The SQLite store's schema, and the upgrades from each older version of it.
 #include <map>
 #include <stdexcept>
 #include <string>
 
-#include "server/farm/store.hpp"
+#include "server/farm/sqlite_store.hpp"
 
 namespace tessera {
 namespace {
@@ -93,7 +93,7 @@ CREATE TABLE tile_pixels (
 
 }  // namespace
 
-void Store::create_schema() {
+void SqliteStore::create_schema() {
   const int version = std::stoi(db_.query_text("PRAGMA user_version"));
   if (version == schema_version) return;
   if (version < 0 || version > schema_version)
@@ -138,7 +138,7 @@ void Store::create_schema() {
   tx.commit();
 }
 
-void Store::migrate_tile_rows() {
+void SqliteStore::migrate_tile_rows() {
   db_.exec(tile_tables_sql);
   db_.exec(
       "INSERT INTO tile_failures (job_id, tile_index, attempts, last_error) "
