@@ -61,6 +61,7 @@ inline constexpr NameTable<WorkerState, 4> kWorkerStateNames{{
     {WorkerState::gone, "gone"},
     {WorkerState::left, "left"},
 }};
+inline const char* to_string(WorkerState state) { return name_in(kWorkerStateNames, state).data(); }
 
 // One worker of GET /v1/workers (`Worker`).
 struct Worker {

@@ -134,8 +134,7 @@ protocol::Worker worker_of(const WorkerInfo& worker) {
   w.name = worker.name;
   w.host = worker.host;
   w.threads = worker.threads;
-  w.state = protocol::value_in(protocol::kWorkerStateNames, worker.state)
-                .value_or(protocol::WorkerState::gone);
+  w.state = worker.state;
   w.current_job = unless_empty(worker.current_job);
   if (worker.current_tile >= 0) w.current_tile = worker.current_tile;
   w.tiles_rendered = worker.tiles_rendered;

@@ -382,7 +382,7 @@ class Scheduler {
   struct Observed {
     std::vector<JobEntry*> jobs;
     std::vector<std::pair<JobEntry*, int>> tiles;
-    std::vector<std::pair<WorkerEntry*, std::string>> workers;  // with the state before
+    std::vector<std::pair<WorkerEntry*, protocol::WorkerState>> workers;  // with the state before
   };
   Observed observed_before(const StagedChange& change) const;
   // A farm control of the job `id` (scheduler_controls.cpp): `change_job(job, change)`

@@ -217,7 +217,7 @@ FarmGauges Scheduler::gauges() const {
       gauges.pending_by_priority[job->status.priority] += job->pending.size();
   }
   for (const auto& [id, worker] : workers_) {
-    gauges.workers[worker->info.state] += 1;
+    gauges.workers[to_string(worker->info.state)] += 1;
     if (worker->info.draining) gauges.workers["draining"] += 1;
   }
   return gauges;

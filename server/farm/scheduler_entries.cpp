@@ -165,9 +165,15 @@ std::vector<int> hand_out_order(const std::vector<TileRect>& rects, int width, i
 }
 
 WorkerRow worker_row(const WorkerEntry& w) {
-  return {w.info.id,           w.info.name,     w.info.host,
-          w.info.threads,      w.info.state,    w.info.tiles_rendered,
-          w.info.last_seen_ms, w.secret_sha256, w.info.draining};
+  return {w.info.id,
+          w.info.name,
+          w.info.host,
+          w.info.threads,
+          to_string(w.info.state),
+          w.info.tiles_rendered,
+          w.info.last_seen_ms,
+          w.secret_sha256,
+          w.info.draining};
 }
 
 }  // namespace tessera

@@ -27,18 +27,9 @@ enum class TileState : std::uint8_t { pending, leased, done };
 const char* to_string(TileState state);
 std::optional<TileState> tile_state_from_string(std::string_view text);
 
-// A worker's state, in the words of the API and of the database.
-inline constexpr std::string_view worker_idle =
-    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::idle);
-inline constexpr std::string_view worker_rendering =
-    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::rendering);
-inline constexpr std::string_view worker_gone =
-    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::gone);
-inline constexpr std::string_view worker_departed =
-    protocol::name_in(protocol::kWorkerStateNames, protocol::WorkerState::left);
 // Idle or rendering: counted among the workers that share a job's tiles.
-inline bool is_present(std::string_view state) {
-  return state != worker_gone && state != worker_departed;
+inline bool is_present(WorkerState state) {
+  return state != WorkerState::gone && state != WorkerState::left;
 }
 
 // A tile's state. A job holds one per tile of every frame, millions of them for a large

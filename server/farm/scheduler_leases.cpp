@@ -54,7 +54,7 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
     std::optional<Lease> result;
     WorkerEntry* worker = find_worker(worker_id);
     // One that left registers again first.
-    if (!worker || worker->info.state == worker_departed) return pending(result, before);
+    if (!worker || worker->info.state == WorkerState::left) return pending(result, before);
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
 
@@ -84,13 +84,13 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
     } else {
       // A draining worker is given nothing new.
       JobEntry* chosen = worker->info.draining ? nullptr : next_job_for(*worker);
-      if (!chosen && worker->info.state == worker_idle) {
+      if (!chosen && worker->info.state == WorkerState::idle) {
         note_seen(*worker, now);
       } else {
         StagedChange change;
         WorkerEntry& staged_worker = change.worker(*worker);
         staged_worker.info.last_seen_ms = now;
-        staged_worker.info.state = worker_idle;  // asking for work also revives a gone worker
+        staged_worker.info.state = WorkerState::idle;  // asking for work also revives a gone worker
         if (chosen) {
           const std::string lease_id = new_lease_id();
           const std::vector<int> batch =
@@ -106,7 +106,7 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
             if (status.started_at_ms == 0) status.started_at_ms = now;
           }
           staged_worker.lease_id = lease_id;
-          staged_worker.info.state = worker_rendering;
+          staged_worker.info.state = WorkerState::rendering;
           staged_worker.info.current_job = chosen->status.id;
         }
         commit(change);
@@ -313,7 +313,7 @@ void Scheduler::stage_lease_end(StagedChange& change, const std::string& lease_i
       staged.lease_id.clear();
       staged.info.current_job.clear();
       staged.info.current_tile = -1;
-      if (staged.info.state == worker_rendering) staged.info.state = worker_idle;
+      if (staged.info.state == WorkerState::rendering) staged.info.state = WorkerState::idle;
     }
   }
   if (!expired) return;

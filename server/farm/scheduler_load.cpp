@@ -97,7 +97,9 @@ void Scheduler::load_workers(std::vector<WorkerRow>& rows) {
     worker->info.name = std::move(row.name);
     worker->info.host = std::move(row.host);
     worker->info.threads = row.threads;
-    worker->info.state = std::move(row.state);
+    // A state this build does not know is one it cannot vouch for: gone until it calls.
+    worker->info.state =
+        protocol::value_in(protocol::kWorkerStateNames, row.state).value_or(WorkerState::gone);
     worker->info.tiles_rendered = row.tiles_rendered;
     worker->info.last_seen_ms = row.last_seen_ms;
     worker->info.draining = row.draining;
@@ -245,13 +247,13 @@ void Scheduler::stage_leases_kept(StagedChange& change, std::int64_t now) {
       }
       holders.emplace(worker, tile.lease_id);
       staged.lease_id = tile.lease_id;
-      staged.info.state = worker_rendering;
+      staged.info.state = WorkerState::rendering;
     }
   }
   // Without a lease we know nothing of a worker until it talks to us again.
   for (auto& [id, worker] : workers_)
     if (!holders.contains(worker.get()) && is_present(worker->info.state))
-      change.worker(*worker).info.state = worker_gone;
+      change.worker(*worker).info.state = WorkerState::gone;
 }
 
 void Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {

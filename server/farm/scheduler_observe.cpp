@@ -99,11 +99,11 @@ void Scheduler::tell_observer(const Observed& observed, StoreTicket ticket) {
   for (const auto& [job, index] : observed.tiles) tiles.push_back(tile_change(*job, index));
   std::vector<std::pair<WorkerInfo, FarmObserver::WorkerChange>> workers;
   for (const auto& [worker, was] : observed.workers) {
-    const std::string& now = worker->info.state;
+    const WorkerState now = worker->info.state;
     auto kind = FarmObserver::WorkerChange::changed;
-    if (now == worker_departed && was != worker_departed)
+    if (now == WorkerState::left && was != WorkerState::left)
       kind = FarmObserver::WorkerChange::left;
-    else if (now == worker_gone && was != worker_gone)
+    else if (now == WorkerState::gone && was != WorkerState::gone)
       kind = FarmObserver::WorkerChange::lost;
     workers.emplace_back(worker->info, kind);
   }

@@ -18,6 +18,7 @@
 #include "common/protocol/job_state.hpp"
 #include "common/protocol/jobs.hpp"
 #include "common/protocol/limits.hpp"
+#include "common/protocol/workers.hpp"
 #include "common/scene/scene.hpp"
 #include "server/farm/store_thread.hpp"
 #include "server/metrics/histogram.hpp"
@@ -110,12 +111,14 @@ struct JobStatus {
   std::optional<int> current_frame;
 };
 
+using protocol::WorkerState;
+
 struct WorkerInfo {
   std::string id;
   std::string name;
   std::string host;
   int threads = 0;
-  std::string state;        // "idle", "rendering", "gone", "left"
+  WorkerState state = WorkerState::idle;
   std::string current_job;  // empty when idle
   int current_tile = -1;
   std::uint64_t tiles_rendered = 0;

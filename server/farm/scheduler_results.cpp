@@ -171,7 +171,7 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
       if (next < 0) {
         staged.lease_id.clear();
         staged.info.current_job.clear();
-        staged.info.state = worker_idle;
+        staged.info.state = WorkerState::idle;
       }
     }
   }

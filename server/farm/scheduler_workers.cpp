@@ -29,7 +29,7 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
   info.name = name;
   info.host = host;
   info.threads = threads;
-  info.state = worker_idle;
+  info.state = WorkerState::idle;
   info.last_seen_ms = clock_.now_ms();
   worker->secret_sha256 = secret_sha256;
   if (!secret_sha256.empty()) secret_owners_[secret_sha256] = info.id;
@@ -50,7 +50,7 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
 bool Scheduler::worker_known(const std::string& worker_id) const {
   std::lock_guard lock(mutex_);
   const WorkerEntry* worker = find_worker(worker_id);
-  return worker && worker->info.state != worker_departed;
+  return worker && worker->info.state != WorkerState::left;
 }
 
 std::optional<std::string> Scheduler::worker_with_secret(const std::string& secret_sha256) const {
@@ -58,7 +58,7 @@ std::optional<std::string> Scheduler::worker_with_secret(const std::string& secr
   const auto owner = secret_owners_.find(secret_sha256);
   if (owner == secret_owners_.end()) return std::nullopt;
   const WorkerEntry* worker = find_worker(owner->second);
-  if (!worker || worker->info.state == worker_departed) return std::nullopt;
+  if (!worker || worker->info.state == WorkerState::left) return std::nullopt;
   return owner->second;
 }
 
@@ -75,16 +75,16 @@ Written Scheduler::touch_worker(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   const StoreTicket before = last_write_;
   WorkerEntry* worker = find_worker(worker_id);
-  if (!worker || worker->info.state == worker_departed) return pending(std::monostate{}, before);
+  if (!worker || worker->info.state == WorkerState::left) return pending(std::monostate{}, before);
   const std::int64_t now = clock_.now_ms();
-  if (worker->info.state != worker_gone) {
+  if (worker->info.state != WorkerState::gone) {
     note_seen(*worker, now);
     return pending(std::monostate{}, before);
   }
   // Marked gone (not heard from, or the coordinator restarted) but talking again.
   StagedChange change;
   WorkerEntry& staged = change.worker(*worker);
-  staged.info.state = worker_idle;
+  staged.info.state = WorkerState::idle;
   staged.info.last_seen_ms = now;
   commit(change);
   return pending(std::monostate{}, before);
@@ -104,7 +104,7 @@ Written Scheduler::worker_left(const std::string& worker_id) {
       notify = callbacks_;
     }
     WorkerEntry& staged = change.worker(*worker);
-    staged.info.state = worker_departed;
+    staged.info.state = WorkerState::left;
     staged.info.last_seen_ms = clock_.now_ms();
     commit(change);
     spdlog::info("worker {} ({}) left", worker_id, worker->info.name);
@@ -124,7 +124,7 @@ void Scheduler::forget_workers_locked(std::int64_t now) {
       continue;
     }
     spdlog::info("worker {} ({}) forgotten: {} since {} s ago", it->first, worker.info.name,
-                 worker.info.state, (now - worker.info.last_seen_ms) / 1000);
+                 to_string(worker.info.state), (now - worker.info.last_seen_ms) / 1000);
     queue_write([id = it->first](Store& store) { store.delete_worker(id); });
     secret_owners_.erase(worker.secret_sha256);
     it = workers_.erase(it);

@@ -43,7 +43,7 @@ TEST_F(SchedulerBatchTest, AClaimTakesUpToHalfOfTheWorkersShareCentreFirst) {
   EXPECT_EQ(info_of(w).current_tile, 4);
   ASSERT_EQ(deliver(first), ResultOutcome::accepted);  // all four, in the lease's order
   EXPECT_EQ(s().job(job)->tiles_done, 4);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   EXPECT_EQ(info_of(w).tiles_rendered, 4u);
 
   // The batch shrinks as the job nears its end, down to single tiles.
@@ -97,7 +97,7 @@ TEST_F(SchedulerBatchTest, TilesOfOneLeaseAreDeliveredInGroups) {
   EXPECT_EQ(s().job(job)->rays, 60u);
   const std::vector<TileResult> last{{d.index, pixels_d, 40}};
   EXPECT_EQ(s().complete(lease.id, last), ResultOutcome::accepted);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   EXPECT_FALSE(s().heartbeat(lease.id));  // nothing owed: the lease is over
   EXPECT_EQ(s().complete(lease.id, repeat), ResultOutcome::duplicate);
 
@@ -149,7 +149,7 @@ TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
   s().expire_leases();
   EXPECT_EQ(s().job(job)->tiles_done, 1);
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
-  EXPECT_EQ(info_of(slow).state, "idle");
+  EXPECT_EQ(info_of(slow).state, WorkerState::idle);
   EXPECT_FALSE(s().heartbeat(lease.id));
 
   // The owed tiles go out again first, under a new lease. The expiry counted against each
@@ -175,7 +175,7 @@ TEST_F(SchedulerBatchTest, ReleaseGivesBackWhatWasNotDelivered) {
   s().release(lease.id);
   EXPECT_EQ(s().job(job)->tiles_done, 1);
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   const Lease next = *s().claim(w, 100);
   EXPECT_NE(next.id, lease.id);
   EXPECT_EQ(next.tiles[0].index, lease.tiles[1].index);  // first in line again
@@ -187,7 +187,7 @@ TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
   const Lease lease = *s().claim(w, 100);
   ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
   reopen();
-  EXPECT_EQ(info_of(w).state, "rendering");
+  EXPECT_EQ(info_of(w).state, WorkerState::rendering);
   EXPECT_EQ(info_of(w).current_tile, lease.tiles[1].index);
   const Lease back = *s().claim(w, 100);
   EXPECT_EQ(back.id, lease.id);
@@ -214,7 +214,7 @@ TEST_F(SchedulerBatchTest, AnExtensionAddsTheJobsNextTilesToTheLiveLeaseAndRenew
   EXPECT_EQ(indexes_of(*s().extend(lease.id, 1)), (std::vector<int>{2}));  // max_tiles caps
   ASSERT_EQ(deliver(*s().heartbeat(lease.id)), ResultOutcome::accepted);
   EXPECT_EQ(s().job(job)->tiles_done, 7);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   EXPECT_FALSE(s().extend(lease.id, 100));  // the lease is over once it owes nothing
 }
 

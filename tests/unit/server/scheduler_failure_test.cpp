@@ -59,7 +59,7 @@ TEST_F(SchedulerFailureTest, AFailureGivesTheLeasesOtherTilesBackUncharged) {
   std::vector<int> expected(9, 0);
   expected[lease.tiles[1].index] = 1;
   EXPECT_EQ(attempts(), expected);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   s().fail_tile(lease.id, lease.tiles[2].index, "too late");  // the lease is over: nothing
   s().fail_tile("l-0000000000000000", 0, "unknown lease");
   EXPECT_EQ(attempts(), expected);

@@ -87,7 +87,7 @@ TEST_F(SchedulerTest, LeasesExpireInTheOrderOfTheirExpiryWhateverTheOrderOfTheir
   clock_.advance_ms(timeout_ms - 5'000);  // 10 s + timeout
   s().expire_leases();
   EXPECT_FALSE(s().heartbeat(second.id));
-  EXPECT_EQ(info_of(late).state, "idle");
+  EXPECT_EQ(info_of(late).state, WorkerState::idle);
   ASSERT_TRUE(s().heartbeat(first.id));  // 10 s + 2 * timeout now
   EXPECT_EQ(s().job(job)->tiles_rendering, 1);
 

@@ -90,11 +90,11 @@ TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   EXPECT_EQ(s().job(submitted.id)->state, JobState::running);
   EXPECT_EQ(s().job(submitted.id)->started_at_ms, clock_.now_ms());
   EXPECT_EQ(s().job(submitted.id)->tiles_rendering, 1);
-  EXPECT_EQ(info_of(w).state, "rendering");
+  EXPECT_EQ(info_of(w).state, WorkerState::rendering);
   EXPECT_EQ(info_of(w).current_job, submitted.id);
   EXPECT_EQ(info_of(w).current_tile, lease->tiles[0].index);
   ASSERT_EQ(deliver(*lease), ResultOutcome::accepted);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   finish(submitted.id, w);
 
   const JobStatus done = *s().job(submitted.id);
@@ -179,7 +179,7 @@ TEST_F(SchedulerTest, HeartbeatExtendsAndTheLeaseExpiresExactlyAfterTheTimeout) 
   clock_.advance_ms(1);
   s().expire_leases();
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
-  EXPECT_EQ(info_of(w1).state, "idle");
+  EXPECT_EQ(info_of(w1).state, WorkerState::idle);
   EXPECT_FALSE(s().heartbeat(lease.id));
 
   const auto second = s().claim(w2);
@@ -266,7 +266,7 @@ TEST_F(SchedulerTest, CancelWithdrawsLeases) {
   EXPECT_EQ(canceled.tiles_rendering, 0);
   EXPECT_FALSE(s().heartbeat(lease.id));
   EXPECT_EQ(deliver(lease), ResultOutcome::stale);
-  EXPECT_EQ(info_of(w).state, "idle");
+  EXPECT_EQ(info_of(w).state, WorkerState::idle);
   EXPECT_FALSE(s().claim(w));
   EXPECT_EQ(s().cancel(job), CancelOutcome::already_finished);
   EXPECT_EQ(s().cancel("j-000000000000"), CancelOutcome::not_found);
@@ -319,8 +319,8 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   EXPECT_EQ(after.tiles_done, 4);
   EXPECT_EQ(after.rays, 40u);
   EXPECT_EQ(s().job(canceled)->state, JobState::canceled);
-  EXPECT_EQ(info_of(w1).state, "gone");  // until it talks to us again
-  EXPECT_EQ(info_of(w2).state, "rendering");
+  EXPECT_EQ(info_of(w1).state, WorkerState::gone);  // until it talks to us again
+  EXPECT_EQ(info_of(w2).state, WorkerState::rendering);
   EXPECT_EQ(info_of(w1).tiles_rendered, 4u);
 
   const Lease back = *s().claim(w2);
@@ -331,7 +331,7 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
     EXPECT_NE(lease->tiles[0].index, held.tiles[0].index);
     ASSERT_EQ(deliver(*lease), ResultOutcome::accepted);
   }
-  EXPECT_EQ(info_of(w1).state, "idle");
+  EXPECT_EQ(info_of(w1).state, WorkerState::idle);
   EXPECT_EQ(s().job(job)->state, JobState::running);
   ASSERT_EQ(deliver(back), ResultOutcome::accepted);
   EXPECT_EQ(s().job(job)->state, JobState::completed);
@@ -400,26 +400,26 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   const std::string w2 = worker("two");
   const Lease first = *s().claim(w1);
   s().worker_left(w1);
-  EXPECT_EQ(info_of(w1).state, "left");
+  EXPECT_EQ(info_of(w1).state, WorkerState::left);
   EXPECT_EQ(info_of(w1).current_job, "");
   EXPECT_FALSE(s().heartbeat(first.id));
   EXPECT_EQ(deliver(first), ResultOutcome::stale);
   // It said goodbye: it registers again before it claims, and touching it revives nothing.
   EXPECT_FALSE(s().worker_known(w1));
   s().touch_worker(w1);
-  EXPECT_EQ(info_of(w1).state, "left");
+  EXPECT_EQ(info_of(w1).state, WorkerState::left);
   EXPECT_FALSE(s().claim(w1));
 
   const Lease second = *s().claim(w2);
   EXPECT_EQ(second.tiles[0].index, first.tiles[0].index);
   EXPECT_NE(second.id, first.id);
   s().release(second.id);
-  EXPECT_EQ(info_of(w2).state, "idle");
+  EXPECT_EQ(info_of(w2).state, WorkerState::idle);
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
 
   // It comes back: not under its old id, which stays left, but registered anew.
   s().touch_worker(w1);
-  EXPECT_EQ(info_of(w1).state, "left");
+  EXPECT_EQ(info_of(w1).state, WorkerState::left);
   EXPECT_FALSE(s().worker_known("w-000000000000"));
   const std::string back = worker("one");
   EXPECT_NE(back, w1);
@@ -538,7 +538,7 @@ TEST_F(SchedulerTest, WorkersGoneOrLeftForAnHourLeaveTheListAndTheStore) {
   reopen();
   EXPECT_FALSE(listed(leaver));
   ASSERT_TRUE(listed(stayer));
-  EXPECT_EQ(info_of(stayer).state, "gone");
+  EXPECT_EQ(info_of(stayer).state, WorkerState::gone);
   clock_.advance_ms(hour + 1000);
   s().expire_leases();
   EXPECT_FALSE(listed(stayer));
