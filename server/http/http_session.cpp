@@ -15,7 +15,6 @@
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
@@ -26,6 +25,7 @@
 #include "server/http/pending_response.hpp"
 #include "server/http/request_framing.hpp"
 #include "server/http/router.hpp"
+#include "server/http/stream_writer.hpp"
 #include "server/http/wire_messages.hpp"
 #include "server/metrics/http_metrics.hpp"
 
@@ -467,92 +467,18 @@ class BasicHttpSession : public HttpSession {
   }
 
   void on_shut_down() {
-    if (phase_ == Phase::streaming) return end_stream();
+    if (phase_ == Phase::streaming) return streamer_->end();
     if (phase_ == Phase::idle) close();
     // Otherwise the current request finishes, and stopping() ends the connection after it.
   }
 
-  // A streamed body (server-sent events): the header, then what the stream has whenever it
-  // has something, a keep-alive when it had nothing for a while, until the peer goes, the
-  // stream ends or the server stops. A peer that stops reading is closed once a write has
-  // waited longer than write_timeout.
   void start_stream(HttpResponse response) {
     phase_ = Phase::streaming;
-    body_stream_ = std::move(response.stream);
-    keepalive_timer_ = std::make_unique<net::steady_timer>(stream_.get_executor());
-    lowest().expires_never();
-    // What the kernel holds for a peer that stops reading is bounded too, not only the
-    // stream's queue: the system's autotuning would let a thousand stalled subscribers
-    // hold 4 MiB each.
-    error_code ignored;
-    lowest().socket().set_option(net::socket_base::send_buffer_size(kStreamSendBuffer), ignored);
-    watch_peer();
-    write_stream(stream_header(response));
-  }
-
-  void write_stream(std::string text) {
-    stream_writing_ = true;
-    stream_out_ = std::move(text);
-    stream_write_started_ = std::chrono::steady_clock::now();
-    arm_keepalive();  // which also catches a write that waits too long
-    net::async_write(stream_, net::buffer(stream_out_),
-                     [self = self()](error_code ec, std::size_t) {
-                       self->stream_writing_ = false;
-                       if (ec) return self->end_stream();
-                       self->pump_stream();
-                     });
-  }
-
-  void pump_stream() {
-    if (phase_ != Phase::streaming || stream_writing_) return;
-    if (stopping()) return end_stream();
-    bool ended = false;
-    std::string text = body_stream_->take(ended);
-    if (!text.empty()) return write_stream(std::move(text));
-    if (ended) return end_stream();
-    arm_keepalive();
-    body_stream_->wait([weak = weak_from_this()] {
-      if (auto session = std::static_pointer_cast<BasicHttpSession>(weak.lock()))
-        net::post(session->stream_.get_executor(), [session] { session->pump_stream(); });
-    });
-  }
-
-  void on_keepalive() {
-    if (phase_ != Phase::streaming) return;
-    if (!stream_writing_) return write_stream(body_stream_->keepalive());
-    // A write still waiting on a peer that does not read.
-    if (std::chrono::steady_clock::now() - stream_write_started_ > shared_->options.write_timeout)
-      return end_stream();
-    arm_keepalive();
-  }
-
-  // The timer of on_keepalive(), from now; an earlier one is forgotten.
-  void arm_keepalive() {
-    const std::uint64_t generation = ++keepalive_generation_;
-    keepalive_timer_->expires_after(std::min<std::chrono::steady_clock::duration>(
-        body_stream_->keepalive_interval(), shared_->options.write_timeout));
-    keepalive_timer_->async_wait([self = self(), generation](error_code ec) {
-      if (!ec && generation == self->keepalive_generation_) self->on_keepalive();
-    });
-  }
-
-  // A stream's peer sends nothing; a read that ends says it went.
-  void watch_peer() {
-    stream_.async_read_some(buffer_.prepare(512),
-                            [self = self()](error_code ec, std::size_t bytes) {
-                              if (ec) return self->end_stream();
-                              self->buffer_.commit(bytes);
-                              self->buffer_.consume(self->buffer_.size());
-                              self->watch_peer();
-                            });
-  }
-
-  void end_stream() {
-    if (phase_ != Phase::streaming) return;
-    body_stream_->cancel();
-    ++keepalive_generation_;
-    keepalive_timer_->cancel();
-    close();
+    std::weak_ptr<HttpSession> weak = weak_from_this();
+    streamer_ = std::make_unique<StreamWriter<Stream>>(
+        stream_, std::weak_ptr<void>(weak), std::move(response.stream),
+        shared_->options.write_timeout, [this] { return stopping(); }, [this] { close(); });
+    streamer_->start(stream_header(response));
   }
 
   // Half-closes, then discards what the client still sends until it closes too: closing
@@ -595,18 +521,11 @@ class BasicHttpSession : public HttpSession {
   std::shared_ptr<ServerShared> shared_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
-  std::optional<WireMessage> answer_;              // alive while being written
-  std::unique_ptr<std::array<char, 4096>> drain_;  // only while lingering
-  std::unique_ptr<std::string> refusal_;           // to a client of the other protocol
-  // A streamed body's (start_stream()).
-  std::shared_ptr<BodyStream> body_stream_;
-  std::unique_ptr<net::steady_timer> keepalive_timer_;
-  std::uint64_t keepalive_generation_ = 0;
-  std::string stream_out_;  // alive while being written
-  bool stream_writing_ = false;
-  std::chrono::steady_clock::time_point stream_write_started_;
+  std::optional<WireMessage> answer_;               // alive while being written
+  std::unique_ptr<std::array<char, 4096>> drain_;   // only while lingering
+  std::unique_ptr<std::string> refusal_;            // to a client of the other protocol
+  std::unique_ptr<StreamWriter<Stream>> streamer_;  // only while streaming a body
   static constexpr std::size_t kStreamPiece = 1 << 20;
-  static constexpr int kStreamSendBuffer = 128 * 1024;  // the kernel doubles it
   std::shared_ptr<BodySink> sink_;  // the streamed body's, for a route that has one
   std::size_t budget_held_ = 0;     // of shared_->body_budget, for the body being read or served
   std::string remote_address_;

@@ -1,5 +1,5 @@
 // One HTTP/1.1 connection, from accept to close. The session itself lives in
-// http_session.cpp, the one server file that includes Beast.
+// http_session.cpp, which with its stream_writer.hpp is all the server code that includes Beast.
 #pragma once
 
 #include <utility>  // before Asio: Boost 1.74 with GCC 12 in C++20 needs it
