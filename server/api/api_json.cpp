@@ -73,7 +73,8 @@ std::optional<std::string> unless_empty(const std::string& text) {
   return text;
 }
 
-protocol::JobHealth health_of(const JobHealth& health, const JobStatus& job, std::int64_t now_ms) {
+protocol::JobHealth health_of(const JobHealthRecord& health, const JobRecord& job,
+                              std::int64_t now_ms) {
   // How long its tiles have rendered with none delivered; 0 unless some are under lease.
   const bool rendering = job.state == JobState::running && job.tiles_rendering > 0;
   const double no_progress_s = rendering && health.progress_at_ms > 0
@@ -85,7 +86,7 @@ protocol::JobHealth health_of(const JobHealth& health, const JobStatus& job, std
 
 }  // namespace
 
-protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms) {
+protocol::JobStatus status_of(const JobRecord& job, std::int64_t now_ms) {
   protocol::JobStatus status;
   status.id = job.id;
   status.name = job.name;
@@ -119,7 +120,7 @@ protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms) {
   return status;
 }
 
-protocol::FrameStatus frame_status_of(const FrameInfo& frame) {
+protocol::FrameStatus frame_status_of(const FrameRecord& frame) {
   protocol::FrameStatus status;
   status.frame = frame.frame;
   status.state = frame.state;
@@ -128,7 +129,7 @@ protocol::FrameStatus frame_status_of(const FrameInfo& frame) {
   return status;
 }
 
-protocol::Worker worker_of(const WorkerInfo& worker) {
+protocol::Worker worker_of(const WorkerRecord& worker) {
   protocol::Worker w;
   w.id = worker.id;
   w.name = worker.name;
@@ -145,14 +146,14 @@ protocol::Worker worker_of(const WorkerInfo& worker) {
   return w;
 }
 
-protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms) {
+protocol::Lease lease_of(const LeaseRecord& lease, std::int64_t now_ms) {
   protocol::Lease l;
   l.id = lease.id;
   l.job_id = lease.job_id;
   l.scene_digest = lease.scene_digest;
   l.frame = lease.frame;
   l.tiles.reserve(lease.tiles.size());
-  for (const LeaseTile& tile : lease.tiles)
+  for (const LeaseTileRecord& tile : lease.tiles)
     l.tiles.push_back({tile.index, tile.rect.x, tile.rect.y, tile.rect.width, tile.rect.height});
   l.expires_in_s = std::max<std::int64_t>(0, lease.expires_at_ms - now_ms) / 1e3;
   return l;

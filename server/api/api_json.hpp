@@ -49,10 +49,10 @@ std::optional<std::chrono::milliseconds> wait_of(const HttpRequest& request, dou
 HttpResponse bad_wait();
 
 // The one mapping from each record to what the API shows of it.
-protocol::JobStatus status_of(const JobStatus& job, std::int64_t now_ms);
-protocol::FrameStatus frame_status_of(const FrameInfo& frame);
-protocol::Worker worker_of(const WorkerInfo& worker);
-protocol::Lease lease_of(const Lease& lease, std::int64_t now_ms);
+protocol::JobStatus status_of(const JobRecord& job, std::int64_t now_ms);
+protocol::FrameStatus frame_status_of(const FrameRecord& frame);
+protocol::Worker worker_of(const WorkerRecord& worker);
+protocol::Lease lease_of(const LeaseRecord& lease, std::int64_t now_ms);
 
 template <typename T>
 HttpResponse body_response(int status, const T& body) {

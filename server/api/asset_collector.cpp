@@ -29,7 +29,7 @@ std::size_t AssetCollector::collect_once() {
   // The digests of the scenes of queued and running jobs, then the assets those scenes name.
   std::set<std::string> scenes;
   for (const JobState state : {JobState::queued, JobState::running})
-    for (const JobStatus& job : scheduler_.jobs(state, std::numeric_limits<std::size_t>::max()))
+    for (const JobRecord& job : scheduler_.jobs(state, std::numeric_limits<std::size_t>::max()))
       scenes.insert(job.scene_digest);
   std::set<std::string> in_use;
   for (const std::string& scene : scenes) {

@@ -32,7 +32,7 @@ auto worker_answer(ApiContext& context, const std::string& id, std::string what)
     if (!error.empty()) return storage_failed(what + " of worker " + id, error);
     if (outcome.result == ControlOutcome::Result::not_found)
       return error_response(404, "unknown_worker", "no worker " + id);
-    for (const WorkerInfo& worker : context.scheduler.workers())
+    for (const WorkerRecord& worker : context.scheduler.workers())
       if (worker.id == id) return body_response(200, worker_of(worker));
     return error_response(404, "unknown_worker", "no worker " + id);
   };

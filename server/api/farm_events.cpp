@@ -73,18 +73,18 @@ std::string tile_event_data(const FarmObserver::TileChange& tile) {
   return dumped(protocol::to_json(status));
 }
 
-void FarmEvents::send_job(const JobStatus& job) {
+void FarmEvents::send_job(const JobRecord& job) {
   hub_.publish(std::string(protocol::event::job),
                dumped(protocol::to_json(status_of(job, clock_.now_ms()))), true, job.id);
 }
 
-void FarmEvents::send_worker(const WorkerInfo& worker, WorkerChange change) {
+void FarmEvents::send_worker(const WorkerRecord& worker, WorkerChange change) {
   hub_.publish(std::string(protocol::event::worker),
                dumped(protocol::to_json(protocol::WorkerEvent{change, worker_of(worker)})), true);
 }
 
-void FarmEvents::jobs_changed(const std::vector<JobStatus>& jobs) {
-  for (const JobStatus& job : jobs) {
+void FarmEvents::jobs_changed(const std::vector<JobRecord>& jobs) {
+  for (const JobRecord& job : jobs) {
     bool now = false;
     {
       std::lock_guard lock(mutex_);
@@ -109,7 +109,8 @@ void FarmEvents::tiles_changed(const std::vector<TileChange>& tiles) {
     hub_.publish(std::string(protocol::event::tile), tile_event_data(tile), false, tile.job_id);
 }
 
-void FarmEvents::workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) {
+void FarmEvents::workers_changed(
+    const std::vector<std::pair<WorkerRecord, WorkerChange>>& workers) {
   for (const auto& [worker, change] : workers) {
     if (change == WorkerChange::changed) {
       std::lock_guard lock(mutex_);
@@ -141,8 +142,8 @@ void FarmEvents::job_removed(const std::string& job_id) {
 }
 
 void FarmEvents::flush() {
-  std::map<std::string, JobStatus> jobs;
-  std::map<std::string, WorkerInfo> workers;
+  std::map<std::string, JobRecord> jobs;
+  std::map<std::string, WorkerRecord> workers;
   {
     std::lock_guard lock(mutex_);
     jobs.swap(dirty_jobs_);
@@ -151,7 +152,7 @@ void FarmEvents::flush() {
   for (const auto& [id, job] : jobs) send_job(job);
   if (workers.empty()) return;
   if (scheduler_)
-    for (const WorkerInfo& now : scheduler_->workers())
+    for (const WorkerRecord& now : scheduler_->workers())
       if (const auto it = workers.find(now.id); it != workers.end()) it->second = now;
   for (const auto& [id, worker] : workers) send_worker(worker, WorkerChange::changed);
 }

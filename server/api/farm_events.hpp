@@ -23,9 +23,9 @@ class FarmEvents : public FarmObserver {
  public:
   FarmEvents(EventHub& hub, const Clock& clock) : hub_(hub), clock_(clock) {}
 
-  void jobs_changed(const std::vector<JobStatus>& jobs) override;
+  void jobs_changed(const std::vector<JobRecord>& jobs) override;
   void tiles_changed(const std::vector<TileChange>& tiles) override;
-  void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) override;
+  void workers_changed(const std::vector<std::pair<WorkerRecord, WorkerChange>>& workers) override;
   void job_removed(const std::string& job_id) override;
   bool wants_tiles(const std::string& job_id) override;
   // Sends the newest state of the jobs and workers whose progress changed since the last
@@ -37,8 +37,8 @@ class FarmEvents : public FarmObserver {
   void rates_from(const Scheduler* scheduler) { scheduler_ = scheduler; }
 
  private:
-  void send_job(const JobStatus& job);
-  void send_worker(const WorkerInfo& worker, WorkerChange change);
+  void send_job(const JobRecord& job);
+  void send_worker(const WorkerRecord& worker, WorkerChange change);
 
   EventHub& hub_;
   const Clock& clock_;
@@ -46,8 +46,8 @@ class FarmEvents : public FarmObserver {
   std::mutex mutex_;
   // What was last sent of each unfinished job: its state and priority.
   std::unordered_map<std::string, std::pair<JobState, int>> told_;
-  std::map<std::string, JobStatus> dirty_jobs_;
-  std::map<std::string, WorkerInfo> dirty_workers_;
+  std::map<std::string, JobRecord> dirty_jobs_;
+  std::map<std::string, WorkerRecord> dirty_workers_;
 };
 
 // A tile as GET /v1/jobs/{id}/tiles lists it, and as the data of a "tile" event, which

@@ -239,7 +239,7 @@ void check_and_submit(ApiContext& context, Taken taken, std::shared_ptr<Submissi
   submission.scene = json();
   context.scheduler.submit(
       submission.name, submission.priority, scene, std::move(scene_json),
-      [&context, memory, respond = std::move(respond)](std::optional<JobStatus> job,
+      [&context, memory, respond = std::move(respond)](std::optional<JobRecord> job,
                                                        const std::string& error) {
         memory->hold.reset();  // before the answer, as above
         // The store refused (a full disk, say): nothing was created.
@@ -278,7 +278,7 @@ HttpResponse list(ApiContext& context, const HttpRequest& request) {
   std::optional<std::string> name;
   if (auto it = request.query.find(std::string(protocol::query::name)); it != request.query.end())
     name = it->second;
-  for (const JobStatus& job : context.scheduler.jobs(state, std::get<std::size_t>(limit),
+  for (const JobRecord& job : context.scheduler.jobs(state, std::get<std::size_t>(limit),
                                                      std::get<std::size_t>(offset), name))
     list.jobs.push_back(status_of(job, now));
   return body_response(200, list);
@@ -347,7 +347,7 @@ void image(ApiContext& context, const HttpRequest& request, Respond respond) {
                                     "frame must be a whole number from 0 to 999999999"));
     frame = std::stoi(text);
   }
-  const std::optional<FrameInfo> info = context.scheduler.frame(id, frame);
+  const std::optional<FrameRecord> info = context.scheduler.frame(id, frame);
   if (!info)
     return respond(error_response(
         404, "not_found",
@@ -394,7 +394,7 @@ void frame_list(ApiContext& context, const HttpRequest& request, Respond respond
     if (!frames) return not_found(id);
     protocol::FrameList list;
     list.frames.reserve(frames->size());
-    for (const FrameInfo& frame : *frames) list.frames.push_back(frame_status_of(frame));
+    for (const FrameRecord& frame : *frames) list.frames.push_back(frame_status_of(frame));
     return body_response(200, list);
   });
 }

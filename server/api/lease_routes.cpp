@@ -219,7 +219,7 @@ void add_lease_routes(Router& router, ApiContext& context) {
         if (lease.value) context.scheduler.touch_worker(lease.value->worker_id);
         respond_when_stored(
             context.scheduler, std::move(lease), std::move(respond),
-            [&context, id](const std::optional<Lease>& renewed, const std::string&) {
+            [&context, id](const std::optional<LeaseRecord>& renewed, const std::string&) {
               return renewed ? body_response(200, lease_of(*renewed, context.clock.now_ms()))
                              : lease_lost(id);
             });
@@ -237,7 +237,7 @@ void add_lease_routes(Router& router, ApiContext& context) {
         if (lease.value) context.scheduler.touch_worker(lease.value->worker_id);
         respond_when_stored(
             context.scheduler, std::move(lease), std::move(respond),
-            [&context, id](const std::optional<Lease>& extended, const std::string& error) {
+            [&context, id](const std::optional<LeaseRecord>& extended, const std::string& error) {
               // As for a claim: the store refused the new tiles, and the job has failed.
               if (!error.empty()) return storage_failed("the lease", error);
               return extended ? body_response(200, lease_of(*extended, context.clock.now_ms()))

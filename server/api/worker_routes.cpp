@@ -38,7 +38,7 @@ void register_worker(ApiContext& context, const HttpRequest& request, Respond re
       registration.name, host, registration.threads.value_or(1), worker_secret_digest(secret));
   respond_when_stored(
       context.scheduler, std::move(registered), std::move(respond),
-      [&context, secret = std::move(secret)](const WorkerInfo& worker, const std::string& error) {
+      [&context, secret = std::move(secret)](const WorkerRecord& worker, const std::string& error) {
         if (!error.empty()) return storage_failed("the worker", error);
         const SchedulerConfig& config = context.scheduler.config();
         return body_response(
@@ -70,7 +70,7 @@ void claim(ApiContext& context, const HttpRequest& request, Respond respond) {
         if (!lease.value) return false;
         respond_when_stored(
             context.scheduler, std::move(lease), *shared_respond,
-            [&context](const std::optional<Lease>& granted, const std::string& error) {
+            [&context](const std::optional<LeaseRecord>& granted, const std::string& error) {
               // The store refused the lease (a full disk, say); the job has failed and says why.
               if (!error.empty()) return storage_failed("the lease", error);
               return body_response(200, lease_of(*granted, context.clock.now_ms()));
@@ -90,7 +90,7 @@ void add_worker_routes(Router& router, ApiContext& context) {
       [&context](HttpRequest&&, Respond respond) {
         respond_durable(context.scheduler, std::move(respond), [&context] {
           protocol::WorkerList list;
-          for (const WorkerInfo& worker : context.scheduler.workers())
+          for (const WorkerRecord& worker : context.scheduler.workers())
             list.workers.push_back(worker_of(worker));
           return body_response(200, list);
         });

@@ -93,7 +93,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
   std::vector<int> order = hand_out_order(*rects, scene.width, scene.height, frame_count);
 
   auto job = std::make_shared<JobEntry>();
-  JobStatus& s = job->status;
+  JobRecord& s = job->status;
   s.name = name;
   s.state = JobState::queued;
   s.priority = priority;
@@ -127,7 +127,7 @@ void Scheduler::submit(const std::string& name, int priority, const Scene& scene
       return then(std::nullopt, error);
     }
     Callbacks notify;
-    JobStatus status;
+    JobRecord status;
     FarmObserver* observer = nullptr;
     {
       std::lock_guard lock(mutex_);
@@ -168,22 +168,22 @@ std::optional<std::string> Scheduler::job_memory_refusal(std::uint64_t tiles) co
          "); remove finished jobs (tessera rm), or render it in fewer, larger tiles";
 }
 
-std::optional<JobStatus> Scheduler::job(const std::string& id) const {
+std::optional<JobRecord> Scheduler::job(const std::string& id) const {
   std::lock_guard lock(mutex_);
   const JobEntry* job = find_job(id);
   if (!job) return std::nullopt;
   return job->status;
 }
 
-std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_t limit,
+std::vector<JobRecord> Scheduler::jobs(std::optional<JobState> state, std::size_t limit,
                                        std::size_t offset,
                                        const std::optional<std::string>& name) const {
   std::lock_guard lock(mutex_);
-  std::vector<const JobStatus*> matching;
+  std::vector<const JobRecord*> matching;
   for (const auto& [id, job] : jobs_)
     if ((!state || job->status.state == *state) && (!name || job->status.name == *name))
       matching.push_back(&job->status);
-  const auto newest_first = [](const JobStatus* a, const JobStatus* b) {
+  const auto newest_first = [](const JobRecord* a, const JobRecord* b) {
     if (a->created_at_ms != b->created_at_ms) return a->created_at_ms > b->created_at_ms;
     return a->id > b->id;
   };
@@ -191,7 +191,7 @@ std::vector<JobStatus> Scheduler::jobs(std::optional<JobState> state, std::size_
   const std::size_t end = std::min(offset + limit, matching.size());
   std::partial_sort(matching.begin(), matching.begin() + static_cast<std::ptrdiff_t>(end),
                     matching.end(), newest_first);
-  std::vector<JobStatus> result;
+  std::vector<JobRecord> result;
   for (std::size_t i = std::min(offset, end); i < end; ++i) result.push_back(*matching[i]);
   return result;
 }
@@ -203,7 +203,7 @@ Pending<CancelOutcome> Scheduler::cancel(const std::string& id) {
   if (!job) return pending(CancelOutcome::not_found, before);
   if (is_finished(job->status.state)) return pending(CancelOutcome::already_finished, before);
   StagedChange change;
-  JobStatus& status = change.job(*job);
+  JobRecord& status = change.job(*job);
   status.state = JobState::canceled;
   status.finished_at_ms = clock_.now_ms();
   // Withdrawn leases are forgotten: their heartbeats answer "lost", their results "stale".
@@ -301,8 +301,8 @@ std::optional<int> Scheduler::slot_of_frame(const JobEntry& job, int frame) {
   return static_cast<int>(it - numbers.begin());
 }
 
-FrameInfo Scheduler::frame_info(const JobEntry& job, int slot) const {
-  FrameInfo info;
+FrameRecord Scheduler::frame_info(const JobEntry& job, int slot) const {
+  FrameRecord info;
   info.frame = job.status.frames->numbers[slot];
   info.tiles_total = job.tiles_per_frame;
   info.tiles_done = job.frame_done[slot];
@@ -325,18 +325,18 @@ FrameInfo Scheduler::frame_info(const JobEntry& job, int slot) const {
   return info;
 }
 
-std::optional<std::vector<FrameInfo>> Scheduler::frames(const std::string& id) const {
+std::optional<std::vector<FrameRecord>> Scheduler::frames(const std::string& id) const {
   std::lock_guard lock(mutex_);
   const JobEntry* job = find_job(id);
   if (!job) return std::nullopt;
-  std::vector<FrameInfo> frames;
+  std::vector<FrameRecord> frames;
   if (job->tiles_per_frame == 0) return frames;
   frames.reserve(job->frame_count());
   for (int slot = 0; slot < job->frame_count(); ++slot) frames.push_back(frame_info(*job, slot));
   return frames;
 }
 
-std::optional<FrameInfo> Scheduler::frame(const std::string& id, int frame) const {
+std::optional<FrameRecord> Scheduler::frame(const std::string& id, int frame) const {
   std::lock_guard lock(mutex_);
   const JobEntry* job = find_job(id);
   const std::optional<int> slot = job ? slot_of_frame(*job, frame) : std::nullopt;
@@ -359,7 +359,7 @@ void Scheduler::image_write_failed(const std::string& key, const std::string& er
                           error;
   StagedChange change;
   if (job->status.state == JobState::completed) {
-    JobStatus& status = change.job(*job);
+    JobRecord& status = change.job(*job);
     status.state = JobState::failed;
     status.error = why;
   } else if (!is_finished(job->status.state)) {

@@ -52,16 +52,16 @@ class Scheduler {
   // --- jobs -----------------------------------------------------------------
   // Called on the store thread once the job is stored, with its status, or with nothing
   // and the store's error when the store refused it.
-  using Submitted = std::function<void(std::optional<JobStatus>, const std::string& error)>;
+  using Submitted = std::function<void(std::optional<JobRecord>, const std::string& error)>;
   // `scene` is already validated; `scene_json` is what is stored and served to workers. The
   // job exists, for every other call too, once it is stored.
   // `frames`: the frames of an animated scene to render, ascending (checked against its
   // range); empty for a still, its one frame 0.
   void submit(const std::string& name, int priority, const Scene& scene, std::string scene_json,
               Submitted then, std::vector<int> frames = {});
-  std::optional<JobStatus> job(const std::string& id) const;
+  std::optional<JobRecord> job(const std::string& id) const;
   // Newest first; `state` filters when set; at most `limit`, after the first `offset`.
-  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
+  std::vector<JobRecord> jobs(std::optional<JobState> state, std::size_t limit,
                               std::size_t offset = 0,
                               const std::optional<std::string>& name = std::nullopt) const;
   Pending<CancelOutcome> cancel(const std::string& id);
@@ -99,9 +99,9 @@ class Scheduler {
                       std::function<void(std::shared_ptr<const Image>)> then) const;
   std::optional<std::filesystem::path> frame_image_file(const std::string& id, int frame) const;
   // Every frame of the job, in the order they go out; nothing when there is no such job.
-  std::optional<std::vector<FrameInfo>> frames(const std::string& id) const;
+  std::optional<std::vector<FrameRecord>> frames(const std::string& id) const;
   // One frame of the job; nothing when there is no such job or frame.
-  std::optional<FrameInfo> frame(const std::string& id, int frame) const;
+  std::optional<FrameRecord> frame(const std::string& id, int frame) const;
   // Waits until the image file of every job completed so far is written (or has failed).
   void wait_for_images();
 
@@ -127,8 +127,8 @@ class Scheduler {
   // --- workers --------------------------------------------------------------
   // `secret_sha256`: the digest of the secret the worker was given, which its later calls
   // prove (worker_with_secret()).
-  Pending<WorkerInfo> register_worker(const std::string& name, const std::string& host, int threads,
-                                      const std::string& secret_sha256 = "");
+  Pending<WorkerRecord> register_worker(const std::string& name, const std::string& host,
+                                        int threads, const std::string& secret_sha256 = "");
   bool worker_known(const std::string& worker_id) const;
   // The worker whose secret has this digest, while it has not left; nothing otherwise.
   std::optional<std::string> worker_with_secret(const std::string& secret_sha256) const;
@@ -138,15 +138,15 @@ class Scheduler {
   // new lease on up to `max_tiles` of the best pending tiles: highest priority job first,
   // then oldest job, tiles centre-first. The batch is cut to the worker's share of the
   // job's pending tiles, so that the last tiles of a job spread over every worker.
-  Pending<std::optional<Lease>> claim(const std::string& worker_id, int max_tiles = 1);
+  Pending<std::optional<LeaseRecord>> claim(const std::string& worker_id, int max_tiles = 1);
   // Extends the lease; nothing when it is no longer live.
-  Pending<std::optional<Lease>> heartbeat(const std::string& lease_id);
+  Pending<std::optional<LeaseRecord>> heartbeat(const std::string& lease_id);
   // More tiles for a live lease, so that its worker renders on without the round trips of
   // a claim between batches: up to `max_tiles` more of the lease's job, cut as claim()
   // cuts a batch, while that job is the one claim() would give this worker. Renews the
-  // lease as heartbeat() does. The Lease returned lists only the tiles added, which may
+  // lease as heartbeat() does. The LeaseRecord returned lists only the tiles added, which may
   // be none; nothing when the lease is no longer live.
-  Pending<std::optional<Lease>> extend(const std::string& lease_id, int max_tiles);
+  Pending<std::optional<LeaseRecord>> extend(const std::string& lease_id, int max_tiles);
   // Stores the results of some or all of the lease's tiles, atomically: every tile is
   // accepted or none is. The pixels must stay valid until when_stored() has answered: the
   // store thread writes them, and pastes them into the job's canvas once they are durable.
@@ -172,7 +172,7 @@ class Scheduler {
   // Records that a worker is alive (any request from it).
   Written touch_worker(const std::string& worker_id);
   Written worker_left(const std::string& worker_id);
-  std::vector<WorkerInfo> workers() const;
+  std::vector<WorkerRecord> workers() const;
   // For GET /metrics (scheduler_controls.cpp).
   const FarmCounters& counters() const { return counters_; }
   FarmGauges gauges() const;
@@ -274,7 +274,7 @@ class Scheduler {
   // resumes the job from what was stored.
   void fail_unstorable(JobEntry& job, const std::string& error,
                        const std::vector<Delivery>& undelivered);
-  void apply_job(JobEntry& job, const JobStatus& next);
+  void apply_job(JobEntry& job, const JobRecord& next);
   void apply_tile(JobEntry& job, int index, TileSlot next);
   // Adds (+1) or removes (-1) a tile's share of the indexes: pending set, counters and
   // leases_.
@@ -295,7 +295,7 @@ class Scheduler {
   // tiles spends its attempts the others leave the pending set, and come back should the
   // job be retried.
   void set_frame_pending(JobEntry& job, int slot, bool pending);
-  FrameInfo frame_info(const JobEntry& job, int slot) const;
+  FrameRecord frame_info(const JobEntry& job, int slot) const;
   // The first frame of the job `id` (a still's 0); nothing when there is no such job.
   std::optional<int> first_frame(const std::string& id) const;
   // The slot of the scene's frame `frame` in the job; nothing when it does not render it.
@@ -336,7 +336,7 @@ class Scheduler {
   bool expire_locked(std::int64_t now);
   // Drops the workers gone or left longer than config_.forget_workers_after_ms.
   void forget_workers_locked(std::int64_t now);
-  Lease lease_of(const std::string& lease_id) const;
+  LeaseRecord lease_of(const std::string& lease_id) const;
   std::string new_lease_id() const;
   // The job a claim by `worker` takes tiles of: the first in claim order with a pending
   // tile it is not kept off; none when there is none.

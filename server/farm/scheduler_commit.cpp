@@ -186,8 +186,8 @@ void Scheduler::apply(StagedChange& change) {
   change = StagedChange{};
 }
 
-void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
-  const JobStatus& s = job.status;
+void Scheduler::apply_job(JobEntry& job, const JobRecord& next) {
+  const JobRecord& s = job.status;
   const JobState was = s.state;
   // Every job state change passes here: one log line each.
   if (next.state != s.state) {
@@ -199,7 +199,7 @@ void Scheduler::apply_job(JobEntry& job, const JobStatus& next) {
                    to_string(next.state), next.error);
   }
   active_.erase({-s.priority, s.created_at_ms, s.id});
-  JobStatus updated = next;
+  JobRecord updated = next;
   updated.tiles_total = s.tiles_total;
   updated.tiles_done = s.tiles_done;
   updated.tiles_rendering = s.tiles_rendering;

@@ -18,7 +18,7 @@ ControlOutcome refused(std::string code, std::string message) {
 const ControlOutcome not_found{ControlOutcome::Result::not_found, {}, {}};
 const ControlOutcome done{};
 
-ControlOutcome finished(const JobStatus& job) {
+ControlOutcome finished(const JobRecord& job) {
   return refused("already_finished",
                  "job " + job.id + " has already " + std::string(to_string(job.state)));
 }
@@ -74,7 +74,7 @@ Pending<ControlOutcome> Scheduler::resume(const std::string& id) {
   return control_job(id, [&](JobEntry& job, StagedChange& change) -> std::optional<ControlOutcome> {
     if (is_finished(job.status.state)) return finished(job.status);
     if (job.status.state != JobState::paused) return std::nullopt;
-    JobStatus& status = change.job(job);
+    JobRecord& status = change.job(job);
     status.state = status.started_at_ms != 0 ? JobState::running : JobState::queued;
     // The stall clock counts from now: the pause was asked for, not a stall.
     job.status.health.progress_at_ms = clock_.now_ms();
@@ -109,14 +109,14 @@ Pending<ControlOutcome> Scheduler::retry(const std::string& id) {
         // Every tile done: it failed for want of its image (a full disk, say), and it is
         // completed again; the image is written from the stored tiles, and should that
         // fail once more, it fails once more.
-        JobStatus& status = change.job(job);
+        JobRecord& status = change.job(job);
         status.state = again == 0                  ? JobState::completed
                        : status.started_at_ms != 0 ? JobState::running
                                                    : JobState::queued;
         status.error.clear();
         status.finished_at_ms = again == 0 ? clock_.now_ms() : 0;
         // What went wrong before is in the log; the retried job starts with a clean record.
-        job.status.health = JobHealth{};
+        job.status.health = JobHealthRecord{};
         job.status.health.progress_at_ms = clock_.now_ms();
         job.failures_by_worker.clear();
         for (int slot = 0; slot < job.frame_count(); ++slot) {

@@ -39,7 +39,7 @@ TileSlot& StagedChange::tile(JobEntry& job, int index) {
   return it->second;
 }
 
-JobStatus& StagedChange::job(JobEntry& entry) {
+JobRecord& StagedChange::job(JobEntry& entry) {
   auto it = jobs.find(&entry);
   if (it == jobs.end()) it = jobs.emplace(&entry, entry.status).first;
   return it->second;
@@ -51,7 +51,7 @@ WorkerEntry& StagedChange::worker(WorkerEntry& entry) {
   return it->second;
 }
 
-JobRow job_row(const JobStatus& s) {
+JobRow job_row(const JobRecord& s) {
   return {s.id,
           s.name,
           s.priority,
@@ -69,7 +69,7 @@ JobRow job_row(const JobStatus& s) {
           s.frames->list};
 }
 
-bool status_from_row(JobRow&& row, JobStatus& s) {
+bool status_from_row(JobRow&& row, JobRecord& s) {
   s.id = std::move(row.id);
   s.name = std::move(row.name);
   const std::optional<JobState> state = job_state_from_string(row.state);

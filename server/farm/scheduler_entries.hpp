@@ -50,7 +50,7 @@ struct TileSlot {
 static_assert(sizeof(TileSlot) <= 72, "a tile's state is kept small: see TileSlot");
 
 struct JobEntry {
-  JobStatus status;  // tiles_total/done/rendering are kept current by Scheduler::track_tile
+  JobRecord status;  // tiles_total/done/rendering are kept current by Scheduler::track_tile
   // Every frame's tiles, frame after frame: frame slot k (status.frames->numbers[k]) holds
   // indexes k * tiles_per_frame to (k + 1) * tiles_per_frame - 1, cut alike.
   std::vector<TileSlot> tiles;
@@ -80,7 +80,7 @@ struct JobEntry {
 struct WorkerEntry {
   std::string key() const { return info.name + "@" + info.host; }
 
-  WorkerInfo info;                     // current_job/current_tile mirror lease_id
+  WorkerRecord info;                   // current_job/current_tile mirror lease_id
   SharedText id_text;                  // info.id, shared by the tiles that name it
   std::string lease_id;                // the live lease it holds; "" when none
   std::int64_t persisted_seen_ms = 0;  // last_seen as last written to the store
@@ -95,14 +95,14 @@ struct WorkerEntry {
 // Staging a record again returns the same copy.
 struct StagedChange {
   TileSlot& tile(JobEntry& job, int index);
-  JobStatus& job(JobEntry& job);
+  JobRecord& job(JobEntry& job);
   WorkerEntry& worker(WorkerEntry& worker);
   bool empty() const {
     return tiles.empty() && jobs.empty() && workers.empty() && forgotten_results.empty();
   }
 
   std::map<std::pair<JobEntry*, int>, TileSlot> tiles;
-  std::map<JobEntry*, JobStatus> jobs;
+  std::map<JobEntry*, JobRecord> jobs;
   std::map<WorkerEntry*, WorkerEntry> workers;
   // Results, stored with the tile they belong to.
   std::map<std::pair<const JobEntry*, int>, std::span<const float>> pixels;
@@ -114,9 +114,9 @@ struct StagedChange {
 };
 
 // A job's status and its stored row, each from the other: the one mapping between them.
-JobRow job_row(const JobStatus& status);
+JobRow job_row(const JobRecord& status);
 // False when the row's state is not one this build knows (the job is then failed).
-bool status_from_row(JobRow&& row, JobStatus& status);
+bool status_from_row(JobRow&& row, JobRecord& status);
 WorkerRow worker_row(const WorkerEntry& worker);
 // The images of the job, for ImageAssembly: one per frame slot, each under its
 // image_key().

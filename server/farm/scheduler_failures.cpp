@@ -77,7 +77,7 @@ std::string Scheduler::failed_frames_error(const JobEntry& job, const std::vecto
 }
 
 void Scheduler::stage_job_failure(StagedChange& change, JobEntry& job, const std::string& error) {
-  JobStatus& status = change.job(job);
+  JobRecord& status = change.job(job);
   if (is_finished(status.state)) return;
   status.state = JobState::failed;
   status.finished_at_ms = clock_.now_ms();
@@ -92,7 +92,7 @@ void Scheduler::fail_stalled_locked(std::int64_t now, StagedChange& change) {
   if (config_.stall_timeout_ms <= 0) return;
   for (const auto& key : active_) {
     JobEntry& job = *jobs_.at(std::get<2>(key));
-    const JobHealth& health = job.status.health;
+    const JobHealthRecord& health = job.status.health;
     if (job.status.state != JobState::running || job.status.tiles_rendering == 0 ||
         health.progress_at_ms <= 0 || now - health.progress_at_ms < config_.stall_timeout_ms)
       continue;
@@ -125,7 +125,7 @@ void Scheduler::fail_unstorable(JobEntry& job, const std::string& error,
     if (change.empty()) return;
   } else if (job.status.state == JobState::completed) {  // Its last tiles were refused after it was
                                                          // marked completed in memory.
-    JobStatus& status = change.job(job);
+    JobRecord& status = change.job(job);
     status.state = JobState::failed;
     status.error = error;
   } else {

@@ -45,13 +45,13 @@ int Scheduler::batch_size(const JobEntry& job, int max_tiles) const {
   return std::clamp(share, 1, std::min(max_tiles, pending));
 }
 
-Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int max_tiles) {
+Pending<std::optional<LeaseRecord>> Scheduler::claim(const std::string& worker_id, int max_tiles) {
   Callbacks notify;
-  Pending<std::optional<Lease>> answer;
+  Pending<std::optional<LeaseRecord>> answer;
   {
     std::lock_guard lock(mutex_);
     const StoreTicket before = last_write_;
-    std::optional<Lease> result;
+    std::optional<LeaseRecord> result;
     WorkerEntry* worker = find_worker(worker_id);
     // One that left registers again first.
     if (!worker || worker->info.state == WorkerState::left) return pending(result, before);
@@ -101,7 +101,7 @@ Pending<std::optional<Lease>> Scheduler::claim(const std::string& worker_id, int
           // delivery before a pause (no workers, a job of higher priority in between).
           if (chosen->status.tiles_rendering == 0) chosen->status.health.progress_at_ms = now;
           if (chosen->status.state == JobState::queued) {
-            JobStatus& status = change.job(*chosen);
+            JobRecord& status = change.job(*chosen);
             status.state = JobState::running;
             if (status.started_at_ms == 0) status.started_at_ms = now;
           }
@@ -157,13 +157,13 @@ std::vector<int> Scheduler::stage_batch(StagedChange& change, JobEntry& job,
   return batch;
 }
 
-Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int max_tiles) {
+Pending<std::optional<LeaseRecord>> Scheduler::extend(const std::string& lease_id, int max_tiles) {
   Callbacks notify;
-  Pending<std::optional<Lease>> answer;
+  Pending<std::optional<LeaseRecord>> answer;
   {
     std::lock_guard lock(mutex_);
     const StoreTicket before = last_write_;
-    std::optional<Lease> result;
+    std::optional<LeaseRecord> result;
     const std::int64_t now = clock_.now_ms();
     if (expire_locked(now)) notify = callbacks_;
     const auto it = leases_.find(lease_id);
@@ -187,7 +187,7 @@ Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int
                             job.slot_of(live.front()));
       commit(change);
       if (worker) note_seen(*worker, now);
-      Lease lease = lease_of(lease_id);
+      LeaseRecord lease = lease_of(lease_id);
       lease.tiles.clear();
       // In hand-out order, as stage_batch() took them.
       for (const int index : added) lease.tiles.push_back({index, job.rect(index)});
@@ -199,13 +199,13 @@ Pending<std::optional<Lease>> Scheduler::extend(const std::string& lease_id, int
   return answer;
 }
 
-Pending<std::optional<Lease>> Scheduler::heartbeat(const std::string& lease_id) {
+Pending<std::optional<LeaseRecord>> Scheduler::heartbeat(const std::string& lease_id) {
   Callbacks notify;
-  Pending<std::optional<Lease>> answer;
+  Pending<std::optional<LeaseRecord>> answer;
   {
     std::lock_guard lock(mutex_);
     const StoreTicket before = last_write_;
-    std::optional<Lease> result;
+    std::optional<LeaseRecord> result;
     const auto it = leases_.find(lease_id);
     if (it == leases_.end() || it->second.live.empty()) return pending(result, before);
     const std::vector<int> live = it->second.live;  // commit() rewrites the index
@@ -334,12 +334,12 @@ void Scheduler::count_handout(JobEntry& job, TileSlot& tile) {
   }
 }
 
-Lease Scheduler::lease_of(const std::string& lease_id) const {
+LeaseRecord Scheduler::lease_of(const std::string& lease_id) const {
   const LeaseTiles& entry = leases_.at(lease_id);
   const JobEntry& job = *jobs_.at(entry.job_id);
   std::vector<int> live = entry.live;
   std::sort(live.begin(), live.end(), [&](int a, int b) { return job.rank[a] < job.rank[b]; });
-  Lease lease;
+  LeaseRecord lease;
   lease.id = lease_id;
   lease.job_id = job.status.id;
   lease.scene_digest = job.status.scene_digest;

@@ -130,7 +130,7 @@ std::set<std::string> Scheduler::load_jobs(std::vector<JobRow>& rows) {
     return a->status.created_at_ms < b->status.created_at_ms;
   });
   for (JobEntry* job : oldest_first) {
-    JobStatus& s = job->status;
+    JobRecord& s = job->status;
     if (s.width <= 0 || s.height <= 0 || s.tile_size <= 0) continue;  // fails below: no tiles
     const std::uint64_t per_frame = tile_count(s.width, s.height, s.tile_size);
     const std::uint64_t count = per_frame * s.frames->numbers.size();
@@ -205,7 +205,7 @@ void Scheduler::load_results(const std::vector<ResultRow>& rows, StagedChange& c
 void Scheduler::recount_health(std::int64_t now) {
   // What the store keeps of a job's health: its tiles' failures and their last errors.
   for (auto& [id, job] : jobs_) {
-    JobHealth& health = job->status.health;
+    JobHealthRecord& health = job->status.health;
     for (std::size_t index = 0; index < job->tiles.size(); ++index) {
       const TileSlot& tile = job->tiles[index];
       health.tile_failures += tile.attempts;
@@ -277,25 +277,25 @@ void Scheduler::stage_job_states(StagedChange& change, std::int64_t now) {
     const JobState state = job.status.state;
     if (!is_finished(state)) {
       if (job.status.tiles_total == 0) {
-        JobStatus& s = change.job(job);
+        JobRecord& s = change.job(job);
         s.state = JobState::failed;
         const auto reason = not_loaded_.find(id);
         s.error = reason != not_loaded_.end() ? reason->second : "the job has no tiles";
         s.finished_at_ms = now;
       } else if (done == job.status.tiles_total) {
-        JobStatus& s = change.job(job);
+        JobRecord& s = change.job(job);
         s.state = JobState::completed;
         if (s.finished_at_ms == 0) s.finished_at_ms = now;
       } else if (!open) {
         // Every frame is done or failed: the process stopped as the last one settled.
         stage_job_failure(change, job, failed_frames_error(job, {}, change));
       } else if (state == JobState::queued && touched) {
-        JobStatus& s = change.job(job);
+        JobRecord& s = change.job(job);
         s.state = JobState::running;
         if (s.started_at_ms == 0) s.started_at_ms = now;
       }
     } else if (state == JobState::completed && done != job.status.tiles_total) {
-      JobStatus& s = change.job(job);
+      JobRecord& s = change.job(job);
       s.state = JobState::running;
       s.finished_at_ms = 0;
       if (s.started_at_ms == 0) s.started_at_ms = now;

@@ -93,11 +93,11 @@ Scheduler::Observed Scheduler::observed_before(const StagedChange& change) const
 
 void Scheduler::tell_observer(const Observed& observed, StoreTicket ticket) {
   if (!observer_) return;
-  std::vector<JobStatus> jobs;
+  std::vector<JobRecord> jobs;
   for (const JobEntry* job : observed.jobs) jobs.push_back(job->status);
   std::vector<FarmObserver::TileChange> tiles;
   for (const auto& [job, index] : observed.tiles) tiles.push_back(tile_change(*job, index));
-  std::vector<std::pair<WorkerInfo, FarmObserver::WorkerChange>> workers;
+  std::vector<std::pair<WorkerRecord, FarmObserver::WorkerChange>> workers;
   for (const auto& [worker, was] : observed.workers) {
     const WorkerState now = worker->info.state;
     auto kind = FarmObserver::WorkerChange::changed;

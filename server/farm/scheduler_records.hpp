@@ -63,7 +63,7 @@ inline constexpr std::uint64_t kTileBytes = 128;
 // that renders the same tiles again and again, or delivers nothing, must be seen as such.
 // Kept in memory; tile_failures and last_problem are recounted from the stored tiles after
 // a restart.
-struct JobHealth {
+struct JobHealthRecord {
   int tile_failures = 0;    // failures charged to its tiles: expired leases, errors reported
   int refused_results = 0;  // results the coordinator refused for a reason other than a lost lease
   int repeated_handouts = 0;  // times one of its tiles went out again after going out before
@@ -81,7 +81,7 @@ struct JobFrames {
 // A still's frames: the one frame 0.
 std::shared_ptr<const JobFrames> still_frames();
 
-struct JobStatus {
+struct JobRecord {
   std::string id;
   std::string name;
   JobState state = JobState::queued;
@@ -99,7 +99,7 @@ struct JobStatus {
   std::uint64_t rays = 0;                                 // summed over the tiles done
   std::string scene_digest;                               // hex SHA-256 of the scene JSON as stored
   OutputTransfer output_transfer = OutputTransfer::srgb;  // the scene's, for downloads
-  JobHealth health;  // in memory; only the Scheduler changes it, in place
+  JobHealthRecord health;  // in memory; only the Scheduler changes it, in place
   // Its tiles are every frame's, frame after frame: tiles_total is frames times the tiles
   // of one frame. Never null once the job exists.
   std::shared_ptr<const JobFrames> frames = still_frames();
@@ -113,7 +113,7 @@ struct JobStatus {
 
 using protocol::WorkerState;
 
-struct WorkerInfo {
+struct WorkerRecord {
   std::string id;
   std::string name;
   std::string host;
@@ -129,13 +129,13 @@ struct WorkerInfo {
   double rays_per_s = 0;
 };
 
-struct LeaseTile {
+struct LeaseTileRecord {
   int index = 0;
   TileRect rect;
 };
 
 // One frame of a job, for GET /v1/jobs/{id}/frames.
-struct FrameInfo {
+struct FrameRecord {
   int frame = 0;
   protocol::FrameState state = protocol::FrameState::pending;
   int tiles_total = 0;
@@ -148,11 +148,11 @@ struct FrameInfo {
 // fencing token: a tile's pixels are accepted only under the lease it is currently bound
 // to. Tiles leave the lease one by one as their results arrive; the lease ends when none
 // is left, or all at once when it expires, is released or its job is canceled.
-struct Lease {
+struct LeaseRecord {
   std::string id;  // unique per grant
   std::string job_id;
   std::string worker_id;
-  std::vector<LeaseTile> tiles;  // the tiles still owed, in hand-out order
+  std::vector<LeaseTileRecord> tiles;  // the tiles still owed, in hand-out order
   std::string scene_digest;
   int frame = 0;  // the scene's frame all its tiles are of: a lease never spans two
   std::int64_t expires_at_ms = 0;
@@ -224,7 +224,7 @@ class FarmObserver {
  public:
   virtual ~FarmObserver() = default;
   // Each job's status after a change to it (its state, priority, tiles or rays).
-  virtual void jobs_changed(const std::vector<JobStatus>& jobs) = 0;
+  virtual void jobs_changed(const std::vector<JobRecord>& jobs) = 0;
   using TileView = protocol::TileView;
   struct TileChange {
     std::string job_id;
@@ -244,7 +244,8 @@ class FarmObserver {
   // under the scheduler's lock: it must be quick and must not call the scheduler.
   virtual bool wants_tiles(const std::string& job_id) = 0;
   using WorkerChange = protocol::WorkerChange;
-  virtual void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>& workers) = 0;
+  virtual void workers_changed(
+      const std::vector<std::pair<WorkerRecord, WorkerChange>>& workers) = 0;
   virtual void job_removed(const std::string& job_id) = 0;
 };
 

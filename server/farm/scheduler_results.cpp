@@ -40,7 +40,7 @@ Pending<ResultOutcome> Scheduler::complete(const std::string& lease_id,
                      before);
     std::vector<int> tiles;
     std::vector<std::size_t> counts;
-    for (const LeaseTile& tile : lease_of(lease_id).tiles) {
+    for (const LeaseTileRecord& tile : lease_of(lease_id).tiles) {
       tiles.push_back(tile.index);
       counts.push_back(tile.rect.pixel_count());
     }
@@ -118,7 +118,7 @@ bool Scheduler::stage_results(StagedChange& change, JobEntry& job, const std::st
                               const std::vector<const TileResult*>& fresh,
                               const std::vector<int>& live, const std::set<int>& named) {
   const std::int64_t now = clock_.now_ms();
-  JobStatus& status = change.job(job);
+  JobRecord& status = change.job(job);
   for (const TileResult* result : fresh) {
     TileSlot& tile = change.tile(job, result->tile_index);
     tile.state = TileState::done;

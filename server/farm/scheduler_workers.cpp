@@ -16,12 +16,12 @@ constexpr std::int64_t seen_write_interval_ms = 1000;
 
 }  // namespace
 
-Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const std::string& host,
-                                               int threads, const std::string& secret_sha256) {
+Pending<WorkerRecord> Scheduler::register_worker(const std::string& name, const std::string& host,
+                                                 int threads, const std::string& secret_sha256) {
   std::lock_guard lock(mutex_);
   const StoreTicket before = last_write_;
   auto worker = std::make_unique<WorkerEntry>();
-  WorkerInfo& info = worker->info;
+  WorkerRecord& info = worker->info;
   do {
     info.id = "w-" + random_hex(12);
   } while (workers_.contains(info.id));
@@ -40,7 +40,7 @@ Pending<WorkerInfo> Scheduler::register_worker(const std::string& name, const st
       if (error.empty()) observer->workers_changed({{info, FarmObserver::WorkerChange::joined}});
     });
   worker->persisted_seen_ms = info.last_seen_ms;
-  const WorkerInfo result = info;
+  const WorkerRecord result = info;
   workers_.emplace(result.id, std::move(worker));
   ++present_workers_;
   spdlog::info("worker {} joined: {} on {}, {} thread(s)", result.id, name, host, threads);
@@ -131,13 +131,13 @@ void Scheduler::forget_workers_locked(std::int64_t now) {
   }
 }
 
-std::vector<WorkerInfo> Scheduler::workers() const {
+std::vector<WorkerRecord> Scheduler::workers() const {
   std::lock_guard lock(mutex_);
-  std::vector<WorkerInfo> result;
+  std::vector<WorkerRecord> result;
   result.reserve(workers_.size());
   const std::int64_t now = clock_.now_ms();
   for (const auto& [id, worker] : workers_) {
-    WorkerInfo& info = result.emplace_back(worker->info);
+    WorkerRecord& info = result.emplace_back(worker->info);
     int tiles = 0;
     std::uint64_t rays = 0;
     for (const auto& [when, count, traced] : worker->recent) {
@@ -148,7 +148,7 @@ std::vector<WorkerInfo> Scheduler::workers() const {
     info.tiles_per_min = tiles;
     info.rays_per_s = static_cast<double>(rays) / 60;
   }
-  std::sort(result.begin(), result.end(), [](const WorkerInfo& a, const WorkerInfo& b) {
+  std::sort(result.begin(), result.end(), [](const WorkerRecord& a, const WorkerRecord& b) {
     return a.name != b.name ? a.name < b.name : a.id < b.id;
   });
   return result;

@@ -20,12 +20,12 @@ class BlockingScheduler {
   explicit BlockingScheduler(const std::unique_ptr<Scheduler>& owner) : owner_(owner) {}
 
   const SchedulerConfig& config() const { return scheduler().config(); }
-  JobStatus submit(const std::string& name, int priority, const Scene& scene,
+  JobRecord submit(const std::string& name, int priority, const Scene& scene,
                    const std::string& scene_json, std::vector<int> frames = {}) {
-    std::promise<JobStatus> submitted;
+    std::promise<JobRecord> submitted;
     scheduler().submit(
         name, priority, scene, scene_json,
-        [&](std::optional<JobStatus> job, const std::string& error) {
+        [&](std::optional<JobRecord> job, const std::string& error) {
           if (job)
             submitted.set_value(*job);
           else
@@ -34,8 +34,8 @@ class BlockingScheduler {
         std::move(frames));
     return submitted.get_future().get();
   }
-  std::optional<JobStatus> job(const std::string& id) const { return scheduler().job(id); }
-  std::vector<JobStatus> jobs(std::optional<JobState> state, std::size_t limit,
+  std::optional<JobRecord> job(const std::string& id) const { return scheduler().job(id); }
+  std::vector<JobRecord> jobs(std::optional<JobState> state, std::size_t limit,
                               std::size_t offset = 0) const {
     return scheduler().jobs(state, limit, offset);
   }
@@ -79,13 +79,13 @@ class BlockingScheduler {
   std::optional<std::filesystem::path> frame_image_file(const std::string& id, int frame) const {
     return scheduler().frame_image_file(id, frame);
   }
-  std::optional<std::vector<FrameInfo>> frames(const std::string& id) const {
+  std::optional<std::vector<FrameRecord>> frames(const std::string& id) const {
     return scheduler().frames(id);
   }
   void wait_for_images() { scheduler().wait_for_images(); }
 
-  WorkerInfo register_worker(const std::string& name, const std::string& host, int threads,
-                             const std::string& secret_sha256 = "") {
+  WorkerRecord register_worker(const std::string& name, const std::string& host, int threads,
+                               const std::string& secret_sha256 = "") {
     return stored(scheduler().register_worker(name, host, threads, secret_sha256));
   }
   bool worker_known(const std::string& id) const { return scheduler().worker_known(id); }
@@ -95,13 +95,13 @@ class BlockingScheduler {
   std::optional<std::string> lease_holder(const std::string& lease_id) const {
     return scheduler().lease_holder(lease_id);
   }
-  std::optional<Lease> claim(const std::string& worker_id, int max_tiles = 1) {
+  std::optional<LeaseRecord> claim(const std::string& worker_id, int max_tiles = 1) {
     return stored(scheduler().claim(worker_id, max_tiles));
   }
-  std::optional<Lease> heartbeat(const std::string& lease_id) {
+  std::optional<LeaseRecord> heartbeat(const std::string& lease_id) {
     return stored(scheduler().heartbeat(lease_id));
   }
-  std::optional<Lease> extend(const std::string& lease_id, int max_tiles) {
+  std::optional<LeaseRecord> extend(const std::string& lease_id, int max_tiles) {
     return stored(scheduler().extend(lease_id, max_tiles));
   }
   ResultOutcome complete(const std::string& lease_id, std::span<const TileResult> results) {
@@ -124,7 +124,7 @@ class BlockingScheduler {
   }
   void touch_worker(const std::string& worker_id) { stored(scheduler().touch_worker(worker_id)); }
   void worker_left(const std::string& worker_id) { stored(scheduler().worker_left(worker_id)); }
-  std::vector<WorkerInfo> workers() const { return scheduler().workers(); }
+  std::vector<WorkerRecord> workers() const { return scheduler().workers(); }
   void expire_leases() { stored(scheduler().expire_leases()); }
   void on_work_available(std::function<void()> callback) {
     scheduler().on_work_available(std::move(callback));

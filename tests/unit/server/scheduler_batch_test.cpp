@@ -18,7 +18,7 @@ namespace {
 using namespace test;
 
 // The lease's tiles after the first.
-std::vector<int> rest_of(const Lease& lease) {
+std::vector<int> rest_of(const LeaseRecord& lease) {
   std::vector<int> indexes = indexes_of(lease);
   indexes.erase(indexes.begin());
   return indexes;
@@ -27,7 +27,7 @@ std::vector<int> rest_of(const Lease& lease) {
 class SchedulerBatchTest : public SchedulerTest {
  protected:
   // Delivers the lease's first tile alone, as a group of one.
-  ResultOutcome deliver_first(const Lease& lease) {
+  ResultOutcome deliver_first(const LeaseRecord& lease) {
     const std::vector<float> pixels = tile_pixels(lease.tiles[0].rect, 1.0f);
     const std::vector<TileResult> group{{lease.tiles[0].index, pixels, 10}};
     return s().complete(lease.id, group);
@@ -37,7 +37,7 @@ class SchedulerBatchTest : public SchedulerTest {
 TEST_F(SchedulerBatchTest, AClaimTakesUpToHalfOfTheWorkersShareCentreFirst) {
   const std::string job = submit(96, 96, 32).id;  // 3x3 tiles, centre-first 4 1 3 5 7 0 2 6 8
   const std::string w = worker();
-  const Lease first = *s().claim(w, 100);
+  const LeaseRecord first = *s().claim(w, 100);
   EXPECT_EQ(indexes_of(first), (std::vector<int>{4, 1, 3, 5}));  // 9 pending / 2
   EXPECT_EQ(s().job(job)->tiles_rendering, 4);
   EXPECT_EQ(info_of(w).current_tile, 4);
@@ -64,12 +64,12 @@ TEST_F(SchedulerBatchTest, EveryWorkerIsCountedInTheShareAndMaxTilesCaps) {
 TEST_F(SchedulerBatchTest, TilesOfOneLeaseAreDeliveredInGroups) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 100);
+  const LeaseRecord lease = *s().claim(w, 100);
   ASSERT_EQ(lease.tiles.size(), 4u);
-  const LeaseTile& a = lease.tiles[0];
-  const LeaseTile& b = lease.tiles[1];
-  const LeaseTile& c = lease.tiles[2];
-  const LeaseTile& d = lease.tiles[3];
+  const LeaseTileRecord& a = lease.tiles[0];
+  const LeaseTileRecord& b = lease.tiles[1];
+  const LeaseTileRecord& c = lease.tiles[2];
+  const LeaseTileRecord& d = lease.tiles[3];
   const auto pixels_a = tile_pixels(a.rect, 1.0f);
   const auto pixels_b = tile_pixels(b.rect, 2.0f);
   const auto pixels_c = tile_pixels(c.rect, 3.0f);
@@ -114,9 +114,9 @@ TEST_F(SchedulerBatchTest, TilesOfOneLeaseAreDeliveredInGroups) {
 
 TEST_F(SchedulerBatchTest, AnUploadIsAllOrNothing) {
   const std::string job = submit(96, 96, 32).id;
-  const Lease lease = *s().claim(worker(), 100);
-  const LeaseTile& a = lease.tiles[0];
-  const LeaseTile& b = lease.tiles[1];
+  const LeaseRecord lease = *s().claim(worker(), 100);
+  const LeaseTileRecord& a = lease.tiles[0];
+  const LeaseTileRecord& b = lease.tiles[1];
   const auto pixels_a = tile_pixels(a.rect, 1.0f);
   const auto pixels_b = tile_pixels(b.rect, 2.0f);
   auto short_b = pixels_b;
@@ -142,7 +142,7 @@ TEST_F(SchedulerBatchTest, AnUploadIsAllOrNothing) {
 TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
   const std::string job = submit(96, 96, 32).id;
   const std::string slow = worker("slow");
-  const Lease lease = *s().claim(slow, 100);
+  const LeaseRecord lease = *s().claim(slow, 100);
   ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
 
   clock_.advance_ms(timeout_ms);
@@ -155,7 +155,7 @@ TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
   // The owed tiles go out again first, under a new lease. The expiry counted against each
   // of them (the worker has 4 threads, so it may have been on any of the 3), and a tile
   // that failed goes out alone.
-  const Lease rescue = *s().claim(worker("rescuer"), 3);
+  const LeaseRecord rescue = *s().claim(worker("rescuer"), 3);
   EXPECT_NE(rescue.id, lease.id);
   EXPECT_EQ(indexes_of(rescue), (std::vector<int>{rest_of(lease).front()}));
   // The old lease: its delivered tile is a duplicate, an owed one stale.
@@ -170,13 +170,13 @@ TEST_F(SchedulerBatchTest, AnExpiredBatchReturnsOnlyTheTilesStillOwed) {
 TEST_F(SchedulerBatchTest, ReleaseGivesBackWhatWasNotDelivered) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 100);
+  const LeaseRecord lease = *s().claim(w, 100);
   ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
   s().release(lease.id);
   EXPECT_EQ(s().job(job)->tiles_done, 1);
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
   EXPECT_EQ(info_of(w).state, WorkerState::idle);
-  const Lease next = *s().claim(w, 100);
+  const LeaseRecord next = *s().claim(w, 100);
   EXPECT_NE(next.id, lease.id);
   EXPECT_EQ(next.tiles[0].index, lease.tiles[1].index);  // first in line again
 }
@@ -184,12 +184,12 @@ TEST_F(SchedulerBatchTest, ReleaseGivesBackWhatWasNotDelivered) {
 TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 100);
+  const LeaseRecord lease = *s().claim(w, 100);
   ASSERT_EQ(deliver_first(lease), ResultOutcome::accepted);
   reopen();
   EXPECT_EQ(info_of(w).state, WorkerState::rendering);
   EXPECT_EQ(info_of(w).current_tile, lease.tiles[1].index);
-  const Lease back = *s().claim(w, 100);
+  const LeaseRecord back = *s().claim(w, 100);
   EXPECT_EQ(back.id, lease.id);
   EXPECT_EQ(indexes_of(back), rest_of(lease));
   EXPECT_EQ(s().job(job)->tiles_rendering, 3);
@@ -198,7 +198,7 @@ TEST_F(SchedulerBatchTest, ARestartKeepsTheBatchLeaseForItsWorker) {
 TEST_F(SchedulerBatchTest, AnExtensionAddsTheJobsNextTilesToTheLiveLeaseAndRenewsIt) {
   const std::string job = submit(96, 96, 32).id;  // centre-first 4 1 3 5 7 0 2 6 8
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 100);
+  const LeaseRecord lease = *s().claim(w, 100);
   ASSERT_EQ(indexes_of(lease), (std::vector<int>{4, 1, 3, 5}));
   clock_.advance_ms(timeout_ms - 1);
   const auto added = s().extend(lease.id, 100);
@@ -221,7 +221,7 @@ TEST_F(SchedulerBatchTest, AnExtensionAddsTheJobsNextTilesToTheLiveLeaseAndRenew
 TEST_F(SchedulerBatchTest, AnExtensionAddsNothingWhileAJobOfHigherPriorityWaits) {
   submit(96, 96, 32, 50);
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 100);
+  const LeaseRecord lease = *s().claim(w, 100);
   const std::string urgent = submit(64, 64, 32, 80).id;
   const auto added = s().extend(lease.id, 100);
   ASSERT_TRUE(added);
@@ -235,8 +235,8 @@ TEST_F(SchedulerBatchTest, AnExtensionStopsBeforeATileThatFailedBefore) {
   submit(96, 96, 32);
   const std::string w1 = worker("one");
   const std::string w2 = worker("two");
-  const Lease first = *s().claim(w1, 1);
-  const Lease second = *s().claim(w2, 1);
+  const LeaseRecord first = *s().claim(w1, 1);
+  const LeaseRecord second = *s().claim(w2, 1);
   ASSERT_EQ(indexes_of(second), (std::vector<int>{1}));
   s().fail_tile(second.id, 1, "out of memory");  // tile 1 is next in line, and failed once
   EXPECT_TRUE(s().extend(first.id, 100)->tiles.empty());
@@ -252,7 +252,7 @@ TEST_F(SchedulerBatchTest, AJobWhoseImageCannotBeWrittenFails) {
   std::ofstream(store_->data_dir() / "images") << "not a directory";
   ASSERT_EQ(deliver(*s().claim(worker())), ResultOutcome::accepted);
   s().wait_for_images();
-  const JobStatus failed = *s().job(job);
+  const JobRecord failed = *s().job(job);
   EXPECT_EQ(failed.state, JobState::failed);
   EXPECT_NE(failed.error.find("cannot write the image"), std::string::npos) << failed.error;
   EXPECT_EQ(failed.tiles_done, 1);  // the tiles are kept all the same
@@ -298,9 +298,9 @@ TEST_F(SchedulerBatchTest, ARetryWritesTheImageThatCouldNotBeWritten) {
 TEST_F(SqliteSchedulerTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   const std::string job = submit(96, 96, 8).id;  // 144 tiles
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 16);
+  const LeaseRecord lease = *s().claim(w, 16);
   ASSERT_EQ(lease.tiles.size(), 16u);
-  const Lease added = *s().extend(lease.id, 16);
+  const LeaseRecord added = *s().extend(lease.id, 16);
   ASSERT_EQ(added.tiles.size(), 16u);
   const auto count = [&](const char* table) {
     return SqliteDb(store_->data_dir() / "tessera.db")
@@ -313,7 +313,7 @@ TEST_F(SqliteSchedulerTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   // The first 16 in one upload.
   std::vector<std::vector<float>> pixels;
   std::vector<TileResult> group;
-  for (const LeaseTile& tile : lease.tiles) pixels.push_back(tile_pixels(tile.rect, 1.0f));
+  for (const LeaseTileRecord& tile : lease.tiles) pixels.push_back(tile_pixels(tile.rect, 1.0f));
   for (std::size_t i = 0; i < lease.tiles.size(); ++i)
     group.push_back({lease.tiles[i].index, pixels[i], 10});
   ASSERT_EQ(s().complete(lease.id, group), ResultOutcome::accepted);
@@ -324,7 +324,7 @@ TEST_F(SqliteSchedulerTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
   reopen();
   EXPECT_EQ(s().job(job)->tiles_done, 16);
   EXPECT_EQ(s().job(job)->rays, 160u);
-  const Lease back = *s().claim(w, 16);
+  const LeaseRecord back = *s().claim(w, 16);
   EXPECT_EQ(back.id, lease.id);
   EXPECT_EQ(indexes_of(back), indexes_of(added));
   ASSERT_EQ(deliver(back), ResultOutcome::accepted);
@@ -347,9 +347,9 @@ TEST_F(SqliteSchedulerTest, AnUploadIsStoredAsOneRowAndALeaseAsAnother) {
 TEST_F(SqliteSchedulerTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRendersItsTilesAgain) {
   const std::string job = submit(96, 96, 32).id;
   const std::string w = worker();
-  const Lease first = *s().claim(w, 100);  // 4 1 3 5
+  const LeaseRecord first = *s().claim(w, 100);  // 4 1 3 5
   ASSERT_EQ(deliver(first, 0.0f, 40), ResultOutcome::accepted);
-  const Lease second = *s().claim(w, 2);  // 7 0
+  const LeaseRecord second = *s().claim(w, 2);  // 7 0
   ASSERT_EQ(deliver(second, 0.0f, 20), ResultOutcome::accepted);
   ASSERT_EQ(s().job(job)->rays, 60u);
   scheduler_.reset();
@@ -360,14 +360,14 @@ TEST_F(SqliteSchedulerTest, ARestartForgetsAResultWhosePixelsAreCutShortAndRende
   ASSERT_EQ(std::filesystem::file_size(pixels), 6u * 32 * 32 * 12);
   std::filesystem::resize_file(pixels, 5u * 32 * 32 * 12 + 100);
   open();
-  const JobStatus after = *s().job(job);
+  const JobRecord after = *s().job(job);
   EXPECT_EQ(after.tiles_done, 4);
   EXPECT_EQ(after.rays, 40u);
   EXPECT_EQ(SqliteDb(dir_ / "tessera.db").query_text("SELECT count(*) FROM results"), "1");
   reopen();  // what the first start decided was stored
   EXPECT_EQ(s().job(job)->rays, 40u);
   EXPECT_EQ(s().job(job)->tiles_done, 4);
-  const Lease again = *s().claim(w, 100);
+  const LeaseRecord again = *s().claim(w, 100);
   EXPECT_EQ(indexes_of(again), (std::vector<int>{7, 0}));  // 5 pending, cut to 5 / 2
   finish(job, w);
   s().wait_for_images();

@@ -38,7 +38,7 @@ TEST_F(SchedulerTest, APausedJobsLeasesRunOutAndNoNewTileGoesOut) {
   const std::string job = submit(64, 32, 16).id;  // 8 tiles
   const std::string other = submit(16, 16, 16, 10).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 2);
+  const LeaseRecord lease = *s().claim(w, 2);
   ASSERT_EQ(lease.tiles.size(), 2u);
   EXPECT_EQ(s().pause(job).result, Result::done);
   EXPECT_EQ(s().job(job)->state, JobState::paused);
@@ -53,7 +53,7 @@ TEST_F(SchedulerTest, APausedJobsLeasesRunOutAndNoNewTileGoesOut) {
   EXPECT_EQ(s().job(job)->tiles_done, 2);
   EXPECT_EQ(s().job(job)->state, JobState::paused);
   const std::string w2 = worker("two");
-  const Lease other_lease = *s().claim(w2);
+  const LeaseRecord other_lease = *s().claim(w2);
   EXPECT_EQ(other_lease.job_id, other);
   EXPECT_EQ(deliver(other_lease), ResultOutcome::accepted);
   EXPECT_FALSE(s().claim(worker("three")));
@@ -87,9 +87,9 @@ TEST_F(SchedulerTest, ARetriedJobRendersOnlyTheTilesItLackedAndItsImageIsWhole) 
   reopen();
   const std::string job = submit(64, 32, 16).id;  // 8 tiles
   const std::string w = worker();
-  const Lease good = *s().claim(w, 3);
+  const LeaseRecord good = *s().claim(w, 3);
   ASSERT_EQ(deliver(good, 0.0f), ResultOutcome::accepted);
-  const Lease bad = *s().claim(w, 1);
+  const LeaseRecord bad = *s().claim(w, 1);
   s().fail_tile(bad.id, bad.tiles[0].index, "out of memory");
   ASSERT_EQ(s().job(job)->state, JobState::failed);
   EXPECT_EQ(s().retry("j-none").result, Result::not_found);
@@ -98,7 +98,7 @@ TEST_F(SchedulerTest, ARetriedJobRendersOnlyTheTilesItLackedAndItsImageIsWhole) 
   EXPECT_EQ(s().retry(running).code, "not_failed");
 
   EXPECT_EQ(s().retry(job).result, Result::done);
-  const JobStatus retried = *s().job(job);
+  const JobRecord retried = *s().job(job);
   EXPECT_EQ(retried.state, JobState::running);
   EXPECT_EQ(retried.error, "");
   EXPECT_EQ(retried.finished_at_ms, 0);
@@ -134,11 +134,11 @@ TEST_F(SchedulerTest, ACanceledJobIsRetriedKeepingItsTilesDone) {
   const std::string job = submit(64, 32, 16).id;  // 8 tiles
   const std::string w = worker();
   ASSERT_EQ(deliver(*s().claim(w, 3), 0.5f), ResultOutcome::accepted);
-  const Lease withdrawn = *s().claim(w, 2);
+  const LeaseRecord withdrawn = *s().claim(w, 2);
   ASSERT_EQ(s().cancel(job), CancelOutcome::canceled);
   ASSERT_EQ(s().job(job)->state, JobState::canceled);
   EXPECT_EQ(s().retry(job).result, Result::done);
-  const JobStatus retried = *s().job(job);
+  const JobRecord retried = *s().job(job);
   EXPECT_EQ(retried.state, JobState::running);
   EXPECT_EQ(retried.finished_at_ms, 0);
   EXPECT_EQ(retried.tiles_done, 3);
@@ -165,7 +165,7 @@ TEST_F(SchedulerTest, ARetryAfterARestartForgetsTheStoredFailures) {
   reopen();
   const std::string job = submit(16, 16, 16).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w);
+  const LeaseRecord lease = *s().claim(w);
   s().fail_tile(lease.id, 0, "bad");
   ASSERT_EQ(s().job(job)->state, JobState::failed);
   ASSERT_EQ(s().retry(job).result, Result::done);
@@ -178,7 +178,7 @@ TEST_F(SchedulerTest, ARetryAfterARestartForgetsTheStoredFailures) {
 TEST_F(SchedulerTest, ADrainingWorkerFinishesItsLeaseAndTakesNoMore) {
   const std::string job = submit(64, 32, 16).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 2);
+  const LeaseRecord lease = *s().claim(w, 2);
   EXPECT_EQ(s().drain_worker(w, true).result, Result::done);
   EXPECT_TRUE(info_of(w).draining);
   // Its lease goes on, without more tiles; a reconnect gets the same lease back.
@@ -199,7 +199,7 @@ TEST_F(SchedulerTest, ADrainingWorkerFinishesItsLeaseAndTakesNoMore) {
 TEST_F(SchedulerTest, ARemovedWorkersTilesGoBackAndItIsForgotten) {
   const std::string job = submit(64, 16, 16).id;  // 4 tiles: a batch of 2
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 2);
+  const LeaseRecord lease = *s().claim(w, 2);
   ASSERT_EQ(lease.tiles.size(), 2u);
   EXPECT_EQ(s().remove_worker(w).result, Result::done);
   EXPECT_FALSE(s().worker_known(w));
@@ -208,7 +208,7 @@ TEST_F(SchedulerTest, ARemovedWorkersTilesGoBackAndItIsForgotten) {
   EXPECT_EQ(s().job(job)->tiles_rendering, 0);
   EXPECT_EQ(s().claim(worker("other"), 2)->tiles.size(), 2u);
   reopen();
-  for (const WorkerInfo& info : s().workers()) EXPECT_NE(info.id, w);
+  for (const WorkerRecord& info : s().workers()) EXPECT_NE(info.id, w);
   EXPECT_EQ(s().remove_worker(w).result, Result::not_found);
 }
 
@@ -233,7 +233,7 @@ TEST_F(SchedulerTest, PagesOfTheJobListCoverEveryJobOnceNewestFirst) {
   }
   std::vector<std::string> paged;
   for (std::size_t offset = 0; offset < 30; offset += 10)
-    for (const JobStatus& job : s().jobs(std::nullopt, 10, offset)) paged.push_back(job.id);
+    for (const JobRecord& job : s().jobs(std::nullopt, 10, offset)) paged.push_back(job.id);
   EXPECT_EQ(paged, std::vector<std::string>(submitted.rbegin(), submitted.rend()));
   EXPECT_TRUE(s().jobs(std::nullopt, 10, 25).empty()) << "past the end";
   EXPECT_EQ(s().jobs(JobState::queued, 5, 20).size(), 5u);

@@ -36,7 +36,7 @@ TEST_F(SchedulerDurabilityTest, ALeaseAndAResultAreInTheDatabaseBeforeTheyAreAns
   const std::string job = submit(64, 32, 32).id;  // 2 tiles
   const std::string w = worker();
   for (int round = 1; round <= 2; ++round) {
-    const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+    const Pending<std::optional<LeaseRecord>> claimed = scheduler_->claim(w, 1);
     ASSERT_TRUE(claimed.value);
     EXPECT_TRUE(claimed.wrote);
     EXPECT_EQ(rows_when_stored(claimed, "leases"), "1");
@@ -53,7 +53,7 @@ TEST_F(SchedulerDurabilityTest, AnAnswerThatChangedNothingWaitsForWhatItReports)
   // given once that change is stored.
   const std::string job = submit(32, 32, 32).id;
   const std::string w = worker();
-  const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+  const Pending<std::optional<LeaseRecord>> claimed = scheduler_->claim(w, 1);
   ASSERT_TRUE(claimed.value);
   const Written now = scheduler_->durable();
   EXPECT_FALSE(now.wrote);
@@ -69,7 +69,7 @@ TEST_F(SchedulerDurabilityTest, ALastResultTheStoreRefusesFailsTheJobBeforeAnyon
   const std::string w = worker();
   std::filesystem::create_directories(sqlite().pixel_path(job).parent_path());
   std::filesystem::create_symlink("/dev/full", sqlite().pixel_path(job));
-  const Pending<std::optional<Lease>> claimed = scheduler_->claim(w, 1);
+  const Pending<std::optional<LeaseRecord>> claimed = scheduler_->claim(w, 1);
   ASSERT_TRUE(claimed.value);
   const std::uint64_t refusals = scheduler_->refusals();
   const std::vector<float> pixels = test::tile_pixels(claimed.value->tiles[0].rect, 0.0f);
@@ -108,7 +108,7 @@ TEST_F(SchedulerDurabilityTest,
   EXPECT_EQ(s().retry(job).result, ControlOutcome::Result::done);
   finish(job, w, 7.0f);
   reopen();
-  const JobStatus after = *s().job(job);
+  const JobRecord after = *s().job(job);
   EXPECT_EQ(after.state, JobState::completed);
   EXPECT_EQ(after.tiles_done, 2);
   int tiles = 0;

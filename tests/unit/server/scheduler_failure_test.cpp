@@ -28,7 +28,7 @@ TEST_F(SchedulerFailureTest, ATileThatKeepsFailingFailsItsJobNamingTheTileAndThe
   const std::string other = submit(32, 32, 32, 10).id;
   std::vector<std::string> workers{worker("a"), worker("b"), worker("c")};
   for (int attempt = 1; attempt <= 3; ++attempt) {
-    const Lease lease = *s().claim(workers[attempt - 1], 4);
+    const LeaseRecord lease = *s().claim(workers[attempt - 1], 4);
     ASSERT_EQ(lease.job_id, job);
     ASSERT_EQ(lease.tiles.front().index, 4);
     s().fail_tile(lease.id, 4, "out of memory, try " + std::to_string(attempt));
@@ -37,7 +37,7 @@ TEST_F(SchedulerFailureTest, ATileThatKeepsFailingFailsItsJobNamingTheTileAndThe
       EXPECT_EQ(s().job(job)->state, JobState::running);
     }
   }
-  const JobStatus failed = *s().job(job);
+  const JobRecord failed = *s().job(job);
   EXPECT_EQ(failed.state, JobState::failed);
   EXPECT_EQ(failed.error,
             "tile 4 at (32, 32) failed 3 times; the last error: out of memory, try 3");
@@ -53,7 +53,7 @@ TEST_F(SchedulerFailureTest, ATileThatKeepsFailingFailsItsJobNamingTheTileAndThe
 TEST_F(SchedulerFailureTest, AFailureGivesTheLeasesOtherTilesBackUncharged) {
   submit(96, 96, 32);
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 4);
+  const LeaseRecord lease = *s().claim(w, 4);
   ASSERT_EQ(lease.tiles.size(), 4u);
   s().fail_tile(lease.id, lease.tiles[1].index, "bad tile");
   std::vector<int> expected(9, 0);
@@ -68,7 +68,7 @@ TEST_F(SchedulerFailureTest, AFailureGivesTheLeasesOtherTilesBackUncharged) {
 TEST_F(SchedulerFailureTest, AnExpiryChargesEveryTileStillOwedAndEachGoesOutAlone) {
   submit(96, 96, 32);  // centre-first: 4 1 3 5 7 0 2 6 8
   const std::string slow = worker("slow");
-  const Lease lease = *s().claim(slow, 4);
+  const LeaseRecord lease = *s().claim(slow, 4);
   ASSERT_EQ(lease.tiles.size(), 4u);  // 4 1 3 5
   const std::vector<float> pixels = tile_pixels(lease.tiles[0].rect, 1.0f);
   const std::vector<TileResult> first{{4, pixels, 10}};
@@ -82,7 +82,7 @@ TEST_F(SchedulerFailureTest, AnExpiryChargesEveryTileStillOwedAndEachGoesOutAlon
   // Each of them goes out alone; then batches again.
   const std::string next = worker("next");
   for (const int tile : {1, 3, 5}) {
-    const Lease alone = *s().claim(next, 4);
+    const LeaseRecord alone = *s().claim(next, 4);
     ASSERT_EQ(indexes_of(alone), std::vector<int>{tile});
     ASSERT_EQ(deliver(alone), ResultOutcome::accepted);
   }
@@ -99,7 +99,7 @@ TEST_F(SchedulerFailureTest, AWorkerThatKeepsFailingIsKeptOffTheJobWhileOthersCa
   const std::string flaky = worker("flaky");
   const std::string sound = worker("sound");
   for (int i = 0; i < 2; ++i) {
-    const Lease lease = *s().claim(flaky);
+    const LeaseRecord lease = *s().claim(flaky);
     s().fail_tile(lease.id, lease.tiles[0].index, "flaky");
   }
   EXPECT_FALSE(s().claim(flaky)) << "a worker that failed twice on the job got it again";

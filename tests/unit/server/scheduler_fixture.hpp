@@ -51,7 +51,7 @@ inline std::vector<float> tile_pixels(const TileRect& rect, float seed) {
 }
 
 // The job's row as the store has it, but in `state` (to stage a crash).
-inline JobRow row_of(const JobStatus& job, const std::string& state) {
+inline JobRow row_of(const JobRecord& job, const std::string& state) {
   JobRow row;
   row.id = job.id;
   row.name = job.name;
@@ -71,9 +71,9 @@ inline bool same_bits(std::span<const float> a, std::span<const float> b) {
 }
 
 // The indexes of a lease's tiles, in its order.
-inline std::vector<int> indexes_of(const Lease& lease) {
+inline std::vector<int> indexes_of(const LeaseRecord& lease) {
   std::vector<int> indexes;
-  for (const LeaseTile& tile : lease.tiles) indexes.push_back(tile.index);
+  for (const LeaseTileRecord& tile : lease.tiles) indexes.push_back(tile.index);
   return indexes;
 }
 
@@ -116,14 +116,14 @@ class SchedulerTest : public ::testing::Test {
   std::string worker(const std::string& name = "w") {
     return s().register_worker(name, "host", 4).id;
   }
-  JobStatus submit(int width, int height, int tile_size, int priority = 50,
+  JobRecord submit(int width, int height, int tile_size, int priority = 50,
                    const std::string& json = "{}") {
     return s().submit("job", priority, scene_of(width, height, tile_size), json);
   }
-  ResultOutcome deliver(const Lease& lease, float seed = 0.0f, std::uint64_t rays = 10) {
+  ResultOutcome deliver(const LeaseRecord& lease, float seed = 0.0f, std::uint64_t rays = 10) {
     // Every tile the lease owes, in its order; the rays count once.
     std::vector<float> pixels;
-    for (const LeaseTile& tile : lease.tiles) {
+    for (const LeaseTileRecord& tile : lease.tiles) {
       const std::vector<float> part = tile_pixels(tile.rect, seed);
       pixels.insert(pixels.end(), part.begin(), part.end());
     }
@@ -138,8 +138,8 @@ class SchedulerTest : public ::testing::Test {
       ASSERT_EQ(deliver(*lease, seed), ResultOutcome::accepted);
     }
   }
-  WorkerInfo info_of(const std::string& worker_id) {
-    for (const WorkerInfo& w : s().workers())
+  WorkerRecord info_of(const std::string& worker_id) {
+    for (const WorkerRecord& w : s().workers())
       if (w.id == worker_id) return w;
     ADD_FAILURE() << "no worker " << worker_id;
     return {};

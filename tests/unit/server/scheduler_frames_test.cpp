@@ -27,7 +27,7 @@ Image expected_frame(float seed) {
 
 class SchedulerFramesTest : public SchedulerTest {
  protected:
-  JobStatus submit_frames(std::vector<int> frames) {
+  JobRecord submit_frames(std::vector<int> frames) {
     return s().submit("animation", 50, scene_of(kSize, kSize, kTile), "{\"frames\": 1}",
                       std::move(frames));
   }
@@ -43,15 +43,15 @@ class SchedulerFramesTest : public SchedulerTest {
   }
   std::map<int, protocol::FrameState> frame_states(const std::string& job_id) {
     std::map<int, protocol::FrameState> states;
-    const std::vector<FrameInfo> frames = *s().frames(job_id);
-    for (const FrameInfo& frame : frames) states[frame.frame] = frame.state;
+    const std::vector<FrameRecord> frames = *s().frames(job_id);
+    for (const FrameRecord& frame : frames) states[frame.frame] = frame.state;
     return states;
   }
 };
 
 TEST_F(SchedulerFramesTest, FramesGoOutInOrderEachLeaseWithinOneFrame) {
   const std::string w = worker();
-  const JobStatus job = submit_frames({3, 5, 7});
+  const JobRecord job = submit_frames({3, 5, 7});
   EXPECT_EQ(job.tiles_total, 12);
   EXPECT_EQ(job.frames->list, "3-7x2");
   EXPECT_EQ(job.current_frame, 3);
@@ -61,14 +61,14 @@ TEST_F(SchedulerFramesTest, FramesGoOutInOrderEachLeaseWithinOneFrame) {
     const auto lease = s().claim(w, 100);
     ASSERT_TRUE(lease);
     std::set<int> slots;
-    for (const LeaseTile& tile : lease->tiles) slots.insert(tile.index / 4);
+    for (const LeaseTileRecord& tile : lease->tiles) slots.insert(tile.index / 4);
     EXPECT_EQ(slots.size(), 1u) << "a lease spans frames";
     EXPECT_EQ(lease->frame, 3 + 2 * *slots.begin());
     frames_leased.push_back(lease->frame);
     ASSERT_EQ(deliver(*lease, static_cast<float>(lease->frame)), ResultOutcome::accepted);
   }
   EXPECT_TRUE(std::is_sorted(frames_leased.begin(), frames_leased.end()));
-  const JobStatus done = *s().job(job.id);
+  const JobRecord done = *s().job(job.id);
   EXPECT_EQ(done.frames_done, 3);
   EXPECT_FALSE(done.current_frame);
   s().wait_for_images();
@@ -86,14 +86,14 @@ TEST_F(SchedulerFramesTest, FramesGoOutInOrderEachLeaseWithinOneFrame) {
 
 TEST_F(SchedulerFramesTest, AnExtensionAddsTilesOfItsLeasesFrameOnly) {
   const std::string w = worker();
-  const JobStatus job = submit_frames({1, 2});
+  const JobRecord job = submit_frames({1, 2});
   const auto lease = s().claim(w, 2);
   ASSERT_TRUE(lease);
   ASSERT_EQ(lease->tiles.size(), 2u);
   const auto more = s().extend(lease->id, 100);
   ASSERT_TRUE(more);
   EXPECT_EQ(more->tiles.size(), 2u) << "the rest of frame 1, and none of frame 2";
-  for (const LeaseTile& tile : more->tiles) EXPECT_LT(tile.index, 4);
+  for (const LeaseTileRecord& tile : more->tiles) EXPECT_LT(tile.index, 4);
   const auto none = s().extend(lease->id, 100);
   ASSERT_TRUE(none);
   EXPECT_TRUE(none->tiles.empty());
@@ -101,7 +101,7 @@ TEST_F(SchedulerFramesTest, AnExtensionAddsTilesOfItsLeasesFrameOnly) {
 
 TEST_F(SchedulerFramesTest, EachFrameIsWholeAsSoonAsItsLastTileLands) {
   const std::string w = worker();
-  const JobStatus job = submit_frames({1, 2});
+  const JobRecord job = submit_frames({1, 2});
   deliver_until(w, [&] { return s().job(job.id)->frames_done == 1; });
   EXPECT_EQ(s().job(job.id)->state, JobState::running);
   EXPECT_EQ(s().job(job.id)->current_frame, 2);
@@ -118,13 +118,13 @@ TEST_F(SchedulerFramesTest, AFrameWhoseTileFailsForGoodFailsAloneAndTheJobEndsFa
   config_.max_tile_attempts = 1;
   reopen();
   const std::string w = worker();
-  const JobStatus job = submit_frames({1, 2, 3});
+  const JobRecord job = submit_frames({1, 2, 3});
   deliver_until(w, [&] { return s().job(job.id)->frames_done == 1; });
   const auto lease = s().claim(w, 1);
   ASSERT_TRUE(lease);
   ASSERT_EQ(lease->frame, 2);
   s().fail_tile(lease->id, lease->tiles.front().index, "out of memory");
-  JobStatus now = *s().job(job.id);
+  JobRecord now = *s().job(job.id);
   EXPECT_EQ(now.state, JobState::running) << "the job goes on with its other frames";
   EXPECT_EQ(now.failed_frames, std::vector<int>{2});
   EXPECT_EQ(now.current_frame, 3);
@@ -163,12 +163,12 @@ TEST_F(SchedulerFramesTest, TheLastFrameFailingEndsTheJobAtOnce) {
   config_.max_tile_attempts = 1;
   reopen();
   const std::string w = worker();
-  const JobStatus job = submit_frames({1, 2});
+  const JobRecord job = submit_frames({1, 2});
   deliver_until(w, [&] { return s().job(job.id)->frames_done == 1; });
   const auto lease = s().claim(w, 1);
   ASSERT_TRUE(lease);
   s().fail_tile(lease->id, lease->tiles.front().index, "broke");
-  const JobStatus now = *s().job(job.id);
+  const JobRecord now = *s().job(job.id);
   EXPECT_EQ(now.state, JobState::failed);
   EXPECT_NE(now.error.find("1 of 2 frames failed: 2"), std::string::npos) << now.error;
   EXPECT_EQ(now.tiles_rendering, 0);
@@ -176,14 +176,14 @@ TEST_F(SchedulerFramesTest, TheLastFrameFailingEndsTheJobAtOnce) {
 
 TEST_F(SchedulerFramesTest, ARestartKeepsEveryFinishedFrameAndDeliveredTile) {
   const std::string w = worker();
-  const JobStatus job = submit_frames({0, 1, 2});
+  const JobRecord job = submit_frames({0, 1, 2});
   deliver_until(w, [&] { return s().job(job.id)->frames_done == 1; });
   const auto lease = s().claim(w, 1);
   ASSERT_TRUE(lease);
   ASSERT_EQ(deliver(*lease, 1.0f), ResultOutcome::accepted);
   s().wait_for_images();
   reopen();
-  const JobStatus now = *s().job(job.id);
+  const JobRecord now = *s().job(job.id);
   EXPECT_EQ(now.frames_done, 1);
   EXPECT_EQ(now.tiles_done, 5);
   EXPECT_EQ(now.current_frame, 1);
@@ -201,7 +201,7 @@ TEST_F(SchedulerFramesTest, ARestartKeepsEveryFinishedFrameAndDeliveredTile) {
 
 TEST_F(SchedulerFramesTest, ACanceledAnimationKeepsItsFramesDone) {
   const std::string w = worker();
-  const JobStatus job = submit_frames({1, 2});
+  const JobRecord job = submit_frames({1, 2});
   deliver_until(w, [&] { return s().job(job.id)->frames_done == 1; });
   ASSERT_EQ(s().cancel(job.id), CancelOutcome::canceled);
   s().wait_for_images();
@@ -217,11 +217,11 @@ TEST_F(SchedulerFramesTest, ACanceledAnimationKeepsItsFramesDone) {
 // the next claim, and an animation's extension stops while one waits.
 TEST_F(SchedulerFramesTest, PriorityAndPauseWorkAcrossFrames) {
   const std::string w = worker();
-  const JobStatus low = submit_frames({1, 2, 3});
+  const JobRecord low = submit_frames({1, 2, 3});
   const auto first = s().claim(w, 2);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->job_id, low.id);
-  const JobStatus high =
+  const JobRecord high =
       s().submit("urgent", 90, scene_of(kSize, kSize, kTile), "{\"urgent\": 1}", {7, 8});
   const auto more = s().extend(first->id, 10);
   ASSERT_TRUE(more);
@@ -242,7 +242,7 @@ TEST_F(SchedulerFramesTest, PriorityAndPauseWorkAcrossFrames) {
 
 TEST_F(SchedulerFramesTest, AStillIsOneFrameZeroWithItsImageWhereItWas) {
   const std::string w = worker();
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   EXPECT_FALSE(job.frames->animated());
   EXPECT_EQ(job.frames->numbers, std::vector<int>{0});
   finish(job.id, w);

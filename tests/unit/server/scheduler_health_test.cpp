@@ -13,7 +13,7 @@ constexpr int kSize = 32;
 constexpr int kTile = 8;
 
 TEST_F(SchedulerTest, ARefusedResultShowsOnItsJob) {
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   const std::string w = worker();
   const auto lease = s().claim(w, 4);
   ASSERT_TRUE(lease);
@@ -21,7 +21,7 @@ TEST_F(SchedulerTest, ARefusedResultShowsOnItsJob) {
   EXPECT_TRUE(s().job(job.id)->health.last_problem.empty());
 
   s().note_refused_result(lease->id, "413: a result carries at most 256 tiles; this one has 1,365");
-  const JobHealth health = s().job(job.id)->health;
+  const JobHealthRecord health = s().job(job.id)->health;
   EXPECT_EQ(health.refused_results, 1);
   EXPECT_NE(health.last_problem.find("this one has 1,365"), std::string::npos)
       << health.last_problem;
@@ -36,7 +36,7 @@ TEST_F(SchedulerTest, ARefusedResultShowsOnItsJob) {
 TEST_F(SchedulerTest, ATileHandedOutTooOftenFailsItsJobSayingSo) {
   config_.max_tile_handouts = 3;
   reopen();
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   const std::string w = worker();
   // Given back unrendered each time (a release charges no failure), as a worker that keeps
   // dropping its tiles would.
@@ -59,7 +59,7 @@ TEST_F(SchedulerTest, ATileHandedOutTooOftenFailsItsJobSayingSo) {
 TEST_F(SchedulerTest, AWorkerThatKeepsClaimingItsOwnLeaseBackEndsAtTheLimit) {
   config_.max_tile_handouts = 4;
   reopen();
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   const std::string w = worker();
   const auto first = s().claim(w, 2);
   ASSERT_TRUE(first);
@@ -80,7 +80,7 @@ TEST_F(SchedulerTest, AWorkerThatKeepsClaimingItsOwnLeaseBackEndsAtTheLimit) {
 TEST_F(SchedulerTest, AJobThatDeliversNothingWhileRenderingFailsAfterTheStallTimeout) {
   config_.stall_timeout_ms = 600'000;  // longer than the lease timeout: heartbeats keep it
   reopen();
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   const std::string w = worker();
   const auto lease = s().claim(w, 4);
   ASSERT_TRUE(lease);
@@ -106,7 +106,7 @@ TEST_F(SchedulerTest, AJobThatDeliversNothingWhileRenderingFailsAfterTheStallTim
 TEST_F(SchedulerTest, AJobWaitingForWorkersIsNotStalled) {
   config_.stall_timeout_ms = 60'000;
   reopen();
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   // Nothing under lease for ten minutes: no workers, which is not the job's fault.
   clock_.advance_ms(600'000);
   s().expire_leases();
@@ -124,7 +124,7 @@ TEST_F(SchedulerTest, AJobWaitingForWorkersIsNotStalled) {
 TEST_F(SchedulerTest, ExtensionsNeverGrowALeasePastTheLeaseLimit) {
   config_.max_lease_tiles = 6;
   reopen();
-  const JobStatus job = submit(64, 64, kTile);  // 64 tiles
+  const JobRecord job = submit(64, 64, kTile);  // 64 tiles
   const std::string w = worker();
   const auto lease = s().claim(w, 4);
   ASSERT_TRUE(lease);
@@ -140,13 +140,13 @@ TEST_F(SchedulerTest, ExtensionsNeverGrowALeasePastTheLeaseLimit) {
 }
 
 TEST_F(SchedulerTest, TileFailuresAreRecountedFromTheStoreAfterARestart) {
-  const JobStatus job = submit(kSize, kSize, kTile);
+  const JobRecord job = submit(kSize, kSize, kTile);
   const std::string w = worker();
   const auto lease = s().claim(w, 1);
   ASSERT_TRUE(lease);
   s().fail_tile(lease->id, lease->tiles.front().index, "out of memory");
   reopen();
-  const JobHealth health = s().job(job.id)->health;
+  const JobHealthRecord health = s().job(job.id)->health;
   EXPECT_EQ(health.tile_failures, 1);
   EXPECT_NE(health.last_problem.find("out of memory"), std::string::npos) << health.last_problem;
 }

@@ -42,7 +42,7 @@ TEST_F(SchedulerMemoryTest, AStartOverTheBudgetLoadsTheOldestThatFitAndFailsTheR
   with_budget(100);  // lowered: only one of them fits
   EXPECT_EQ(s().job(older)->state, JobState::queued);
   EXPECT_EQ(s().job(older)->tiles_total, 64);
-  const JobStatus failed = *s().job(newer);
+  const JobRecord failed = *s().job(newer);
   EXPECT_EQ(failed.state, JobState::failed);
   EXPECT_EQ(failed.tiles_total, 0);
   EXPECT_NE(failed.error.find("not loaded at start"), std::string::npos) << failed.error;

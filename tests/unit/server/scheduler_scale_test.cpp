@@ -78,9 +78,9 @@ TEST_F(SchedulerTest, LeasesExpireInTheOrderOfTheirExpiryWhateverTheOrderOfTheir
   const std::string job = submit(64, 64, 16).id;  // 16 tiles
   const std::string early = worker("early");
   const std::string late = worker("late");
-  const Lease first = *s().claim(early);  // expires at timeout
+  const LeaseRecord first = *s().claim(early);  // expires at timeout
   clock_.advance_ms(10'000);
-  const Lease second = *s().claim(late);  // expires at 10 s + timeout
+  const LeaseRecord second = *s().claim(late);  // expires at 10 s + timeout
   clock_.advance_ms(5'000);
   ASSERT_TRUE(s().heartbeat(first.id));  // now expires at 15 s + timeout, after the second
 
@@ -103,7 +103,7 @@ TEST_F(SchedulerTest, LeasesExpireInTheOrderOfTheirExpiryWhateverTheOrderOfTheir
 TEST_F(SchedulerTest, ALeaseDeliveredInPartExpiresWithWhatItStillOwesAndKnowsWhatItDelivered) {
   const std::string job = submit(64, 64, 16).id;  // 16 tiles
   const std::string w = worker();
-  const Lease lease = *s().claim(w, 4);
+  const LeaseRecord lease = *s().claim(w, 4);
   ASSERT_EQ(lease.tiles.size(), 4u);
   const std::vector<float> pixels = tile_pixels(lease.tiles[0].rect, 1.0f);
   const std::vector<TileResult> first{{lease.tiles[0].index, pixels, 10}};
@@ -121,7 +121,7 @@ TEST_F(SchedulerTest, ALeaseDeliveredInPartExpiresWithWhatItStillOwesAndKnowsWha
 
 TEST_F(SchedulerTest, OfManyLeasesOnlyTheExpiredOnesAreReapedAndAfterARestartAllAtOnce) {
   const std::string job = submit(128, 128, 16).id;  // 64 tiles
-  std::vector<Lease> leases;
+  std::vector<LeaseRecord> leases;
   for (int i = 0; i < 20; ++i) {
     leases.push_back(*s().claim(worker("w" + std::to_string(i))));
     clock_.advance_ms(1'000);

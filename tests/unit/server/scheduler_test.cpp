@@ -26,8 +26,8 @@ using namespace test;
 class AskOnCompletion : public FarmObserver {
  public:
   explicit AskOnCompletion(Scheduler& scheduler) : scheduler_(scheduler) {}
-  void jobs_changed(const std::vector<JobStatus>& jobs) override {
-    for (const JobStatus& job : jobs) {
+  void jobs_changed(const std::vector<JobRecord>& jobs) override {
+    for (const JobRecord& job : jobs) {
       if (job.state != JobState::completed || asked_.exchange(true)) continue;
       scheduler_.assemble(job.id, [this](std::shared_ptr<const Image> image) {
         image_.set_value(std::move(image));
@@ -36,7 +36,7 @@ class AskOnCompletion : public FarmObserver {
   }
   void tiles_changed(const std::vector<TileChange>&) override {}
   bool wants_tiles(const std::string&) override { return false; }
-  void workers_changed(const std::vector<std::pair<WorkerInfo, WorkerChange>>&) override {}
+  void workers_changed(const std::vector<std::pair<WorkerRecord, WorkerChange>>&) override {}
   void job_removed(const std::string&) override {}
   // Null when no image came within a few seconds.
   std::shared_ptr<const Image> image() {
@@ -73,7 +73,7 @@ TEST_F(SchedulerTest, TheImageAskedForAsSoonAsTheJobCompletesHasItsLastTiles) {
 }
 
 TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
-  const JobStatus submitted = submit(100, 37, 32);
+  const JobRecord submitted = submit(100, 37, 32);
   EXPECT_TRUE(std::regex_match(submitted.id, std::regex("j-[0-9a-f]{32}")));
   EXPECT_EQ(submitted.state, JobState::queued);
   EXPECT_EQ(submitted.tiles_total, 8);
@@ -97,7 +97,7 @@ TEST_F(SchedulerTest, SubmitClaimCompleteAssemblesTheImageBitExactly) {
   EXPECT_EQ(info_of(w).state, WorkerState::idle);
   finish(submitted.id, w);
 
-  const JobStatus done = *s().job(submitted.id);
+  const JobRecord done = *s().job(submitted.id);
   EXPECT_EQ(done.state, JobState::completed);
   EXPECT_EQ(done.tiles_done, 8);
   EXPECT_EQ(done.tiles_rendering, 0);
@@ -150,9 +150,9 @@ TEST_F(SchedulerTest, TilesGoOutCentreFirst) {
 TEST_F(SchedulerTest, ReconnectingWorkerGetsItsLeaseBack) {
   submit(64, 64, 32);
   const std::string w = worker();
-  const Lease first = *s().claim(w);
+  const LeaseRecord first = *s().claim(w);
   clock_.advance_ms(1000);
-  const Lease again = *s().claim(w);
+  const LeaseRecord again = *s().claim(w);
   EXPECT_EQ(again.id, first.id);
   EXPECT_EQ(again.tiles[0].index, first.tiles[0].index);
   EXPECT_EQ(again.expires_at_ms, first.expires_at_ms);
@@ -163,7 +163,7 @@ TEST_F(SchedulerTest, HeartbeatExtendsAndTheLeaseExpiresExactlyAfterTheTimeout) 
   const std::string job = submit(16, 16, 16).id;  // one tile
   const std::string w1 = worker("one");
   const std::string w2 = worker("two");
-  const Lease lease = *s().claim(w1);
+  const LeaseRecord lease = *s().claim(w1);
 
   clock_.advance_ms(20'000);
   const auto extended = s().heartbeat(lease.id);
@@ -191,7 +191,7 @@ TEST_F(SchedulerTest, HeartbeatExtendsAndTheLeaseExpiresExactlyAfterTheTimeout) 
 
 TEST_F(SchedulerTest, ClaimReapsExpiredLeasesAndALateHeartbeatIsLost) {
   submit(16, 16, 16);
-  const Lease lease = *s().claim(worker());
+  const LeaseRecord lease = *s().claim(worker());
   clock_.advance_ms(timeout_ms);
   EXPECT_FALSE(s().heartbeat(lease.id));
   const std::string other = worker();
@@ -202,10 +202,10 @@ TEST_F(SchedulerTest, ClaimReapsExpiredLeasesAndALateHeartbeatIsLost) {
 
 TEST_F(SchedulerTest, StaleResultIsRefusedAfterReassignment) {
   const std::string job = submit(16, 16, 16).id;
-  const Lease old_lease = *s().claim(worker());
+  const LeaseRecord old_lease = *s().claim(worker());
   clock_.advance_ms(timeout_ms);
   s().expire_leases();
-  const Lease new_lease = *s().claim(worker());
+  const LeaseRecord new_lease = *s().claim(worker());
 
   EXPECT_EQ(deliver(old_lease, 1.0f), ResultOutcome::stale);
   EXPECT_EQ(s().job(job)->tiles_done, 0);
@@ -221,7 +221,7 @@ TEST_F(SchedulerTest, StaleResultIsRefusedAfterReassignment) {
 
 TEST_F(SchedulerTest, ExpiredLeaseNotYetReassignedIsStillAccepted) {
   const std::string job = submit(16, 16, 16).id;
-  const Lease lease = *s().claim(worker());
+  const LeaseRecord lease = *s().claim(worker());
   clock_.advance_ms(timeout_ms + 5000);  // nobody reaped it
   EXPECT_EQ(deliver(lease), ResultOutcome::accepted);
   EXPECT_EQ(s().job(job)->state, JobState::completed);
@@ -230,7 +230,7 @@ TEST_F(SchedulerTest, ExpiredLeaseNotYetReassignedIsStillAccepted) {
 TEST_F(SchedulerTest, DuplicateResultChangesNothing) {
   const std::string job = submit(32, 16, 16).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w);
+  const LeaseRecord lease = *s().claim(w);
   ASSERT_EQ(deliver(lease, 1.0f, 7), ResultOutcome::accepted);
   EXPECT_EQ(deliver(lease, 9.0f, 7), ResultOutcome::duplicate);
   EXPECT_EQ(s().job(job)->rays, 7u);
@@ -245,7 +245,7 @@ TEST_F(SchedulerTest, DuplicateResultChangesNothing) {
 
 TEST_F(SchedulerTest, WrongSizeIsRefusedAndTheLeaseKept) {
   const std::string job = submit(16, 16, 16).id;
-  const Lease lease = *s().claim(worker());
+  const LeaseRecord lease = *s().claim(worker());
   std::vector<float> short_pixels = tile_pixels(lease.tiles[0].rect, 0.0f);
   short_pixels.pop_back();
   EXPECT_EQ(s().complete(lease.id, short_pixels, 1), ResultOutcome::wrong_size);
@@ -257,10 +257,10 @@ TEST_F(SchedulerTest, WrongSizeIsRefusedAndTheLeaseKept) {
 TEST_F(SchedulerTest, CancelWithdrawsLeases) {
   const std::string job = submit(64, 64, 32).id;
   const std::string w = worker();
-  const Lease lease = *s().claim(w);
+  const LeaseRecord lease = *s().claim(w);
   clock_.advance_ms(10);
   EXPECT_EQ(s().cancel(job), CancelOutcome::canceled);
-  const JobStatus canceled = *s().job(job);
+  const JobRecord canceled = *s().job(job);
   EXPECT_EQ(canceled.state, JobState::canceled);
   EXPECT_EQ(canceled.finished_at_ms, clock_.now_ms());
   EXPECT_EQ(canceled.tiles_rendering, 0);
@@ -273,10 +273,10 @@ TEST_F(SchedulerTest, CancelWithdrawsLeases) {
 }
 
 TEST_F(SchedulerTest, RemoveOnlyFinishedJobs) {
-  const JobStatus running = submit(16, 16, 16, 50, R"({"a":1})");
+  const JobRecord running = submit(16, 16, 16, 50, R"({"a":1})");
   clock_.advance_ms(1);
-  const JobStatus sharing = submit(16, 16, 16, 50, R"({"a":1})");
-  const JobStatus own = submit(16, 16, 16, 40, R"({"b":2})");
+  const JobRecord sharing = submit(16, 16, 16, 50, R"({"a":1})");
+  const JobRecord own = submit(16, 16, 16, 40, R"({"b":2})");
   EXPECT_EQ(running.scene_digest, sharing.scene_digest);
   EXPECT_EQ(s().remove(running.id), RemoveOutcome::not_finished);
   EXPECT_EQ(s().remove("j-000000000000"), RemoveOutcome::not_found);
@@ -307,14 +307,14 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   const std::string w2 = worker("two");
   std::set<int> done;
   for (int i = 0; i < 4; ++i) {
-    const Lease lease = *s().claim(w1);
+    const LeaseRecord lease = *s().claim(w1);
     ASSERT_EQ(deliver(lease), ResultOutcome::accepted);
     done.insert(lease.tiles[0].index);
   }
-  const Lease held = *s().claim(w2);
+  const LeaseRecord held = *s().claim(w2);
 
   reopen();
-  const JobStatus after = *s().job(job);
+  const JobRecord after = *s().job(job);
   EXPECT_EQ(after.state, JobState::running);
   EXPECT_EQ(after.tiles_done, 4);
   EXPECT_EQ(after.rays, 40u);
@@ -323,7 +323,7 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
   EXPECT_EQ(info_of(w2).state, WorkerState::rendering);
   EXPECT_EQ(info_of(w1).tiles_rendered, 4u);
 
-  const Lease back = *s().claim(w2);
+  const LeaseRecord back = *s().claim(w2);
   EXPECT_EQ(back.id, held.id);
   EXPECT_EQ(back.tiles[0].index, held.tiles[0].index);
   while (auto lease = s().claim(w1)) {
@@ -352,7 +352,7 @@ TEST_F(SchedulerTest, RestartKeepsDoneTilesLeasesAndFinishedStates) {
 TEST_F(SchedulerTest, RestartGivesLeasesAFreshTimeout) {
   submit(16, 16, 16);
   const std::string w = worker();
-  const Lease lease = *s().claim(w);
+  const LeaseRecord lease = *s().claim(w);
   scheduler_.reset();
   clock_.advance_ms(timeout_ms * 3);  // the coordinator was down for a while
   reopen();
@@ -362,7 +362,7 @@ TEST_F(SchedulerTest, RestartGivesLeasesAFreshTimeout) {
 }
 
 TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
-  const JobStatus job = submit(64, 32, 32);
+  const JobRecord job = submit(64, 32, 32);
   const std::string w = worker();
   finish(job.id, w, 3.0f);
   // As if the process had died after storing the last tile but before the job's update
@@ -375,7 +375,7 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
     store.update_job(row);
     std::filesystem::remove(ImageFiles(store.data_dir()).path(job.id));
   });
-  const JobStatus after = *s().job(job.id);
+  const JobRecord after = *s().job(job.id);
   EXPECT_EQ(after.state, JobState::completed);
   EXPECT_EQ(after.finished_at_ms, clock_.now_ms());
   s().wait_for_images();
@@ -385,7 +385,7 @@ TEST_F(SchedulerTest, ReconcileCompletesARunningJobWhoseTilesAreAllDone) {
 }
 
 TEST_F(SchedulerTest, ReconcileStartsAQueuedJobWithDoneTiles) {
-  const JobStatus job = submit(64, 32, 32);
+  const JobRecord job = submit(64, 32, 32);
   ASSERT_EQ(deliver(*s().claim(worker())), ResultOutcome::accepted);
   const JobRow queued = row_of(*s().job(job.id), "queued");
   reopen([&](Store& store) { store.update_job(queued); });
@@ -398,7 +398,7 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   const std::string job = submit(16, 16, 16).id;
   const std::string w1 = worker("one");
   const std::string w2 = worker("two");
-  const Lease first = *s().claim(w1);
+  const LeaseRecord first = *s().claim(w1);
   s().worker_left(w1);
   EXPECT_EQ(info_of(w1).state, WorkerState::left);
   EXPECT_EQ(info_of(w1).current_job, "");
@@ -410,7 +410,7 @@ TEST_F(SchedulerTest, WorkerLeftAndReleaseGiveTheTileBack) {
   EXPECT_EQ(info_of(w1).state, WorkerState::left);
   EXPECT_FALSE(s().claim(w1));
 
-  const Lease second = *s().claim(w2);
+  const LeaseRecord second = *s().claim(w2);
   EXPECT_EQ(second.tiles[0].index, first.tiles[0].index);
   EXPECT_NE(second.id, first.id);
   s().release(second.id);
@@ -436,7 +436,7 @@ TEST_F(SchedulerTest, JobsAreListedNewestFirstWithFilterAndLimit) {
   ASSERT_EQ(s().cancel(b), CancelOutcome::canceled);
 
   std::vector<std::string> ids;
-  for (const JobStatus& job : s().jobs(std::nullopt, 100)) ids.push_back(job.id);
+  for (const JobRecord& job : s().jobs(std::nullopt, 100)) ids.push_back(job.id);
   EXPECT_EQ(ids, (std::vector<std::string>{d, std::max(b, c), std::min(b, c), a}));
   EXPECT_EQ(s().jobs(std::nullopt, 2).size(), 2u);
   EXPECT_EQ(s().jobs(std::nullopt, 0).size(), 0u);
@@ -447,7 +447,7 @@ TEST_F(SchedulerTest, JobsAreListedNewestFirstWithFilterAndLimit) {
 }
 
 TEST_F(SchedulerTest, SceneIsFoundByItsSha256Digest) {
-  const JobStatus job = submit(16, 16, 16, 50, "abc");
+  const JobRecord job = submit(16, 16, 16, 50, "abc");
   EXPECT_EQ(job.scene_digest, "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
   EXPECT_EQ(s().scene_json(job.scene_digest), "abc");
   EXPECT_FALSE(s().scene_json("00"));
@@ -463,7 +463,7 @@ TEST_F(SchedulerTest, WorkAvailableCallbacksRunOutsideTheLock) {
   submit(16, 16, 16);
   EXPECT_EQ(calls, 1);
   const std::string w = worker();
-  const Lease lease = *s().claim(w);
+  const LeaseRecord lease = *s().claim(w);
   clock_.advance_ms(timeout_ms);
   s().expire_leases();
   EXPECT_EQ(calls, 2);
@@ -517,7 +517,7 @@ namespace {
 
 TEST_F(SchedulerTest, WorkersGoneOrLeftForAnHourLeaveTheListAndTheStore) {
   const auto listed = [&](const std::string& id) {
-    for (const WorkerInfo& info : s().workers())
+    for (const WorkerRecord& info : s().workers())
       if (info.id == id) return true;
     return false;
   };
