@@ -51,9 +51,11 @@ protocol::JobStatus watch(CoordinatorClient& api, const std::string& id, Progres
               const auto data = nlohmann::json::parse(event.data, nullptr, false);
               if (!data.is_object() || data.value("id", "") != id) return true;
               update(protocol::JobStatus::read(protocol::FieldReader(data)));
-            } else if (event.type == protocol::event::job_removed &&
-                       event.data.find("\"" + id + "\"") != std::string::npos) {
-              fail(kExitJobFailed, "job " + id + " was removed");
+            } else if (event.type == protocol::event::job_removed) {
+              const auto data = nlohmann::json::parse(event.data, nullptr, false);
+              if (!data.is_object()) return true;
+              if (protocol::JobRemoved::read(protocol::FieldReader(data)).id == id)
+                fail(kExitJobFailed, "job " + id + " was removed");
             }
             return !finished;
           });

@@ -135,6 +135,10 @@ std::optional<std::int64_t> FieldReader::optional_integer(std::string_view key, 
 }
 
 void FieldReader::only(std::initializer_list<std::string_view> keys) const {
+  only(std::span<const std::string_view>(keys.begin(), keys.size()));
+}
+
+void FieldReader::only(std::span<const std::string_view> keys) const {
   for (const auto& [key, value] : object_.items()) {
     bool known = false;
     for (const std::string_view k : keys) known = known || k == key;

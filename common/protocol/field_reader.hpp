@@ -7,6 +7,7 @@
 #include <initializer_list>
 #include <limits>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -66,6 +67,7 @@ class FieldReader {
 
   // Refuses any key but these: "unknown key "x" (expected a, b, c)".
   void only(std::initializer_list<std::string_view> keys) const;
+  void only(std::span<const std::string_view> keys) const;
   bool has(std::string_view key) const;
   // The pointer of a field of this object.
   std::string pointer(std::string_view key) const;

@@ -17,7 +17,7 @@ int int_of(const FieldReader& body, std::string_view key) {
 
 // Everything but the scene, whose presence is checked.
 JobSubmission read_settings(const FieldReader& body) {
-  body.only({"name", "priority", "frames", "scene"});
+  body.only(JobSubmission::kKeys);
   JobSubmission submission;
   if (body.has("name")) submission.name = read_name(body, "name");
   // Its syntax is checked against the scene's range by the coordinator, which names both.
@@ -29,7 +29,7 @@ JobSubmission read_settings(const FieldReader& body) {
   }
   if (const auto priority = body.optional_integer("priority", 0, 100))
     submission.priority = static_cast<int>(*priority);
-  body.object("scene");  // the scene parser reads what is inside
+  body.object(JobSubmission::kSceneKey);  // the scene parser reads what is inside
   return submission;
 }
 
@@ -69,13 +69,13 @@ json to_json(const JobChange& change) {
 
 JobSubmission JobSubmission::take(json& body) {
   JobSubmission submission = read_settings(FieldReader(body));
-  submission.scene = std::move(body["scene"]);
+  submission.scene = std::move(body[JobSubmission::kSceneKey]);
   return submission;
 }
 
 JobSubmission JobSubmission::read(const FieldReader& body) {
   JobSubmission submission = read_settings(body);
-  submission.scene = body.any("scene");
+  submission.scene = body.any(JobSubmission::kSceneKey);
   return submission;
 }
 

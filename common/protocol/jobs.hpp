@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -28,6 +29,9 @@ struct JobSubmission {
   // common/scene/frame_list.hpp); every frame of its range when left out.
   std::optional<std::string> frames;
   static constexpr std::size_t kMaxFramesBytes = 4096;
+  // Its keys, all there are: the coordinator refuses any other before building its value.
+  static constexpr std::string_view kSceneKey = "scene";
+  static constexpr std::string_view kKeys[] = {"name", "priority", "frames", kSceneKey};
 
   // Moves the scene out of `body` rather than copying it: a scene may be tens of megabytes.
   static JobSubmission take(nlohmann::json& body);

@@ -14,7 +14,7 @@ namespace {
 namespace route = protocol::route;
 
 std::optional<std::string> last_event_id(const HttpRequest& request) {
-  const auto it = request.headers.find(lower_ascii(protocol::kLastEventIdHeader));
+  const auto it = request.headers.find(ascii_lower(protocol::kLastEventIdHeader));
   if (it == request.headers.end()) return std::nullopt;
   return it->second;
 }

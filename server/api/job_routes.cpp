@@ -144,11 +144,12 @@ void submit(ApiContext& context, HttpRequest& request, Respond respond) {
   ObjectTexts objects;
   json envelope;
   try {
-    scan_scene_limits(body, context.limits, "scene");
+    using protocol::JobSubmission;
+    scan_scene_limits(body, context.limits, JobSubmission::kSceneKey);
     objects.reserve(body.size());  // room only: untouched, it costs nothing
-    // JobSubmission's keys: any other is refused by its name, and its value not built.
-    static constexpr std::string_view envelope_keys[] = {"name", "priority", "frames", "scene"};
-    envelope = parse_json_objects_apart(body, "scene", objects, envelope_keys);
+    // Any key but JobSubmission's is refused by its name, and its value not built.
+    envelope =
+        parse_json_objects_apart(body, JobSubmission::kSceneKey, objects, JobSubmission::kKeys);
   } catch (const SceneError& e) {
     // A syntax error is not the scene's: the scan puts it at the document ("").
     if (e.pointer().empty()) return answer(error_response(400, "malformed_json", e.detail()));

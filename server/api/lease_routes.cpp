@@ -75,7 +75,7 @@ Checked check_upload(ApiContext& context, HttpRequest& request) {
     return error_response(400, "wrong_size", "the body must be whole float32 RGB pixels");
   // The request's headers are kept under lower-case names.
   const auto header = [&](std::string_view name) -> const std::string* {
-    const auto it = request.headers.find(lower_ascii(name));
+    const auto it = request.headers.find(ascii_lower(name));
     return it == request.headers.end() ? nullptr : &it->second;
   };
   std::vector<std::uint64_t> rays{0};

@@ -13,7 +13,7 @@ constexpr const char* wrong_worker = "wrong_worker";
 // The worker the request's secret proves, or the answer that refuses it.
 std::variant<std::string, HttpResponse> prover(const Scheduler& scheduler,
                                                const HttpRequest& request) {
-  const auto header = request.headers.find(lower_ascii(protocol::kWorkerSecretHeader));
+  const auto header = request.headers.find(ascii_lower(protocol::kWorkerSecretHeader));
   if (header == request.headers.end() || header->second.empty())
     return error_response(401, "missing_worker_secret",
                           "worker calls must send the secret their registration gave, in " +

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/protocol/error.hpp"
+#include "common/text/ascii_case.hpp"  // header names are kept lower case: ascii_lower()
 
 namespace tessera {
 
@@ -75,14 +76,6 @@ struct HttpResponse {
   // When set, the body is this stream's (server-sent events), and `body` is ignored.
   std::shared_ptr<BodyStream> stream;
 };
-
-// "Content-Type" -> "content-type": header names are kept so, being case-insensitive.
-inline std::string lower_ascii(std::string_view text) {
-  std::string out(text);
-  for (char& c : out)
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-  return out;
-}
 
 // Header names and tokens (codings, media types) compare without regard to ASCII case.
 inline bool iequals_ascii(std::string_view a, std::string_view b) {

@@ -18,7 +18,7 @@ std::string_view host_name(std::string_view host) {
 }
 
 bool is_loopback_name(std::string_view host) {
-  const std::string name = lower_ascii(host_name(host));
+  const std::string name = ascii_lower(host_name(host));
   if (name == "localhost" || (name.size() > 10 && name.ends_with(".localhost"))) return true;
   boost::system::error_code ec;
   const auto address = boost::asio::ip::make_address(name, ec);
@@ -37,7 +37,7 @@ std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::stri
             std::string(host) +
             "'; give it --api-token and --worker-token to be reached by other names");
   if (!origin) return std::nullopt;
-  const std::string seen = lower_ascii(trim_ows(*origin));
+  const std::string seen = ascii_lower(trim_ows(*origin));
   const std::size_t scheme_end = seen.find("://");
   // The server's own pages: of its own host and port, and of its own scheme. A plain
   // server's pages may come as https:// too, through a TLS proxy in front of it; a TLS
@@ -45,7 +45,7 @@ std::optional<HttpResponse> origin_problem(const OriginPolicy& policy, std::stri
   const std::string_view scheme = std::string_view(seen).substr(0, scheme_end);
   const bool own_scheme = scheme == "https" || (!tls && scheme == "http");
   if (scheme_end != std::string::npos && own_scheme &&
-      seen.substr(scheme_end + 3) == lower_ascii(host))
+      seen.substr(scheme_end + 3) == ascii_lower(host))
     return std::nullopt;
   for (const std::string& allowed : policy.allowed_origins)
     if (iequals_ascii(allowed, seen)) return std::nullopt;

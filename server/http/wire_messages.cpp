@@ -55,7 +55,7 @@ HttpRequest plain_request(BeastRequest& request) {
   plain.method = std::string(request.method_string());
   for (const auto& field : request) {
     auto [it, inserted] = plain.headers.try_emplace(
-        lower_ascii({field.name_string().data(), field.name_string().size()}), field.value());
+        ascii_lower({field.name_string().data(), field.name_string().size()}), field.value());
     if (!inserted) it->second.append(", ").append(field.value().data(), field.value().size());
   }
   plain.body = std::move(request.body());

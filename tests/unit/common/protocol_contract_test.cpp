@@ -210,7 +210,7 @@ YAML::Node event_data(const OpenApi& api, const std::string& path, const std::st
       "get")["responses"]["200"]["content"]["text/event-stream"]["x-tessera-event-data"][type];
 }
 
-TEST(ProtocolContract, EveryBodyIsItsSchema) {
+TEST(ProtocolContractTest, EveryBodyIsItsSchema) {
   const OpenApi api;
   check(api, api.schema("Error"),
         Error{"over_limit", "too many", "/scene/objects", "max_objects", 10});
@@ -245,7 +245,28 @@ TEST(ProtocolContract, EveryBodyIsItsSchema) {
             api.schema("TileStatus")["required"].size());
 }
 
-TEST(ProtocolContract, EnumsAreTheSchemasEnums) {
+// The coordinator refuses an unknown submission key before building its value, from
+// JobSubmission::kKeys: those are the schema's properties, and a reader names them.
+TEST(ProtocolContractTest, TheSubmissionsKeysAreItsSchemasProperties) {
+  const OpenApi api;
+  std::set<std::string> properties;
+  for (const auto& property : api.schema("JobSubmission")["properties"])
+    properties.insert(property.first.as<std::string>());
+  const std::set<std::string> keys(std::begin(JobSubmission::kKeys),
+                                   std::end(JobSubmission::kKeys));
+  EXPECT_EQ(keys, properties);
+  try {
+    JobSubmission::read(FieldReader(json{{"scene", json::object()}, {"nmae", "a"}}));
+    ADD_FAILURE() << "an unknown key was taken";
+  } catch (const ProtocolError& e) {
+    EXPECT_EQ(e.pointer(), "/nmae");
+    EXPECT_NE(std::string(e.what()).find("expected name, priority, frames, scene"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ProtocolContractTest, EnumsAreTheSchemasEnums) {
   const OpenApi api;
   std::set<std::string> states;
   for (const auto& [state, name] : kJobStateNames) states.insert(std::string(name));
@@ -281,7 +302,7 @@ TEST(ProtocolContract, EnumsAreTheSchemasEnums) {
   EXPECT_EQ(content_types, served);
 }
 
-TEST(ProtocolContract, EveryRouteIsThePathsOfTheFile) {
+TEST(ProtocolContractTest, EveryRouteIsThePathsOfTheFile) {
   const OpenApi api;
   std::set<std::string> documented;
   for (const auto& path : api.root()["paths"]) documented.insert(path.first.as<std::string>());
@@ -302,7 +323,7 @@ TEST(ProtocolContract, EveryRouteIsThePathsOfTheFile) {
   }
 }
 
-TEST(ProtocolContract, IdsArePercentEncodedIntoTheirSegment) {
+TEST(ProtocolContractTest, IdsArePercentEncodedIntoTheirSegment) {
   EXPECT_EQ(fill(route::job, "j-1"), "/v1/jobs/j-1");
   EXPECT_EQ(fill(route::job_cancel, "../x y"), "/v1/jobs/..%2Fx%20y/cancel");
   EXPECT_EQ(frame_image_target("../x", 12, *image_format_named("exr"), true),
@@ -312,7 +333,7 @@ TEST(ProtocolContract, IdsArePercentEncodedIntoTheirSegment) {
   EXPECT_EQ(jobs_target(JobState::failed, 20), "/v1/jobs?limit=20&state=failed");
 }
 
-TEST(ProtocolContract, AReaderSaysWhereAndWhat) {
+TEST(ProtocolContractTest, AReaderSaysWhereAndWhat) {
   try {
     read_body<JobStatus>(R"({"id": 3})");
     FAIL() << "read";
