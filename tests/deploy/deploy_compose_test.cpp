@@ -21,7 +21,7 @@ bool is_given_secret(const YAML::Node& service, const std::string& path) {
   return false;
 }
 
-TEST(DeployCompose, TheCoordinatorKeepsItsDataInANamedVolume) {
+TEST(DeployComposeTest, TheCoordinatorKeepsItsDataInANamedVolume) {
   const YAML::Node file = compose();
   const YAML::Node coordinator = file["services"]["coordinator"];
   ASSERT_TRUE(test::is_map(coordinator)) << "no coordinator service";
@@ -51,7 +51,7 @@ TEST(DeployCompose, TheCoordinatorKeepsItsDataInANamedVolume) {
       << "the published port is not --listen's";
 }
 
-TEST(DeployCompose, TheWorkerServiceScales) {
+TEST(DeployComposeTest, TheWorkerServiceScales) {
   const YAML::Node file = compose();
   const YAML::Node worker = file["services"]["worker"];
   ASSERT_TRUE(test::is_map(worker)) << "no worker service";
@@ -75,7 +75,7 @@ TEST(DeployCompose, TheWorkerServiceScales) {
   EXPECT_EQ(text_of(worker["depends_on"]["coordinator"]["condition"]), "service_healthy");
 }
 
-TEST(DeployCompose, TokensComeFromSecretFilesOnly) {
+TEST(DeployComposeTest, TokensComeFromSecretFilesOnly) {
   const YAML::Node file = compose();
   const std::pair<const char*, std::vector<const char*>> uses[] = {
       {"coordinator", {"--api-token-file", "--worker-token-file"}}, {"worker", {"--token-file"}}};

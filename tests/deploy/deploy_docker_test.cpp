@@ -95,14 +95,14 @@ std::vector<std::string> readme_build_steps() {
   return steps;
 }
 
-TEST(DeployDocker, TheReadmeShowsTheCommandCiRuns) {
+TEST(DeployDockerTest, TheReadmeShowsTheCommandCiRuns) {
   EXPECT_NE(test::read_source("README.md").find(readme_test_command()), std::string::npos);
   const auto steps = readme_build_steps();
   ASSERT_EQ(steps.size(), 3u) << "expected install, configure, build before ctest";
   EXPECT_EQ(steps[0], "bash deploy/install-deps.sh");
 }
 
-TEST(DeployDocker, TheBuildStageRunsTheReadmesSteps) {
+TEST(DeployDockerTest, TheBuildStageRunsTheReadmesSteps) {
   const auto stages = dockerfile_stages();
   ASSERT_EQ(stages.size(), 2u) << "a build stage and a runtime stage";
   const Stage& build = stages[0];
@@ -124,7 +124,7 @@ TEST(DeployDocker, TheBuildStageRunsTheReadmesSteps) {
   EXPECT_TRUE(copied) << "COPY deploy/install-deps.sh before running it";
 }
 
-TEST(DeployDocker, TheRuntimeStageHoldsTheThreeProgramsAsAPlainUser) {
+TEST(DeployDockerTest, TheRuntimeStageHoldsTheThreeProgramsAsAPlainUser) {
   const auto stages = dockerfile_stages();
   ASSERT_EQ(stages.size(), 2u);
   const Stage& build = stages[0];
@@ -179,7 +179,7 @@ TEST(DeployDocker, TheRuntimeStageHoldsTheThreeProgramsAsAPlainUser) {
       << "the check's default port is not " << port;
 }
 
-TEST(DeployDocker, TheBuildContextLeavesOutBuildTreesHistoryAndTokens) {
+TEST(DeployDockerTest, TheBuildContextLeavesOutBuildTreesHistoryAndTokens) {
   for (const char* path : {".git", "build", "build-asan", "deploy/secrets/api.token",
                            "deploy/k8s/worker.token", "deploy/.env", "tessera-data"})
     EXPECT_TRUE(test::ignored_by(".dockerignore", path, true))

@@ -89,7 +89,7 @@ void expect_token_credentials(const Unit& unit, const std::string& name,
   }
 }
 
-TEST(DeploySystemd, TheServerUnitIsHardenedAndKeepsItsDataInItsStateDirectory) {
+TEST(DeploySystemdTest, TheServerUnitIsHardenedAndKeepsItsDataInItsStateDirectory) {
   const std::string name = "deploy/systemd/tessera-server.service";
   const Unit unit = read_unit(name);
   expect_hardened(unit, name);
@@ -112,7 +112,7 @@ TEST(DeploySystemd, TheServerUnitIsHardenedAndKeepsItsDataInItsStateDirectory) {
   }
 }
 
-TEST(DeploySystemd, TheWorkerUnitIsHardenedAndHasTimeToStop) {
+TEST(DeploySystemdTest, TheWorkerUnitIsHardenedAndHasTimeToStop) {
   const std::string name = "deploy/systemd/tessera-worker@.service";
   const Unit unit = read_unit(name);
   expect_hardened(unit, name);
@@ -129,7 +129,7 @@ TEST(DeploySystemd, TheWorkerUnitIsHardenedAndHasTimeToStop) {
       << "a worker may need " << bound << " s after SIGTERM (systemd's default is 90 s)";
 }
 
-TEST(DeploySlurm, OneWorkerPerNodeWarnedBeforeTheTimeLimit) {
+TEST(DeploySlurmTest, OneWorkerPerNodeWarnedBeforeTheTimeLimit) {
   const std::string name = "deploy/slurm/tessera-workers.sbatch";
   std::map<std::string, std::string> sbatch;  // #SBATCH --option=value
   static const std::regex directive(R"(^#SBATCH\s+(--[a-z-]+)(?:=(\S+))?)");

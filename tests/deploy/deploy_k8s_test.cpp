@@ -69,7 +69,7 @@ std::pair<std::string, std::string> secret_mount(const YAML::Node& workload) {
   return {};
 }
 
-TEST(DeployYaml, EveryYamlFileUnderDeployParses) {
+TEST(DeployYamlTest, EveryYamlFileUnderDeployParses) {
   int files = 0;
   for (const auto& entry :
        std::filesystem::recursive_directory_iterator(test::source_path("deploy"))) {
@@ -86,7 +86,7 @@ TEST(DeployYaml, EveryYamlFileUnderDeployParses) {
   EXPECT_GE(files, 5) << "deploy/compose.yaml and deploy/k8s/*.yaml were not found";
 }
 
-TEST(DeployK8s, TheKustomizationListsEveryManifestAndGeneratesTheTokens) {
+TEST(DeployK8sTest, TheKustomizationListsEveryManifestAndGeneratesTheTokens) {
   const YAML::Node kustomization = test::load_yaml(k8s_dir + "kustomization.yaml").at(0);
   EXPECT_EQ(text_of(kustomization["kind"]), "Kustomization");
   const auto resources = texts_of(kustomization["resources"]);
@@ -117,7 +117,7 @@ TEST(DeployK8s, TheKustomizationListsEveryManifestAndGeneratesTheTokens) {
   }
 }
 
-TEST(DeployK8s, TheCoordinatorIsOneReplicaWithItsOwnVolume) {
+TEST(DeployK8sTest, TheCoordinatorIsOneReplicaWithItsOwnVolume) {
   const YAML::Node set = only("StatefulSet");
   // One SQLite database has one writer: a second coordinator must never start.
   EXPECT_EQ(set["spec"]["replicas"].as<int>(0), 1);
@@ -145,7 +145,7 @@ TEST(DeployK8s, TheCoordinatorIsOneReplicaWithItsOwnVolume) {
   EXPECT_TRUE(pod_spec(set)["securityContext"]["runAsNonRoot"].as<bool>(false));
 }
 
-TEST(DeployK8s, TheServiceRoutesToTheCoordinatorsListenPort) {
+TEST(DeployK8sTest, TheServiceRoutesToTheCoordinatorsListenPort) {
   const YAML::Node set = only("StatefulSet");
   const YAML::Node service = only("Service");
   EXPECT_EQ(text_of(set["spec"]["serviceName"]), text_of(service["metadata"]["name"]));
@@ -166,7 +166,7 @@ TEST(DeployK8s, TheServiceRoutesToTheCoordinatorsListenPort) {
       << "the Service's targetPort is not the port tessera-server listens on";
 }
 
-TEST(DeployK8s, TheCoordinatorIsProbedOnHealthzAndReadyz) {
+TEST(DeployK8sTest, TheCoordinatorIsProbedOnHealthzAndReadyz) {
   const YAML::Node coordinator = container(only("StatefulSet"));
   const int port = test::port_of(flag_value(argv_of(coordinator), "--listen").value_or(":0"));
   const std::pair<const char*, const char*> probes[] = {
@@ -180,7 +180,7 @@ TEST(DeployK8s, TheCoordinatorIsProbedOnHealthzAndReadyz) {
   }
 }
 
-TEST(DeployK8s, WorkersHaveAsManyThreadsAsCpusRequested) {
+TEST(DeployK8sTest, WorkersHaveAsManyThreadsAsCpusRequested) {
   const YAML::Node worker = container(only("Deployment"));
   const auto argv = argv_of(worker);
   ASSERT_FALSE(argv.empty());
@@ -195,7 +195,7 @@ TEST(DeployK8s, WorkersHaveAsManyThreadsAsCpusRequested) {
   EXPECT_FALSE(text_of(worker["resources"]["requests"]["memory"]).empty());
 }
 
-TEST(DeployK8s, WorkersHaveTimeToStopCleanly) {
+TEST(DeployK8sTest, WorkersHaveTimeToStopCleanly) {
   const YAML::Node deployment = only("Deployment");
   const int bound = test::worker_shutdown_bound_s();
   EXPECT_GE(pod_spec(deployment)["terminationGracePeriodSeconds"].as<int>(0), bound)
@@ -211,7 +211,7 @@ YAML::Node trigger_of(const YAML::Node& scaled) {
   return test::size_of(triggers) == 1 ? triggers[0] : YAML::Node(YAML::NodeType::Undefined);
 }
 
-TEST(DeployK8s, KedaScalesTheWorkersOnTheQueueOfWaitingTiles) {
+TEST(DeployK8sTest, KedaScalesTheWorkersOnTheQueueOfWaitingTiles) {
   const YAML::Node deployment = only("Deployment");
   const YAML::Node scaled = only("ScaledObject");
   EXPECT_EQ(text_of(scaled["apiVersion"]), "keda.sh/v1alpha1");
@@ -230,7 +230,7 @@ TEST(DeployK8s, KedaScalesTheWorkersOnTheQueueOfWaitingTiles) {
       << "serverAddress must be the URL of a Prometheus";
 }
 
-TEST(DeployK8s, WorkersScaleToZeroAndBackOnTheFirstWaitingTile) {
+TEST(DeployK8sTest, WorkersScaleToZeroAndBackOnTheFirstWaitingTile) {
   const YAML::Node scaled = only("ScaledObject");
   ASSERT_TRUE(scaled["spec"]["minReplicaCount"].IsDefined());
   EXPECT_EQ(scaled["spec"]["minReplicaCount"].as<int>(-1), 0) << "no tile waiting: no worker";
@@ -242,7 +242,7 @@ TEST(DeployK8s, WorkersScaleToZeroAndBackOnTheFirstWaitingTile) {
       << "activationThreshold " << activation << ": a single waiting tile would start no worker";
 }
 
-TEST(DeployK8s, TheLastWorkerOutlastsAStoppingWorkersGracePeriod) {
+TEST(DeployK8sTest, TheLastWorkerOutlastsAStoppingWorkersGracePeriod) {
   const YAML::Node scaled = only("ScaledObject");
   const int grace = pod_spec(only("Deployment"))["terminationGracePeriodSeconds"].as<int>(0);
   ASSERT_TRUE(scaled["spec"]["cooldownPeriod"].IsDefined()) << "say how long the queue waits";
@@ -251,7 +251,7 @@ TEST(DeployK8s, TheLastWorkerOutlastsAStoppingWorkersGracePeriod) {
          "longer than its grace period to render them before it goes";
 }
 
-TEST(DeployK8s, EachWorkerIsGivenAtLeastATilePerThread) {
+TEST(DeployK8sTest, EachWorkerIsGivenAtLeastATilePerThread) {
   const auto threads = flag_value(argv_of(container(only("Deployment"))), "--threads");
   ASSERT_TRUE(threads);
   const std::string threshold = text_of(trigger_of(only("ScaledObject"))["metadata"]["threshold"]);
@@ -261,7 +261,7 @@ TEST(DeployK8s, EachWorkerIsGivenAtLeastATilePerThread) {
       << " threads idle";
 }
 
-TEST(DeployK8s, NoAutoscalerOnCpuRemains) {
+TEST(DeployK8sTest, NoAutoscalerOnCpuRemains) {
   // KEDA makes the Deployment's HorizontalPodAutoscaler itself; a second one would fight it.
   EXPECT_TRUE(test::of_kind(manifests(), "HorizontalPodAutoscaler").empty())
       << "a HorizontalPodAutoscaler beside KEDA's ScaledObject";
@@ -269,7 +269,7 @@ TEST(DeployK8s, NoAutoscalerOnCpuRemains) {
     EXPECT_NE(text_of(trigger["type"]), "cpu") << "workers scale on the queue, not on CPU use";
 }
 
-TEST(DeployK8s, TokensComeOnlyFromTheGeneratedSecret) {
+TEST(DeployK8sTest, TokensComeOnlyFromTheGeneratedSecret) {
   const YAML::Node kustomization = test::load_yaml(k8s_dir + "kustomization.yaml").at(0);
   const std::string secret = text_of(kustomization["secretGenerator"][0]["name"]);
   const auto keys = texts_of(kustomization["secretGenerator"][0]["files"]);

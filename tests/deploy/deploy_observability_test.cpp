@@ -90,7 +90,7 @@ std::vector<std::string> series_in(const std::string& expr) {
   return names;
 }
 
-TEST(DeployObservability, TheDashboardIsOneGrafanaCanImport) {
+TEST(DeployObservabilityTest, TheDashboardIsOneGrafanaCanImport) {
   nlohmann::json board;
   ASSERT_NO_THROW(board = dashboard()) << dashboard_file << " is not valid JSON";
   EXPECT_EQ(board.value("schemaVersion", 0), 39);
@@ -127,7 +127,7 @@ TEST(DeployObservability, TheDashboardIsOneGrafanaCanImport) {
     }
 }
 
-TEST(DeployObservability, TheDashboardAsksForItsPrometheusOnImport) {
+TEST(DeployObservabilityTest, TheDashboardAsksForItsPrometheusOnImport) {
   const nlohmann::json board = dashboard();
   bool variable = false;
   const nlohmann::json templating = board.value("templating", nlohmann::json::object());
@@ -152,7 +152,7 @@ TEST(DeployObservability, TheDashboardAsksForItsPrometheusOnImport) {
   }
 }
 
-TEST(DeployObservability, TheDashboardQueriesOnlyTheCoordinatorsMetrics) {
+TEST(DeployObservabilityTest, TheDashboardQueriesOnlyTheCoordinatorsMetrics) {
   const auto queries = queries_of(dashboard());
   ASSERT_FALSE(queries.empty());
   std::set<std::string> shown;
@@ -172,7 +172,7 @@ TEST(DeployObservability, TheDashboardQueriesOnlyTheCoordinatorsMetrics) {
     EXPECT_TRUE(shown.contains(metric)) << "no panel shows " << metric;
 }
 
-TEST(DeployObservability, PrometheusScrapesTheCoordinatorsMetricsWithTheToken) {
+TEST(DeployObservabilityTest, PrometheusScrapesTheCoordinatorsMetricsWithTheToken) {
   std::vector<YAML::Node> documents;
   ASSERT_NO_THROW(documents = test::load_yaml(prometheus_file));
   ASSERT_EQ(documents.size(), 1u);

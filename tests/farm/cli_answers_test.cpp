@@ -125,7 +125,7 @@ struct Answer {
   int exit_code;
 };
 
-TEST(CliAnswers, EveryStrangeAnswerIsOneLineAndItsExitCode) {
+TEST(CliAnswersTest, EveryStrangeAnswerIsOneLineAndItsExitCode) {
   const fs::path dir = fresh_dir("cli-answers");
   const std::string page =
       "<html>\n<head><title>502 Bad Gateway</title></head>\n"
@@ -166,7 +166,7 @@ TEST(CliAnswers, EveryStrangeAnswerIsOneLineAndItsExitCode) {
   }
 }
 
-TEST(CliAnswers, NoAnswerAtAllIsUnreachable) {
+TEST(CliAnswersTest, NoAnswerAtAllIsUnreachable) {
   const fs::path dir = fresh_dir("cli-no-answer");
   // Accepts and closes at once: no HTTP answer comes.
   const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
@@ -194,7 +194,7 @@ TEST(CliAnswers, NoAnswerAtAllIsUnreachable) {
   closer.join();
 }
 
-TEST(CliAnswers, AnyServerUrlIsOneLine) {
+TEST(CliAnswersTest, AnyServerUrlIsOneLine) {
   const fs::path dir = fresh_dir("cli-urls");
   const std::vector<std::pair<std::string, int>> urls = {
       {"https://127.0.0.1:1", 3},  // nothing listens there (TLS itself: farm_tls_test.cpp)
@@ -213,7 +213,7 @@ TEST(CliAnswers, AnyServerUrlIsOneLine) {
 
 // A coordinator busy reading other large submissions answers 503 busy with Retry-After and
 // keeps nothing: `tessera submit` sends the job again after that wait, and it is created.
-TEST(CliAnswers, ASubmissionAnsweredBusyGoesAgainAfterRetryAfter) {
+TEST(CliAnswersTest, ASubmissionAnsweredBusyGoesAgainAfterRetryAfter) {
   const fs::path dir = fresh_dir("cli-busy");
   boost::asio::io_context io;
   Router router;

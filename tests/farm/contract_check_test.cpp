@@ -11,7 +11,7 @@ namespace {
 
 HttpResult answer(int status, const std::string& body) { return {status, {}, body}; }
 
-TEST(ContractCheck, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
+TEST(ContractCheckTest, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
   const test::Contract& contract = test::contract();
   const std::string worker = R"({"id": "w-1", "name": "n", "host": "h", "threads": 2,
       "state": "idle", "current_job": null, "current_tile": null, "tiles_rendered": 0,
@@ -49,7 +49,7 @@ TEST(ContractCheck, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
 
 #else
 
-TEST(ContractCheck, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
+TEST(ContractCheckTest, PassesAnswersAsTheContractSaysAndNamesEveryBreak) {
   GTEST_SKIP() << "yaml-cpp is not installed: answers are not checked against the contract";
 }
 

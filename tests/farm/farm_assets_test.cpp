@@ -87,7 +87,7 @@ fs::path write_scene(const fs::path& dir) {
   return dir / "scene.json";
 }
 
-TEST(FarmAssets, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
+TEST(FarmAssetsTest, MeshFilesTravelOnceAndTheFarmRendersWhatTesseraRenderDoes) {
   Farm farm("farm-assets", 2);
   const fs::path scene = write_scene(farm.dir() / "project");
   const CliRun first = run_cli(
@@ -122,7 +122,7 @@ std::string asset_target(const std::string& digest) { return "/v1/assets/sha256:
 // A scene from elsewhere may name any file of the machine it is submitted from; only
 // those in its folder (or under an --allow-path) are read and sent. Each other name is
 // refused before a byte of it is read or anything is sent, naming the key.
-TEST(FarmAssets, SubmitSendsOnlyFilesInsideTheScenesFolder) {
+TEST(FarmAssetsTest, SubmitSendsOnlyFilesInsideTheScenesFolder) {
   Farm farm("assets-confined", 0);
   const fs::path pack = farm.dir() / "pack";
   const fs::path elsewhere = farm.dir() / "private";
@@ -184,7 +184,7 @@ TEST(FarmAssets, SubmitSendsOnlyFilesInsideTheScenesFolder) {
   EXPECT_EQ(stored_assets(), 2);
 }
 
-TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
+TEST(FarmAssetsTest, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   Farm farm("farm-asset-routes", 0, {"--max-asset-bytes", "4096"});
   HttpClient http = farm.http(std::chrono::seconds(10));
   const std::string bytes = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
@@ -274,7 +274,7 @@ TEST(FarmAssets, UploadsAreCheckedByDigestAndKeptOnlyWhole) {
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
 }
 
-TEST(FarmAssets, AFileUploadsStreamedFromDiskAPieceAtATime) {
+TEST(FarmAssetsTest, AFileUploadsStreamedFromDiskAPieceAtATime) {
   Farm farm("farm-asset-file", 0);
   // 24 MiB of varied bytes: many pieces for the socket.
   std::string bytes(24u << 20, '\0');
@@ -299,7 +299,7 @@ TEST(FarmAssets, AFileUploadsStreamedFromDiskAPieceAtATime) {
   EXPECT_FALSE(client.put_asset_file(digest, file));
 }
 
-TEST(FarmAssets, OnATerminalSubmitDrawsAnUploadsProgressBar) {
+TEST(FarmAssetsTest, OnATerminalSubmitDrawsAnUploadsProgressBar) {
   if (!fs::exists("/usr/bin/script"))
     GTEST_SKIP() << "needs script(1) (Debian's bsdutils) to give the CLI a terminal";
   Farm farm("farm-asset-bar", 0);
@@ -327,7 +327,7 @@ TEST(FarmAssets, OnATerminalSubmitDrawsAnUploadsProgressBar) {
   EXPECT_TRUE(contains(shown, "%") && contains(shown, "[###")) << shown;
 }
 
-TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {
+TEST(FarmAssetsTest, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {
   Farm farm("farm-asset-race", 0);
   const std::string bytes(300000, 'q');
   const std::string digest = bytes_sha256(bytes);
@@ -347,7 +347,7 @@ TEST(FarmAssets, UploadsOfOneDigestAtOnceAllSucceedAndMakeOneFile) {
   EXPECT_EQ(read_text(farm.dir() / "data" / "assets" / digest), bytes);
 }
 
-TEST(FarmAssets, AWorkerFetchesACorruptCacheEntryAgain) {
+TEST(FarmAssetsTest, AWorkerFetchesACorruptCacheEntryAgain) {
   Farm farm("farm-asset-cache", 0);
   const fs::path scene = write_scene(farm.dir() / "project");
   const fs::path cache = farm.dir() / "cache";
@@ -381,7 +381,7 @@ TEST(FarmAssets, AWorkerFetchesACorruptCacheEntryAgain) {
       same_pixels(read_image(farm.dir() / "second.exr"), read_image(farm.dir() / "local.exr")));
 }
 
-TEST(FarmAssets, CollectionRemovesOldAssetsButNeverOneAQueuedJobNeeds) {
+TEST(FarmAssetsTest, CollectionRemovesOldAssetsButNeverOneAQueuedJobNeeds) {
   // Assets not named for a second go; with no worker, the job stays queued meanwhile.
   Farm farm("farm-asset-collection", 0, {"--asset-retention", "1"});
   const fs::path scene = write_scene(farm.dir() / "project");
@@ -418,7 +418,7 @@ TEST(FarmAssets, CollectionRemovesOldAssetsButNeverOneAQueuedJobNeeds) {
   EXPECT_TRUE(eventually([&] { return !fs::exists(assets / obj); }, std::chrono::seconds(20)));
 }
 
-TEST(FarmAssets, ADiskThatFillsMidUploadLeavesNoPartialAssetAndTheServerKeepsServing) {
+TEST(FarmAssetsTest, ADiskThatFillsMidUploadLeavesNoPartialAssetAndTheServerKeepsServing) {
   const fs::path dir = fresh_dir("farm-asset-disk-full");
   const fs::path data = dir / "data";
   // A 4 MiB file system for the data dir.

@@ -73,7 +73,7 @@ int status_for_header_only(int port, const std::string& head) {
   return status;
 }
 
-TEST(FarmAuth, EveryRouteRefusesStrangersAndTheOtherRole) {
+TEST(FarmAuthTest, EveryRouteRefusesStrangersAndTheOtherRole) {
   const fs::path secrets = test::fresh_dir("auth-routes-secrets");
   Farm farm("auth-routes", 0, token_args(secrets));
   const auto routes = test::openapi_routes(fs::path(TESSERA_SOURCE_DIR) / "docs" / "openapi.yaml");
@@ -160,7 +160,7 @@ std::string command_line(pid_t pid) {
   return text;
 }
 
-TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
+TEST(FarmAuthTest, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   const fs::path secrets = test::fresh_dir("auth-render-secrets");
   Farm farm("auth-render", 1, token_args(secrets));
   farm.use_api_token(api_token);
@@ -218,7 +218,7 @@ TEST(FarmAuth, WorkersWithTheTokenRenderAndTheTokenStaysOutOfProcessLists) {
   EXPECT_NE(with.output.find(id.substr(0, 10)), std::string::npos) << with.output;
 }
 
-TEST(FarmAuth, BeyondLoopbackOnlyWithTokensOrInsecure) {
+TEST(FarmAuthTest, BeyondLoopbackOnlyWithTokensOrInsecure) {
   const fs::path dir = test::fresh_dir("auth-listen");
   const auto start = [&](const std::string& name, std::vector<std::string> extra) {
     std::vector<std::string> args{

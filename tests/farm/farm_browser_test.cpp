@@ -18,7 +18,7 @@ using namespace std::chrono_literals;
 using nlohmann::json;
 using test::Farm;
 
-TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
+TEST(FarmBrowserTest, APageOnAnotherSiteChangesNothing) {
   Farm farm("browser-pages", 0, {"--allowed-origin", "https://dashboard.example:8443"});
   HttpClient http = farm.http(10s);
   const std::string job =
@@ -50,7 +50,7 @@ TEST(FarmBrowser, APageOnAnotherSiteChangesNothing) {
 // The page's files are served under /ui/{name}: the style sheet and the script the page
 // names, and every module the script imports, each with its type and the page's policy;
 // a name that is none of them, or that tries to leave the folder, is nothing.
-TEST(FarmBrowser, EveryFileThePageLoadsIsServedAndNothingElse) {
+TEST(FarmBrowserTest, EveryFileThePageLoadsIsServedAndNothingElse) {
   Farm farm("browser-files", 0);
   HttpClient http = farm.http(10s);
   const HttpResult page = http.request("GET", "/");
@@ -85,7 +85,7 @@ TEST(FarmBrowser, EveryFileThePageLoadsIsServedAndNothingElse) {
     EXPECT_EQ(http.request("GET", missing).status, 404) << missing;
 }
 
-TEST(FarmBrowser, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
+TEST(FarmBrowserTest, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
   Farm farm("browser-rebinding", 0);
   HttpClient http = farm.http(10s);
   const HttpResult rebound = http.request("GET", "/v1/jobs", "", "", {{"Host", "rebind.example"}});
@@ -97,7 +97,7 @@ TEST(FarmBrowser, ATokenlessCoordinatorAnswersOnlyLoopbackNames) {
   EXPECT_EQ(json::parse(health.body)["api_token_required"], false) << health.body;
 }
 
-TEST(FarmBrowser, ACoordinatorWithTokensAnswersAnyName) {
+TEST(FarmBrowserTest, ACoordinatorWithTokensAnswersAnyName) {
   const auto dir = test::fresh_dir("browser-named-secrets");
   test::write_text(dir / "api", "a-token\n");
   test::write_text(dir / "worker", "w-token\n");

@@ -20,7 +20,7 @@ using namespace std::chrono_literals;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-TEST(FarmChaos, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKilled) {
+TEST(FarmChaosTest, JobsCompleteWithTheRightImageWhileWorkersAndTheCoordinatorAreKilled) {
   const fs::path dir = test::fresh_dir("chaos");
   const unsigned seed = 20261201;
   std::mt19937 random(seed);

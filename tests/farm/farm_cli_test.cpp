@@ -59,7 +59,7 @@ class ClosedPort {
   int port_ = 0;
 };
 
-TEST(FarmCli, JobCommandsEndToEnd) {
+TEST(FarmCliTest, JobCommandsEndToEnd) {
   Farm farm("cli-commands", 0);  // no workers until the test starts one: jobs wait as queued
   const json scene = test::showcase(64, 48, 2, 16);
   const fs::path scene_file = farm.dir() / "scene.json";
@@ -180,7 +180,7 @@ TEST(FarmCli, JobCommandsEndToEnd) {
   EXPECT_EQ(left[0]["id"], id);
 }
 
-TEST(FarmCli, SubmitWaitReportsACanceledJobWithExitOne) {
+TEST(FarmCliTest, SubmitWaitReportsACanceledJobWithExitOne) {
   Farm farm("cli-wait-cancel", 0);
   const fs::path scene_file = farm.dir() / "scene.json";
   test::write_text(scene_file, test::showcase(64, 48, 1, 16).dump());
@@ -201,7 +201,7 @@ TEST(FarmCli, SubmitWaitReportsACanceledJobWithExitOne) {
   EXPECT_EQ(WEXITSTATUS(*status), 1) << test::read_text(farm.dir() / "wait.log");
 }
 
-TEST(FarmCli, AnUnreachableServerExitsWithThree) {
+TEST(FarmCliTest, AnUnreachableServerExitsWithThree) {
   const fs::path dir = test::fresh_dir("cli-unreachable");
   const ClosedPort closed;
   const std::string url = "http://127.0.0.1:" + std::to_string(closed.port());
@@ -219,7 +219,7 @@ TEST(FarmCli, AnUnreachableServerExitsWithThree) {
   EXPECT_EQ(test::run_cli(dir, {"--server", url, "submit", scene_file.string()}).exit_code, 3);
 }
 
-TEST(FarmCli, UsageErrorsExitWithTwo) {
+TEST(FarmCliTest, UsageErrorsExitWithTwo) {
   const fs::path dir = test::fresh_dir("cli-usage");
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"status"}, {"list", "--limit", "0"}, {"frobnicate"}, {}}) {
@@ -228,7 +228,7 @@ TEST(FarmCli, UsageErrorsExitWithTwo) {
   }
 }
 
-TEST(FarmCli, RoughEdges) {
+TEST(FarmCliTest, RoughEdges) {
   Farm farm("cli-edges", 0);
   const fs::path scene_file = farm.dir() / "scene.json";
   test::write_text(scene_file, test::showcase(32, 32, 1, 16).dump());
@@ -270,7 +270,7 @@ TEST(FarmCli, RoughEdges) {
   EXPECT_EQ(refused.exit_code, 1) << refused.output;
 }
 
-TEST(FarmCli, SubmitWithAnOutputWaitsForTheImage) {
+TEST(FarmCliTest, SubmitWithAnOutputWaitsForTheImage) {
   Farm farm("cli-submit-output", 1);
   const fs::path scene_file = farm.dir() / "scene.json";
   test::write_text(scene_file, test::showcase(32, 32, 1, 16).dump());

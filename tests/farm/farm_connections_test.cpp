@@ -138,7 +138,7 @@ bool enough_descriptors_here() {
   return limit.rlim_cur >= 2048;
 }
 
-TEST(FarmConnections, TheSoftDescriptorLimitIsRaisedToTheHardOne) {
+TEST(FarmConnectionsTest, TheSoftDescriptorLimitIsRaisedToTheHardOne) {
   if (!have_prlimit()) GTEST_SKIP() << "no /usr/bin/prlimit (util-linux) on this machine";
   const fs::path dir = test::fresh_dir("connections-raise");
   auto server = start_limited(dir, "256:1024");
@@ -153,7 +153,7 @@ TEST(FarmConnections, TheSoftDescriptorLimitIsRaisedToTheHardOne) {
       << log;
 }
 
-TEST(FarmConnections, AFloodOfIdleConnectionsAndStreamsFailsNoJobAndHealthzAnswers) {
+TEST(FarmConnectionsTest, AFloodOfIdleConnectionsAndStreamsFailsNoJobAndHealthzAnswers) {
   if (!have_prlimit()) GTEST_SKIP() << "no /usr/bin/prlimit (util-linux) on this machine";
   if (!enough_descriptors_here())
     GTEST_SKIP() << "this test process cannot have the 2,048 descriptors its flood needs";

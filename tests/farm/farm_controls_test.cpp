@@ -22,7 +22,7 @@ test::CliRun cli(Farm& farm, std::vector<std::string> args) {
   return test::run_cli(farm.dir(), args);
 }
 
-TEST(FarmControls, AUniquePrefixOfAJobIdWorksEverywhereAndAnAmbiguousOneListsTheCandidates) {
+TEST(FarmControlsTest, AUniquePrefixOfAJobIdWorksEverywhereAndAnAmbiguousOneListsTheCandidates) {
   Farm farm("controls-ids", 0);
   std::vector<std::string> ids;
   for (int i = 0; i < 3; ++i)
@@ -51,7 +51,7 @@ TEST(FarmControls, AUniquePrefixOfAJobIdWorksEverywhereAndAnAmbiguousOneListsThe
   EXPECT_TRUE(contains(none.output, "no job j-ffffffffffffffffffff")) << none.output;
 }
 
-TEST(FarmControls, AJobIsNamedByItsNameWhereNoOtherHasIt) {
+TEST(FarmControlsTest, AJobIsNamedByItsNameWhereNoOtherHasIt) {
   Farm farm("controls-names", 0);
   const std::string shot =
       farm.api().submit("nightly shot 12", 50, test::showcase(16, 16, 1, 16))["id"];
@@ -74,7 +74,7 @@ TEST(FarmControls, AJobIsNamedByItsNameWhereNoOtherHasIt) {
   EXPECT_TRUE(contains(none.output, "no job no such name, by id or by name")) << none.output;
 }
 
-TEST(FarmControls, APausedJobWhoseTilesAreStillOutIsPausing) {
+TEST(FarmControlsTest, APausedJobWhoseTilesAreStillOutIsPausing) {
   Farm farm("controls-pausing", 0, {"--lease-timeout", "30", "--heartbeat-interval", "0.2"});
   // Eight tiles of a second or more each: the first is still out well after the pause, and
   // the others are left for after it.
@@ -102,7 +102,7 @@ TEST(FarmControls, APausedJobWhoseTilesAreStillOutIsPausing) {
   EXPECT_TRUE(contains(paused.output, " paused ")) << paused.output;
 }
 
-TEST(FarmControls, ListAndWorkersPrintAHeaderAndHumanTimes) {
+TEST(FarmControlsTest, ListAndWorkersPrintAHeaderAndHumanTimes) {
   Farm farm("controls-tables", 1);
   const json job = farm.api().submit("table <b>", 50, test::showcase(16, 16, 1, 16));
   ASSERT_EQ(farm.wait_finished(job["id"])["state"], "completed");
@@ -139,7 +139,7 @@ TEST(FarmControls, ListAndWorkersPrintAHeaderAndHumanTimes) {
       << workers.output;
 }
 
-TEST(FarmControls, PriorityPauseAndResumeSteerARealWorker) {
+TEST(FarmControlsTest, PriorityPauseAndResumeSteerARealWorker) {
   Farm farm("controls-pause", 0);
   // Many small tiles: the worker is still at it when it is paused.
   const std::string slow = farm.api().submit("slow", 50, test::showcase(256, 256, 4, 8))["id"];
@@ -167,7 +167,7 @@ TEST(FarmControls, PriorityPauseAndResumeSteerARealWorker) {
                                 test::render_image(test::showcase(256, 256, 4, 8), 2)));
 }
 
-TEST(FarmControls, AFailedJobIsRetriedOnAHealthyWorkerAndItsImageIsWhole) {
+TEST(FarmControlsTest, AFailedJobIsRetriedOnAHealthyWorkerAndItsImageIsWhole) {
   Farm farm("controls-retry", 0, {"--max-tile-attempts", "1"});
   const json scene = test::showcase(64, 32, 1, 16);  // 8 tiles; tile 0 is never the first out
   const std::string id = farm.api().submit("retried", 50, scene)["id"];
@@ -195,7 +195,7 @@ TEST(FarmControls, AFailedJobIsRetriedOnAHealthyWorkerAndItsImageIsWhole) {
   EXPECT_TRUE(contains(again.output, "only a failed or canceled job is retried")) << again.output;
 }
 
-TEST(FarmControls, ADrainedWorkerTakesNoTilesAndARemovedOneIsForgotten) {
+TEST(FarmControlsTest, ADrainedWorkerTakesNoTilesAndARemovedOneIsForgotten) {
   Farm farm("controls-drain", 0);
   auto worker = farm.start_worker("drained", 1);
   ASSERT_TRUE(test::eventually([&] { return farm.worker_named("drained").has_value(); }, 20s));

@@ -83,7 +83,7 @@ std::vector<std::uint8_t> decoded(const std::string& base64) {
   return out;
 }
 
-TEST(FarmEvents, AJobsTilesArriveAsEventsWithThePixelsOfItsImage) {
+TEST(FarmEventsTest, AJobsTilesArriveAsEventsWithThePixelsOfItsImage) {
   Farm farm("events-tiles", 0);
   const json scene = test::showcase(64, 32, 1, 16);  // 8 tiles
   const std::string id = farm.api().submit("watched", 50, scene)["id"];
@@ -124,7 +124,7 @@ TEST(FarmEvents, AJobsTilesArriveAsEventsWithThePixelsOfItsImage) {
   }
 }
 
-TEST(FarmEvents, TheFarmsStreamTellsOfJobsAndWorkersAndResumesAfterItsLastEvent) {
+TEST(FarmEventsTest, TheFarmsStreamTellsOfJobsAndWorkersAndResumesAfterItsLastEvent) {
   Farm farm("events-farm", 0);
   std::string resume_after;
   std::unique_ptr<test::Process> worker;
@@ -154,7 +154,7 @@ TEST(FarmEvents, TheFarmsStreamTellsOfJobsAndWorkersAndResumesAfterItsLastEvent)
   EXPECT_EQ(stranger.next(10s).type, "resync");
 }
 
-TEST(FarmEvents, AnIdleStreamGetsKeepAlives) {
+TEST(FarmEventsTest, AnIdleStreamGetsKeepAlives) {
   Farm farm("events-idle", 0, {"--event-keepalive", "0.2"});
   Stream stream(farm, "/v1/events");
   EXPECT_EQ(stream.connection.read_event(10s), ": open\n\n") << "at once";
@@ -162,7 +162,7 @@ TEST(FarmEvents, AnIdleStreamGetsKeepAlives) {
   EXPECT_EQ(stream.connection.read_event(10s), ": keepalive\n\n");
 }
 
-TEST(FarmEvents, AClientThatStopsReadingHoldsNobodyUpAndIsToldToResync) {
+TEST(FarmEventsTest, AClientThatStopsReadingHoldsNobodyUpAndIsToldToResync) {
   // A queue that a reader on a busy machine does not fill, and a job of far more events:
   // 4,096 tiles of about 1 KB of pixels each, twice the queue and the stream's socket
   // buffers (256 KiB) together.
@@ -202,7 +202,7 @@ double answered(Farm& farm, const std::string& route, const std::string& status)
   return at == std::string::npos ? 0 : std::stod(metrics.body.substr(at + series.size()));
 }
 
-TEST(FarmEvents, WatchAndSubmitWaitFollowEventsInsteadOfPolling) {
+TEST(FarmEventsTest, WatchAndSubmitWaitFollowEventsInsteadOfPolling) {
   Farm farm("events-watch", 1);
   const std::string id = farm.api().submit("watched", 50, test::showcase(192, 192, 2, 16))["id"];
   const test::CliRun watched =

@@ -65,7 +65,7 @@ bool another_writer_can_write(const fs::path& database) {
   return locked;
 }
 
-TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
+TEST(FarmFaultsTest, AWorkerKilledMidTileLosesNothing) {
   Farm farm("fault-kill-worker", 0, quick_leases);
   const json scene = test::showcase(256, 192, 32, 32);  // 48 tiles, ~1.2 s for one thread
   const std::string id = farm.api().submit("kill", 50, scene)["id"];
@@ -89,7 +89,7 @@ TEST(FarmFaults, AWorkerKilledMidTileLosesNothing) {
   EXPECT_GE(by_doomed, done_at_kill == 0 ? 0 : 1);
 }
 
-TEST(FarmFaults, ALongTileOnALiveWorkerIsNeverTakenAway) {
+TEST(FarmFaultsTest, ALongTileOnALiveWorkerIsNeverTakenAway) {
   // Each tile takes several lease timeouts to render; only the heartbeats keep it.
   Farm farm("fault-long-tile", 0, quick_leases);
   const json scene = test::showcase(128, 64, 768, 64);  // 2 tiles of 64x64 at 768 spp
@@ -105,7 +105,7 @@ TEST(FarmFaults, ALongTileOnALiveWorkerIsNeverTakenAway) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
 }
 
-TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
+TEST(FarmFaultsTest, AFrozenWorkerThatComesBackLateIsFencedOut) {
   Farm farm("fault-fence", 0, quick_leases);
   const json scene = test::showcase(256, 192, 16, 32);  // 48 tiles
   const std::string id = farm.api().submit("fence", 50, scene)["id"];
@@ -142,7 +142,7 @@ TEST(FarmFaults, AFrozenWorkerThatComesBackLateIsFencedOut) {
   EXPECT_EQ(by_frozen + by_rescuer, 48) << "a tile was accepted from two workers, or from none";
 }
 
-TEST(FarmFaults, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAgain) {
+TEST(FarmFaultsTest, ACoordinatorKilledMidJobResumesWithoutRenderingDeliveredTilesAgain) {
   const fs::path dir = test::fresh_dir("fault-kill-server");
   const json scene = test::showcase(320, 240, 24, 32);  // 80 tiles, ~1.4 s for one thread
 
@@ -221,7 +221,7 @@ int first_tile_of(const json& scene) {
   return rows / 2 * columns + columns / 2;
 }
 
-TEST(FarmFaults, ATileThatCrashesItsWorkerFailsTheJobAfterThreeTries) {
+TEST(FarmFaultsTest, ATileThatCrashesItsWorkerFailsTheJobAfterThreeTries) {
   const json scene = test::showcase(256, 192, 4, 32);  // 48 tiles
   const int poison = first_tile_of(scene);
   // Local workers inherit the fault from the coordinator's environment; each one that
@@ -245,7 +245,7 @@ TEST(FarmFaults, ATileThatCrashesItsWorkerFailsTheJobAfterThreeTries) {
   EXPECT_EQ(farm.wait_finished(next, 60s)["state"], "completed");
 }
 
-TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob) {
+TEST(FarmFaultsTest, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob) {
   const json scene = test::showcase(256, 192, 4, 32);
   const int poison = first_tile_of(scene);
   Farm farm("fault-error-tile", 0);
@@ -275,7 +275,7 @@ TEST(FarmFaults, ATileWhoseWorkerReportsAnErrorIsRetriedElsewhereThenFailsTheJob
   EXPECT_GE(reporters, 2) << "the tile was not retried on another worker";
 }
 
-TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
+TEST(FarmFaultsTest, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
   const fs::path dir = test::fresh_dir("fault-disk-full");
   const fs::path data = dir / "data";
   // A 2 MiB file system for the data dir.
@@ -338,7 +338,7 @@ TEST(FarmFaults, AFullDiskFailsTheJobWithAClearErrorAndTheServerKeepsServing) {
 // pixels; once the space is back, a retry of that job and a new job both complete, and a
 // restart finds both as they were answered. Before, the rollback of the failed change
 // left its transaction open: nothing was committed again, yet every answer said it was.
-TEST(FarmFaults, AFullDiskThenSpaceBackThenASubmitAndARestartKeepTheJob) {
+TEST(FarmFaultsTest, AFullDiskThenSpaceBackThenASubmitAndARestartKeepTheJob) {
   const fs::path dir = test::fresh_dir("fault-disk-refill");
   const fs::path data = dir / "data";
   const test::SmallDisk disk(data, "20m");
@@ -403,7 +403,7 @@ TEST(FarmFaults, AFullDiskThenSpaceBackThenASubmitAndARestartKeepTheJob) {
 
 // A coordinator that cannot start on a full disk says why in the words a person acts on,
 // both for a new data dir and for one whose database is already there.
-TEST(FarmFaults, AFullDiskAtStartUpIsNamedAsSuch) {
+TEST(FarmFaultsTest, AFullDiskAtStartUpIsNamedAsSuch) {
   const fs::path dir = test::fresh_dir("fault-disk-start");
   const fs::path disk_dir = dir / "disk";
   const test::SmallDisk disk(disk_dir, "1m");
@@ -445,7 +445,7 @@ TEST(FarmFaults, AFullDiskAtStartUpIsNamedAsSuch) {
   EXPECT_EQ(kept.find("disk I/O error\n"), std::string::npos) << kept;
 }
 
-TEST(FarmFaults, AWorkerThatKeepsFailingOnAJobIsKeptOffIt) {
+TEST(FarmFaultsTest, AWorkerThatKeepsFailingOnAJobIsKeptOffIt) {
   const json scene = test::showcase(256, 192, 4, 32);  // 48 tiles
   Farm farm("fault-kept-off", 0);
   std::unique_ptr<test::Process> flaky;

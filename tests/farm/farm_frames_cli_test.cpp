@@ -78,7 +78,7 @@ std::string probed_frames(const fs::path& dir, const fs::path& movie) {
   return text;
 }
 
-TEST(FarmFramesCli, SubmitSavesEachFrameAsRenderMakesItAndGetSavesFrames) {
+TEST(FarmFramesCliTest, SubmitSavesEachFrameAsRenderMakesItAndGetSavesFrames) {
   Farm farm("frames-cli", 2);
   const fs::path scene_file = farm.dir() / "anim.json";
   test::write_text(scene_file, tiny_animation().dump());
@@ -173,7 +173,7 @@ TEST(FarmFramesCli, SubmitSavesEachFrameAsRenderMakesItAndGetSavesFrames) {
   EXPECT_FALSE(contains(watched.output, "tiles")) << watched.output;
 }
 
-TEST(FarmFramesCli, SubmitRefusesWhatItCannotSaveAndMakesOneImageOfTheFirstFrame) {
+TEST(FarmFramesCliTest, SubmitRefusesWhatItCannotSaveAndMakesOneImageOfTheFirstFrame) {
   Farm farm("frames-cli-submit", 1);
   const fs::path scene_file = farm.dir() / "anim.json";
   test::write_text(scene_file, tiny_animation().dump());
@@ -216,7 +216,7 @@ TEST(FarmFramesCli, SubmitRefusesWhatItCannotSaveAndMakesOneImageOfTheFirstFrame
   EXPECT_EQ(job["frames"]["list"], "1") << job.dump();
 }
 
-TEST(FarmFramesCli, SubmitSavesAFrameAsSoonAsItIsDone) {
+TEST(FarmFramesCliTest, SubmitSavesAFrameAsSoonAsItIsDone) {
   Farm farm("frames-cli-early", 1);
   // Five frames big enough that the first is done well before the last.
   json scene = tiny_animation();
@@ -258,7 +258,7 @@ TEST(FarmFramesCli, SubmitSavesAFrameAsSoonAsItIsDone) {
             (std::set<std::string>{"f_1.png", "f_2.png", "f_3.png", "f_4.png", "f_5.png"}));
 }
 
-TEST(FarmFramesCli, AFrameThatFailsLeavesTheOthersSavedAndIsNamed) {
+TEST(FarmFramesCliTest, AFrameThatFailsLeavesTheOthersSavedAndIsNamed) {
   Farm farm("frames-cli-failed", 0);
   // Tile 13 is of the second frame (12 tiles a frame, numbered frame after frame): every
   // worker fails it, so frame 2 fails and frames 1 and 3 render.
@@ -313,7 +313,7 @@ TEST(FarmFramesCli, AFrameThatFailsLeavesTheOthersSavedAndIsNamed) {
   EXPECT_EQ(watched.output.rfind("failed 2/3 frames, 1 failed ", 0), 0u) << watched.output;
 }
 
-TEST(FarmFramesCli, MoviesOfAJobsFrames) {
+TEST(FarmFramesCliTest, MoviesOfAJobsFrames) {
   if (!on_path("ffmpeg") || !on_path("ffprobe"))
     GTEST_SKIP() << "ffmpeg and ffprobe are not installed (deploy/install-deps.sh installs them)";
   Farm farm("frames-cli-movie", 2);

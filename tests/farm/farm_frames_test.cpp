@@ -72,7 +72,7 @@ Image frame_image(Farm& farm, const std::string& id, int frame) {
   return read_image(path);
 }
 
-TEST(FarmFrames, EveryFrameIsBitIdenticalToTheSameFrameRenderedInOneProcess) {
+TEST(FarmFramesTest, EveryFrameIsBitIdenticalToTheSameFrameRenderedInOneProcess) {
   Farm farm("frames-identical", 2);
   const json orbit = turntable(64, 48, 2, 16);
   const json fly = flythrough(48, 32, 8);
@@ -100,7 +100,7 @@ TEST(FarmFrames, EveryFrameIsBitIdenticalToTheSameFrameRenderedInOneProcess) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, fly_id), local_frame(fly, 1)));
 }
 
-TEST(FarmFrames, AFrameIsServedAsSoonAsItIsDoneAndItsRoutesSayWhatIsWrong) {
+TEST(FarmFramesTest, AFrameIsServedAsSoonAsItIsDoneAndItsRoutesSayWhatIsWrong) {
   Farm farm("frames-routes", 0);  // no workers until the test starts one
   HttpClient http = farm.http(10s);
   const json scene = turntable(32, 24, 1, 16);
@@ -132,7 +132,7 @@ TEST(FarmFrames, AFrameIsServedAsSoonAsItIsDoneAndItsRoutesSayWhatIsWrong) {
   EXPECT_EQ(status_of("/v1/jobs/" + still + "/frames/1/image"), 404);
 }
 
-TEST(FarmFrames, ACoordinatorKilledMidAnimationLosesNoFinishedFrameNorDeliveredTile) {
+TEST(FarmFramesTest, ACoordinatorKilledMidAnimationLosesNoFinishedFrameNorDeliveredTile) {
   const fs::path dir = test::fresh_dir("frames-kill-server");
   const json scene = turntable(160, 120, 8, 40);  // 12 tiles a frame
   constexpr int kFrames = 24;

@@ -70,7 +70,7 @@ std::vector<BadRequest> bad_requests() {
   };
 }
 
-TEST(FarmHostile, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
+TEST(FarmHostileTest, AStormOfBadRequestsGetsFourHundredsAndTheServerKeepsServing) {
   Farm farm("hostile-storm", 0);
   const std::vector<BadRequest> requests = bad_requests();
   // The lease routes' bad requests come from a registered worker, with its secret: what is

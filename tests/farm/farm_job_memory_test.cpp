@@ -40,7 +40,7 @@ HttpResult submit(HttpClient& http, const json& scene) {
   return http.request("POST", "/v1/jobs", json{{"name", "big"}, {"scene", scene}}.dump());
 }
 
-TEST(FarmJobMemory, JobsAreBudgetedTheirTilesPagedAndAStartOverTheBudgetServes) {
+TEST(FarmJobMemoryTest, JobsAreBudgetedTheirTilesPagedAndAStartOverTheBudgetServes) {
   const fs::path dir = test::fresh_dir("job-memory");
   const auto start = [&](const std::string& budget, const std::string& log) {
     fs::remove(dir / "port");

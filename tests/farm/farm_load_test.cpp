@@ -30,7 +30,7 @@ long resident_kib(pid_t pid) {
   return -1;
 }
 
-TEST(FarmLoad, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
+TEST(FarmLoadTest, HundredsOfPollersAndSubmittersWithoutAnErrorAndWithFlatMemory) {
   Farm farm("load", 0);
   const json scene = test::showcase(16, 16, 1, 16);
   std::vector<std::string> ids;

@@ -91,7 +91,7 @@ bool idle_comes_back(Farm& farm, long before_kib) {
       [&] { return status_kib(farm.server().pid(), "VmRSS") <= before_kib + 128 * 1024; }, 10s);
 }
 
-TEST(FarmMemory, RefusedSceneCostsNoMoreThanItsBody) {
+TEST(FarmMemoryTest, RefusedSceneCostsNoMoreThanItsBody) {
   Farm farm("mem-refused", 0, {"--max-objects", "1000"});
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
   // 250,000 spheres, 17 MB: read whole into nodes, as before issue 24, the peak grew by 16
@@ -108,7 +108,7 @@ TEST(FarmMemory, RefusedSceneCostsNoMoreThanItsBody) {
 }
 
 // Refused for its key alone, an unknown member's value is never built.
-TEST(FarmMemory, RefusedJunkCostsNoMoreThanItsBody) {
+TEST(FarmMemoryTest, RefusedJunkCostsNoMoreThanItsBody) {
   Farm farm("mem-junk", 0);
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
   std::string body = submission_with_spheres(10);
@@ -124,7 +124,7 @@ TEST(FarmMemory, RefusedJunkCostsNoMoreThanItsBody) {
 
 // A huge value where three numbers belong, in an object or in the camera, is refused
 // before its piece is built.
-TEST(FarmMemory, RefusedHugeValuesCostNoMoreThanTheirBody) {
+TEST(FarmMemoryTest, RefusedHugeValuesCostNoMoreThanTheirBody) {
   Farm farm("mem-huge-value", 0);
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
   std::string huge = "[";
@@ -149,7 +149,7 @@ TEST(FarmMemory, RefusedHugeValuesCostNoMoreThanTheirBody) {
   }
 }
 
-TEST(FarmMemory, AcceptedSceneCostsAFewTimesItsBody) {
+TEST(FarmMemoryTest, AcceptedSceneCostsAFewTimesItsBody) {
   Farm farm("mem-accepted", 0);
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status and clear_refs to measure with";
   const std::string body = submission_with_spheres(100'000);  // the default max_objects
@@ -162,7 +162,7 @@ TEST(FarmMemory, AcceptedSceneCostsAFewTimesItsBody) {
 
 // Submissions sent together while the budget takes one at a time: some are told to come
 // back later, and every one that does is created, once.
-TEST(FarmMemory, SubmissionsOverTheBudgetAreToldToRetry) {
+TEST(FarmMemoryTest, SubmissionsOverTheBudgetAreToldToRetry) {
   const std::string body = submission_with_spheres(40'000);
   // Each is reckoned as 4 times its body: one fits, two do not.
   Farm farm("mem-busy", 0, {"--submit-memory-budget", std::to_string(6 * body.size())});
@@ -208,7 +208,7 @@ namespace {
 // A flood of event streams that read nothing, each queueing a job's tiles with their
 // pixels, then closed: the memory they took goes back to the system (glibc keeps it in its
 // arenas unless asked: 128 MiB before, 540 with 2,000 streams open, 491 after they closed).
-TEST(FarmMemory, MemoryGoesBackAfterAFloodOfEventStreams) {
+TEST(FarmMemoryTest, MemoryGoesBackAfterAFloodOfEventStreams) {
   Farm farm("memory-streams", 1, {"--worker-threads", "2"});
   if (!has_proc(farm)) GTEST_SKIP() << "no /proc/PID/status to measure with";
   const pid_t pid = farm.server().pid();

@@ -35,7 +35,7 @@ std::map<std::string, double> scrape(Farm& farm, const HttpClient::Headers& head
   return samples_of(answer.body);
 }
 
-TEST(FarmMetrics, AfterAJobTheMetricsSayWhatTheFarmDid) {
+TEST(FarmMetricsTest, AfterAJobTheMetricsSayWhatTheFarmDid) {
   Farm farm("metrics-job", 1);
   const json job = farm.api().submit("counted", 70, test::showcase(64, 32, 1, 16));  // 8 tiles
   const json done = farm.wait_finished(job["id"]);
@@ -73,7 +73,7 @@ TEST(FarmMetrics, AfterAJobTheMetricsSayWhatTheFarmDid) {
       2);
 }
 
-TEST(FarmMetrics, PendingTilesAreTheQueueByPriorityWithoutPausedJobs) {
+TEST(FarmMetricsTest, PendingTilesAreTheQueueByPriorityWithoutPausedJobs) {
   Farm farm("metrics-queue", 0);  // no workers: every tile waits
   const std::string low = farm.api().submit("low", 20, test::showcase(32, 32, 1, 16))["id"];
   farm.api().submit("high", 90, test::showcase(64, 32, 1, 16));
@@ -91,7 +91,7 @@ TEST(FarmMetrics, PendingTilesAreTheQueueByPriorityWithoutPausedJobs) {
   EXPECT_EQ(scrape(farm).at("tessera_pending_tiles{priority=\"90\"}"), 13);
 }
 
-TEST(FarmMetrics, WithAMetricsTokenOnlyThatTokenReadsThem) {
+TEST(FarmMetricsTest, WithAMetricsTokenOnlyThatTokenReadsThem) {
   Farm farm("metrics-token", 0,
             {"--api-token", "api-secret", "--worker-token", "worker-secret", "--metrics-token",
              "scrape-secret"});
@@ -135,7 +135,7 @@ std::map<std::string, std::string> query(HttpClient& prometheus, const std::stri
   return values;
 }
 
-TEST(FarmMetrics, ARealPrometheusScrapesTheCoordinator) {
+TEST(FarmMetricsTest, ARealPrometheusScrapesTheCoordinator) {
   const char* binary = "/usr/bin/prometheus";
   if (!std::filesystem::exists(binary))
     GTEST_SKIP() << "skipped: Debian's prometheus is not installed (deploy/install-deps.sh "
@@ -197,7 +197,7 @@ TEST(FarmMetrics, ARealPrometheusScrapesTheCoordinator) {
   prometheus.wait_for(20s);
 }
 
-TEST(FarmMetrics, JsonLogsNameTheJobWorkerAndLeaseOfEachLine) {
+TEST(FarmMetricsTest, JsonLogsNameTheJobWorkerAndLeaseOfEachLine) {
   Farm farm("logs-json", 1, {"--log-format", "json", "--log-level", "info"});
   const std::string id = farm.api().submit("logged", 50, test::showcase(16, 16, 1, 16))["id"];
   ASSERT_EQ(farm.wait_finished(id)["state"], "completed");

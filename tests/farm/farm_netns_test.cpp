@@ -60,7 +60,7 @@ class Namespaces {
   std::vector<std::string> names_;
 };
 
-TEST(FarmNetns, WorkersInOtherNamespacesRenderAJobTogether) {
+TEST(FarmNetnsTest, WorkersInOtherNamespacesRenderAJobTogether) {
   if (::geteuid() != 0) GTEST_SKIP() << "needs root to create network namespaces";
   const std::string ip = find_ip();
   if (ip.empty()) GTEST_SKIP() << "needs iproute2 (`ip`); apt-get install iproute2";

@@ -153,7 +153,7 @@ json worker_info(Farm& farm, const std::string& id) {
   return nullptr;
 }
 
-TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
+TEST(FarmProtocolTest, ClaimHeartbeatReconnectUploadAndDuplicate) {
   Farm farm("proto-basic", 0);
   HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "raw");
@@ -242,7 +242,7 @@ TEST(FarmProtocol, ClaimHeartbeatReconnectUploadAndDuplicate) {
   EXPECT_TRUE(is_error(worker.heartbeat(lease_id), 410, "lease_lost"));
 }
 
-TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
+TEST(FarmProtocolTest, ABatchLeaseDeliversItsTilesInGroups) {
   Farm farm("proto-batch", 0);
   HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "batch");
@@ -330,7 +330,7 @@ TEST(FarmProtocol, ABatchLeaseDeliversItsTilesInGroups) {
   }
 }
 
-TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
+TEST(FarmProtocolTest, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
   Farm farm("proto-wake", 0);
   RawWorker worker(farm.url(), "parked");
   const auto start = Clock::now();
@@ -344,7 +344,7 @@ TEST(FarmProtocol, AClaimParkedOnAnEmptyQueueWakesWhenAJobArrives) {
   EXPECT_LT(Clock::now() - start, 10s) << "the claim waited for its timeout instead of the job";
 }
 
-TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
+TEST(FarmProtocolTest, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
   Farm farm("proto-job-wait", 0);
   HttpClient http = farm.http(30s);
   RawWorker worker(farm.url(), "finisher");
@@ -384,7 +384,7 @@ TEST(FarmProtocol, AStatusRequestWithWaitSAnswersWhenTheJobFinishes) {
   EXPECT_LT(Clock::now() - again, 5s);
 }
 
-TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
+TEST(FarmProtocolTest, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   Farm farm("proto-expiry", 0, {"--lease-timeout", "1", "--heartbeat-interval", "0.2"});
   HttpClient http = farm.http(10s);
   RawWorker slow(farm.url(), "slow");
@@ -444,7 +444,7 @@ TEST(FarmProtocol, AnExpiredLeaseIsReassignedAndItsLateResultIsRefused) {
   EXPECT_EQ(worker_info(farm, rescuer.id())["tiles_rendered"], 1);
 }
 
-TEST(FarmProtocol, CancelWithdrawsTheLease) {
+TEST(FarmProtocolTest, CancelWithdrawsTheLease) {
   Farm farm("proto-cancel", 0);
   RawWorker worker(farm.url(), "canceled");
   const std::string job_id = farm.api().submit("to cancel", 50, one_tile_scene())["id"];
@@ -532,7 +532,7 @@ RawAnswer send_head_only(int port, const std::string& head) {
   return answer;
 }
 
-TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
+TEST(FarmProtocolTest, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   Farm farm("proto-limits", 0,
             {"--max-samples", "8", "--max-pixels", "10000", "--max-job-bytes", "100000"});
   HttpClient http = farm.http(10s);
@@ -570,7 +570,7 @@ TEST(FarmProtocol, AJobOverTheServersLimitsIsRefusedWith422NamingTheLimit) {
   EXPECT_NE(cli.output.find("limit max_samples_per_pixel"), std::string::npos) << cli.output;
 }
 
-TEST(FarmProtocol, AnimatedScenesAreCheckedWholeAndTheirFrameListsToo) {
+TEST(FarmProtocolTest, AnimatedScenesAreCheckedWholeAndTheirFrameListsToo) {
   Farm farm("proto-animation", 0, {"--max-frames", "100"});
   HttpClient http = farm.http(10s);
   const auto submit = [&](const json& scene, std::optional<std::string> frames = std::nullopt) {
@@ -637,7 +637,7 @@ TEST(FarmProtocol, AnimatedScenesAreCheckedWholeAndTheirFrameListsToo) {
   EXPECT_EQ(submit(test::showcase(16, 16, 1, 16)).status, 201);
 }
 
-TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
+TEST(FarmProtocolTest, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   Farm farm("proto-errors", 0);
   HttpClient http = farm.http(10s);
 
@@ -724,7 +724,7 @@ TEST(FarmProtocol, EveryErrorHasOneShapeAndTheServerKeepsServing) {
   EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 2u);
 }
 
-TEST(FarmProtocol, AWorkerThatLeftRegistersAgainBeforeItClaims) {
+TEST(FarmProtocolTest, AWorkerThatLeftRegistersAgainBeforeItClaims) {
   Farm farm("proto-left", 0);
   farm.api().submit("one tile", 50, one_tile_scene());
   RawWorker worker(farm.url(), "leaver");
@@ -743,7 +743,7 @@ TEST(FarmProtocol, AWorkerThatLeftRegistersAgainBeforeItClaims) {
 // The worker token says only that a caller may be some worker; the secret its registration
 // gave says which. Another worker's lease, and another worker's name, are refused with 403,
 // and none of the refused calls changes the lease.
-TEST(FarmProtocol, EveryWorkerCallProvesWhichWorkerItIs) {
+TEST(FarmProtocolTest, EveryWorkerCallProvesWhichWorkerItIs) {
   Farm farm("proto-identity", 0);
   const std::string job_id = farm.api().submit("one tile", 50, one_tile_scene())["id"];
   RawWorker holder(farm.url(), "holder");
@@ -805,7 +805,7 @@ TEST(FarmProtocol, EveryWorkerCallProvesWhichWorkerItIs) {
   EXPECT_TRUE(is_error(other.send("GET", scene), 403, "wrong_worker"));
 }
 
-TEST(FarmProtocol, AWorkerGoneLongerThanForgetWorkersAfterLeavesTheList) {
+TEST(FarmProtocolTest, AWorkerGoneLongerThanForgetWorkersAfterLeavesTheList) {
   Farm farm("proto-forget", 0, {"--forget-workers-after", "1"});
   RawWorker leaver(farm.url(), "leaver");
   RawWorker stayer(farm.url(), "stayer");
@@ -815,7 +815,7 @@ TEST(FarmProtocol, AWorkerGoneLongerThanForgetWorkersAfterLeavesTheList) {
   EXPECT_FALSE(worker_info(farm, stayer.id()).is_null()) << "a worker that never left was dropped";
 }
 
-TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {
+TEST(FarmProtocolTest, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol) {
   Farm farm("proto-version", 0, {"--max-tile-size", "4096"});
   HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "current");
@@ -844,7 +844,7 @@ TEST(FarmProtocol, RegistrationStatesTheLimitsAndRefusesAWorkerOfAnotherProtocol
   EXPECT_EQ(workers["workers"].size(), 1u);  // none of them joined
 }
 
-TEST(FarmProtocol, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJob) {
+TEST(FarmProtocolTest, AResultOverTheTileLimitNamesTheLimitAndTheCountAndShowsOnTheJob) {
   Farm farm("proto-over", 0);
   HttpClient http = farm.http(10s);
   RawWorker worker(farm.url(), "over");

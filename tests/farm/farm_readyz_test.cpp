@@ -69,7 +69,7 @@ class Coordinator {
   std::unique_ptr<test::Process> process_;
 };
 
-TEST(FarmReadiness, ReadyWhileServingAndNotOnceShutdownHasBegun) {
+TEST(FarmReadinessTest, ReadyWhileServingAndNotOnceShutdownHasBegun) {
   Coordinator coordinator("readyz", 1);
   // The first answer already says ready: nothing is served before start-up is over.
   const HttpResult ready = coordinator.get("/readyz");
@@ -106,7 +106,7 @@ TEST(FarmReadiness, ReadyWhileServingAndNotOnceShutdownHasBegun) {
   EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
 }
 
-TEST(FarmReadiness, TheImagesHealthCheckAsksHealthz) {
+TEST(FarmReadinessTest, TheImagesHealthCheckAsksHealthz) {
   Coordinator coordinator("healthcheck", 0);
   EXPECT_EQ(coordinator.healthcheck(), 0) << test::read_text(coordinator.dir() / "healthcheck.log");
   ASSERT_TRUE(coordinator.stop().has_value());

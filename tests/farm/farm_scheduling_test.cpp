@@ -30,7 +30,7 @@ std::int64_t epoch_ms(const json& timestamp) {
   return static_cast<std::int64_t>(::timegm(&utc)) * 1000 + ms;
 }
 
-TEST(FarmScheduling, TheHigherPriorityJobIsRenderedFirst) {
+TEST(FarmSchedulingTest, TheHigherPriorityJobIsRenderedFirst) {
   Farm farm("sched-priority", 0);
   const json scene = test::showcase(96, 64, 2, 16);  // 24 tiles each
   // Submitted first, so plain submission order would favour it.
@@ -56,7 +56,7 @@ TEST(FarmScheduling, TheHigherPriorityJobIsRenderedFirst) {
       << high_done["started_at"] << " to " << high_done["finished_at"];
 }
 
-TEST(FarmScheduling, AWorkerJoiningMidJobGetsTiles) {
+TEST(FarmSchedulingTest, AWorkerJoiningMidJobGetsTiles) {
   Farm farm("sched-late", 1, {"--worker-threads", "1"});
   const json scene = test::showcase(
       320, 240, 32, 16);  // 300 tiles, ~2 s for one thread: outlasts a worker's start
@@ -77,7 +77,7 @@ TEST(FarmScheduling, AWorkerJoiningMidJobGetsTiles) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
 }
 
-TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
+TEST(FarmSchedulingTest, AWorkerStoppedWithSigtermDeliversItsTile) {
   // A lease that is lost rather than delivered or released would hold its tile for a
   // minute, far longer than this test waits.
   Farm farm("sched-sigterm", 0, {"--lease-timeout", "60"});
@@ -136,7 +136,7 @@ TEST(FarmScheduling, AWorkerStoppedWithSigtermDeliversItsTile) {
   EXPECT_TRUE(test::same_pixels(test::farm_image(farm, id), test::render_image(scene, 2)));
 }
 
-TEST(FarmScheduling, AnIdleWorkerExitsAtOnceOnSigterm) {
+TEST(FarmSchedulingTest, AnIdleWorkerExitsAtOnceOnSigterm) {
   Farm farm("sched-idle-stop", 0);
   auto idle = farm.start_worker("idle", 1);
   ASSERT_TRUE(test::eventually([&] { return farm.worker_named("idle").has_value(); }, 20s))

@@ -49,16 +49,16 @@ void renders_like_the_local_render(const Shape& shape) {
   EXPECT_EQ(log.find("duplicate result"), std::string::npos);
 }
 
-TEST(FarmShapes, TwoWorkersOfOneThreadWithEightPixelTiles) {
+TEST(FarmShapesTest, TwoWorkersOfOneThreadWithEightPixelTiles) {
   renders_like_the_local_render({2, 1});
 }
 
-TEST(FarmShapes, OneWorkerOfTwoThreadsWithEightPixelTiles) {
+TEST(FarmShapesTest, OneWorkerOfTwoThreadsWithEightPixelTiles) {
   renders_like_the_local_render({1, 2});
 }
 
 // More threads than the machine has cores (CI has 2): uploads fall furthest behind.
-TEST(FarmShapes, OneWorkerOfEightThreadsOnTwoCoresWithEightPixelTiles) {
+TEST(FarmShapesTest, OneWorkerOfEightThreadsOnTwoCoresWithEightPixelTiles) {
   renders_like_the_local_render({1, 8});
 }
 

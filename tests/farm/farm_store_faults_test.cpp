@@ -183,7 +183,7 @@ void follow(HttpClient& http, const std::string& id, Acknowledged& seen) {
   }
 }
 
-TEST(FarmStoreFaults, EveryAnswerHoldsAfterEachInjectedFaultAndARestart) {
+TEST(FarmStoreFaultsTest, EveryAnswerHoldsAfterEachInjectedFaultAndARestart) {
   const unsigned seed = std::getenv("TESSERA_FAULT_SEED")
                             ? static_cast<unsigned>(std::atol(std::getenv("TESSERA_FAULT_SEED")))
                             : std::random_device{}();

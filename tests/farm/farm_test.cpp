@@ -21,7 +21,7 @@ using test::Farm;
 using test::farm_image;
 using test::small_showcase;
 
-TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
+TEST(FarmTest, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
   const struct { int workers, tile_size; } cases[] = {{1, 32}, {2, 8}, {3, 64}, {2, 32}};
   for (const auto& c : cases) {
     const json scene = small_showcase(c.tile_size);
@@ -44,7 +44,7 @@ TEST(Farm, AnyWorkerCountAndTileSizeGivesTheLocalRenderBitForBit) {
 
 // The job keeps its scene's output transfer from submission (the job row), so its PNG is
 // encoded as the local render's is, each way.
-TEST(Farm, APngDownloadIsEncodedWithTheScenesOutputTransfer) {
+TEST(FarmTest, APngDownloadIsEncodedWithTheScenesOutputTransfer) {
   Farm farm("transfer", 1);
   for (const char* transfer : {"linear", "srgb"}) {
     json scene = small_showcase(32);
@@ -59,7 +59,7 @@ TEST(Farm, APngDownloadIsEncodedWithTheScenesOutputTransfer) {
   }
 }
 
-TEST(Farm, InvalidSceneIsRefusedWithItsPointerAndTheServerKeepsServing) {
+TEST(FarmTest, InvalidSceneIsRefusedWithItsPointerAndTheServerKeepsServing) {
   Farm farm("invalid", 0);
   json scene = small_showcase(32);
   scene["objects"][1]["radius"] = -1;
@@ -80,7 +80,7 @@ TEST(Farm, InvalidSceneIsRefusedWithItsPointerAndTheServerKeepsServing) {
   EXPECT_EQ(http.request("GET", "/healthz").status, 200);
 }
 
-TEST(Farm, CancelAndRemove) {
+TEST(FarmTest, CancelAndRemove) {
   Farm farm("cancel", 0);  // no workers: the job stays queued
   const json job = farm.api().submit("waiting", 50, small_showcase(32));
   const std::string id = job["id"];
@@ -108,7 +108,7 @@ TEST(Farm, CancelAndRemove) {
   }
 }
 
-TEST(Farm, CliSubmitWaitWritesTheImage) {
+TEST(FarmTest, CliSubmitWaitWritesTheImage) {
   Farm farm("cli", 2);
   const fs::path scene = farm.dir() / "scene.json";
   std::ofstream(scene) << small_showcase(32).dump();
@@ -130,7 +130,7 @@ TEST(Farm, CliSubmitWaitWritesTheImage) {
   EXPECT_EQ(WEXITSTATUS(*offline_status), 3);
 }
 
-TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
+TEST(FarmTest, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   const fs::path dir = test::fresh_dir("restart");
   const json scene =
       test::showcase(160, 120, 96, 16);  // 80 tiles, ~1.5 s for one thread: far longer than a poll
@@ -184,7 +184,7 @@ TEST(Farm, SigtermStopsTheServerCleanlyAndDeliveredTilesSurviveARestart) {
   again->wait_for(20s);
 }
 
-TEST(Farm, ALocalWorkerThatDiesIsReplaced) {
+TEST(FarmTest, ALocalWorkerThatDiesIsReplaced) {
   Farm farm("respawn", 1);
   std::vector<pid_t> before;
   ASSERT_TRUE(test::eventually(

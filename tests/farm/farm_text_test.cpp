@@ -40,7 +40,7 @@ const std::vector<std::pair<const char*, std::string>> kControlNames = {
      "b"},
 };
 
-TEST(FarmText, NamesWithControlCharactersAreRefusedWithTheirPointer) {
+TEST(FarmTextTest, NamesWithControlCharactersAreRefusedWithTheirPointer) {
   Farm farm("text-names", 0);
   HttpClient http = farm.http(10s);
   const json scene = test::showcase(16, 16, 1, 16);
@@ -67,7 +67,7 @@ TEST(FarmText, NamesWithControlCharactersAreRefusedWithTheirPointer) {
   EXPECT_EQ(farm.api().jobs("", 10)["jobs"].size(), 1u) << "a refused name was stored";
 }
 
-TEST(FarmText, TheServerLogAndTheCliEscapeWhatOthersWrote) {
+TEST(FarmTextTest, TheServerLogAndTheCliEscapeWhatOthersWrote) {
   Farm farm("text-escaped", 0);
   const json job = farm.api().submit("escaped", 50, test::showcase(16, 16, 1, 16));
 

@@ -83,7 +83,7 @@ std::vector<std::string> tls_args(const fs::path& cert, const fs::path& key) {
   return {"--tls-cert", cert.string(), "--tls-key", key.string()};
 }
 
-TEST(FarmTls, AJobRendersOverHttpsBitForBitAndEveryMistakeIsOneLineAndExitThree) {
+TEST(FarmTlsTest, AJobRendersOverHttpsBitForBitAndEveryMistakeIsOneLineAndExitThree) {
   if (std::system("openssl version >/dev/null 2>&1") != 0)
     GTEST_SKIP() << "the openssl command is not installed; deploy/install-deps.sh installs it";
   const fs::path pki = test::fresh_dir("tls-pki");

@@ -48,14 +48,14 @@ std::optional<std::string> tunables_of_a_worker() {
   return tunables;
 }
 
-TEST(HugePageMalloc, TheWorkerRunsWithMallocOnHugePages) {
+TEST(HugePageMallocTest, TheWorkerRunsWithMallocOnHugePages) {
   // (A user's other tunables are kept before it, but glibc cuts the variable short in place
   // as it parses it, so /proc shows only the first of several.)
   ::unsetenv("GLIBC_TUNABLES");
   EXPECT_EQ(tunables_of_a_worker(), "glibc.malloc.hugetlb=1");
 }
 
-TEST(HugePageMalloc, AUsersOwnChoiceOrTesseraNoHugePagesIsLeftAlone) {
+TEST(HugePageMallocTest, AUsersOwnChoiceOrTesseraNoHugePagesIsLeftAlone) {
   ::setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=0", 1);
   EXPECT_EQ(tunables_of_a_worker(), "glibc.malloc.hugetlb=0");
   ::unsetenv("GLIBC_TUNABLES");

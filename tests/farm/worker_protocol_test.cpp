@@ -112,7 +112,7 @@ void stops_with_status_1(const Outcome& outcome) {
   EXPECT_EQ(WEXITSTATUS(*outcome.status), 1) << outcome.log;
 }
 
-TEST(WorkerProtocol, AWorkerStopsAtACoordinatorThatStatesNoProtocol) {
+TEST(WorkerProtocolTest, AWorkerStopsAtACoordinatorThatStatesNoProtocol) {
   // What builds before protocol 2 answered.
   const Outcome outcome = run_worker_against(
       {{"id", "w-1"}, {"heartbeat_interval_s", 5}, {"lease_timeout_s", 30}}, "v1");
@@ -123,7 +123,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorThatStatesNoProtocol) {
       << outcome.log;
 }
 
-TEST(WorkerProtocol, AWorkerStopsAtACoordinatorOfALaterProtocol) {
+TEST(WorkerProtocolTest, AWorkerStopsAtACoordinatorOfALaterProtocol) {
   json reply = {{"id", "w-1"}, {"protocol", kWorkerProtocolVersion + 1}};
   reply["limits"] = protocol::to_json(ProtocolLimits{});
   const Outcome outcome = run_worker_against(reply, "v3");
@@ -134,7 +134,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorOfALaterProtocol) {
       << outcome.log;
 }
 
-TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
+TEST(WorkerProtocolTest, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
   json limits = protocol::to_json(ProtocolLimits{});
   limits["max_result_tiles"] = 0;
   const Outcome outcome = run_worker_against({{"id", "w-1"},
@@ -150,7 +150,7 @@ TEST(WorkerProtocol, AWorkerStopsAtACoordinatorWhoseLimitsItCannotKeepTo) {
       << outcome.log;
 }
 
-TEST(WorkerProtocol, AWorkerWaitsThroughAProxysBadGateway) {
+TEST(WorkerProtocolTest, AWorkerWaitsThroughAProxysBadGateway) {
   json reply = {{"id", "w-1"},
                 {"secret", "the-secret-of-w-1"},
                 {"heartbeat_interval_s", 5},
@@ -171,7 +171,7 @@ TEST(WorkerProtocol, AWorkerWaitsThroughAProxysBadGateway) {
   EXPECT_TRUE(worker.wait_for(20s).has_value());
 }
 
-TEST(WorkerProtocol, AnyServerUrlIsOneLineAndAnExitCode) {
+TEST(WorkerProtocolTest, AnyServerUrlIsOneLineAndAnExitCode) {
   // (https:// is a server URL like any other: farm_tls_test.cpp.) An unreadable CA file is
   // a usage error too.
   for (const auto& [url, code] :
@@ -199,7 +199,7 @@ TEST(WorkerProtocol, AnyServerUrlIsOneLineAndAnExitCode) {
   }
 }
 
-TEST(ProtocolLimits, TheirJsonRoundTripsAndEveryLimitIsRequired) {
+TEST(ProtocolLimitsTest, TheirJsonRoundTripsAndEveryLimitIsRequired) {
   ProtocolLimits limits = coordinator_limits(4096);
   EXPECT_EQ(limits.max_result_bytes, std::size_t{4096} * 4096 * 12);
   EXPECT_EQ(coordinator_limits(64).max_result_bytes, std::size_t{64} << 20);

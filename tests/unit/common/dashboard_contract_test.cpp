@@ -47,7 +47,7 @@ std::vector<std::string> all_matches(const std::string& text, const std::regex& 
   return out;
 }
 
-TEST(DashboardContract, TheJobStatesAreTheSchemas) {
+TEST(DashboardContractTest, TheJobStatesAreTheSchemas) {
   const std::string contract = read(kWeb / "contract.js");
   std::smatch list;
   ASSERT_TRUE(std::regex_search(contract, list, std::regex(R"(JOB_STATES = \[([^\]]*)\])")))
@@ -64,7 +64,7 @@ TEST(DashboardContract, TheJobStatesAreTheSchemas) {
   EXPECT_EQ(states, documented);
 }
 
-TEST(DashboardContract, EveryStateThePageNamesIsOneOfTheContracts) {
+TEST(DashboardContractTest, EveryStateThePageNamesIsOneOfTheContracts) {
   std::set<std::string> known;
   for (const auto& [state, name] : kJobStateNames) known.emplace(name);
   for (const auto& [state, name] : kWorkerStateNames) known.emplace(name);
@@ -100,7 +100,7 @@ std::regex as_pattern(std::string path) {
   return std::regex(out);
 }
 
-TEST(DashboardContract, EveryPathThePageAsksForIsTheContracts) {
+TEST(DashboardContractTest, EveryPathThePageAsksForIsTheContracts) {
   const YAML::Node api = YAML::LoadFile(std::string(TESSERA_SOURCE_DIR) + "/docs/openapi.yaml");
   std::vector<std::string> documented;
   for (const auto& path : api["paths"]) documented.push_back(path.first.as<std::string>());

@@ -40,7 +40,7 @@ bool openimageio_loaded() {
   return false;
 }
 
-TEST(Tiles, CoverTheImageExactlyOnce) {
+TEST(TilesTest, CoverTheImageExactlyOnce) {
   for (int tile_size : {1, 7, 32, 64, 1000}) {
     const auto tiles = split_into_tiles(100, 37, tile_size);
     std::vector<int> covered(100 * 37, 0);
@@ -56,12 +56,12 @@ TEST(Tiles, CoverTheImageExactlyOnce) {
   EXPECT_EQ(split_into_tiles(100, 37, 32).back(), (TileRect{96, 32, 4, 5}));
 }
 
-TEST(Tiles, RejectNonPositiveSizes) {
+TEST(TilesTest, RejectNonPositiveSizes) {
   EXPECT_THROW(split_into_tiles(0, 10, 4), std::invalid_argument);
   EXPECT_THROW(split_into_tiles(10, 10, 0), std::invalid_argument);
 }
 
-TEST(Image, ANewImageIsBlackAndItsSizesAreCheckedFirst) {
+TEST(ImageTest, ANewImageIsBlackAndItsSizesAreCheckedFirst) {
   const Image image(5, 3);
   ASSERT_EQ(image.pixels().size(), 5u * 3u * 3u);
   EXPECT_TRUE(
@@ -90,7 +90,7 @@ std::string mapping_flags(const void* address) {
   return "";
 }
 
-TEST(Image, ABigImagesPixelsAskForHugePages) {
+TEST(ImageTest, ABigImagesPixelsAskForHugePages) {
   // A 1920x1080 image first touched page by page takes six thousand page faults, each
   // costly on a virtual machine; on huge pages it takes a dozen.
   const Image big(1920, 1080, Image::Unset{});
@@ -106,7 +106,7 @@ TEST(Image, ABigImagesPixelsAskForHugePages) {
   EXPECT_EQ(mapping_flags(small.pixels().data()).find(" hg"), std::string::npos);
 }
 
-TEST(Image, PastePutsTilePixelsInPlace) {
+TEST(ImageTest, PastePutsTilePixelsInPlace) {
   Image image(4, 3);
   const std::vector<float> tile{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};  // 2x2
   image.paste({2, 1, 2, 2}, tile);
@@ -119,7 +119,7 @@ TEST(Image, PastePutsTilePixelsInPlace) {
   EXPECT_THROW(image.paste({0, 0, 1, 1}, tile), std::invalid_argument);
 }
 
-TEST(ImageIo, ExrKeepsLinearFloatsExactlyAndUnclamped) {
+TEST(ImageIoTest, ExrKeepsLinearFloatsExactlyAndUnclamped) {
   const auto dir = temp_dir();
   Image image(3, 2);
   const float values[] = {0.0f, 0.25f, 1.0f, 7.5f, 1e-6f, 123.456f};
@@ -132,7 +132,7 @@ TEST(ImageIo, ExrKeepsLinearFloatsExactlyAndUnclamped) {
     EXPECT_EQ(back.pixels()[i], image.pixels()[i]) << i;
 }
 
-TEST(ImageIo, PngIsClampedAndSrgbEncoded) {
+TEST(ImageIoTest, PngIsClampedAndSrgbEncoded) {
   const auto dir = temp_dir();
   Image image(4, 1);
   const float values[] = {0.5f, 2.0f, -1.0f, 0.0031308f};
@@ -150,7 +150,7 @@ TEST(ImageIo, PngIsClampedAndSrgbEncoded) {
   EXPECT_FLOAT_EQ(read_image(dir / "b.png").pixel(0, 0)[0], 128.0f / 255.0f);
 }
 
-TEST(ImageIo, SrgbTableGivesTheFormulasCodes) {
+TEST(ImageIoTest, SrgbTableGivesTheFormulasCodes) {
   // PNGs are encoded by table; it must give pow()'s codes bit for bit. Every 61st float in
   // [0, 1], and every float within 200 ulps of each point where the code steps up.
   int differing = 0;
@@ -179,7 +179,7 @@ TEST(ImageIo, SrgbTableGivesTheFormulasCodes) {
   EXPECT_EQ(differing, 0);
 }
 
-TEST(ImageIo, TiffIsSixteenBitAndJpegWorks) {
+TEST(ImageIoTest, TiffIsSixteenBitAndJpegWorks) {
   const auto dir = temp_dir();
   Image image(2, 2);
   for (float& v : image.pixels()) v = 0.5f;
@@ -189,7 +189,7 @@ TEST(ImageIo, TiffIsSixteenBitAndJpegWorks) {
   EXPECT_NEAR(read_image(dir / "a.jpg").pixel(0, 0)[0], 188.0f / 255.0f, 2.0f / 255.0f);
 }
 
-TEST(ImageIo, WriteIsAtomicAndLeavesNoTemporaryFiles) {
+TEST(ImageIoTest, WriteIsAtomicAndLeavesNoTemporaryFiles) {
   const auto dir = temp_dir();
   Image image(2, 2);
   write_image(image, dir / "out.png", OutputTransfer::srgb);
@@ -200,7 +200,7 @@ TEST(ImageIo, WriteIsAtomicAndLeavesNoTemporaryFiles) {
   EXPECT_EQ(names, std::vector<std::string>{"out.png"});
 }
 
-TEST(ImageIo, EncodingNeedsNoneOfOpenImageIO) {
+TEST(ImageIoTest, EncodingNeedsNoneOfOpenImageIO) {
   if (openimageio_loaded()) GTEST_SKIP() << "OpenImageIO is loaded already (run by ctest)";
   const auto dir = temp_dir();
   Image image(3, 2);
@@ -217,7 +217,7 @@ TEST(ImageIo, EncodingNeedsNoneOfOpenImageIO) {
   EXPECT_FLOAT_EQ(a.pixel(2, 1)[2], 255.0f / 255.0f);  // 1.7, clamped
 }
 
-TEST(ImageIo, TheLibrariesLoadWhileTheWorkRunsOnAThreadOfItsOwn) {
+TEST(ImageIoTest, TheLibrariesLoadWhileTheWorkRunsOnAThreadOfItsOwn) {
   if (openimageio_loaded()) GTEST_SKIP() << "OpenImageIO is loaded already (run by ctest)";
   // The work waits until it sees the libraries mapped, which, were they loaded only after
   // it, would never happen.
@@ -237,7 +237,7 @@ TEST(ImageIo, TheLibrariesLoadWhileTheWorkRunsOnAThreadOfItsOwn) {
                std::invalid_argument);
 }
 
-TEST(ImageIo, RejectsUnknownExtensionsAndUnwritablePaths) {
+TEST(ImageIoTest, RejectsUnknownExtensionsAndUnwritablePaths) {
   Image image(2, 2);
   EXPECT_FALSE(is_supported_image_path("a.bmp"));
   EXPECT_TRUE(is_supported_image_path("A.PNG"));

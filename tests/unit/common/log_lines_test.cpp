@@ -13,7 +13,7 @@ const std::string job = "j-0123456789abcdef0123456789abcdef";
 const std::string worker = "w-0123456789ab";
 const std::string lease = "l-0123456789abcdef";
 
-TEST(LogLines, AJsonLineCarriesTheIdsItsMessageNames) {
+TEST(LogLinesTest, AJsonLineCarriesTheIdsItsMessageNames) {
   const json line = json::parse(json_log_line(
       "info", "lease " + lease + " of job " + job + " went to worker " + worker + " (render)",
       "2026-12-05T14:00:00.123Z"));
@@ -25,7 +25,7 @@ TEST(LogLines, AJsonLineCarriesTheIdsItsMessageNames) {
   EXPECT_EQ(line["message"].get<std::string>().substr(0, 6), "lease ");
 }
 
-TEST(LogLines, OnlyWholeIdsAreFieldsAndAnyMessageStaysOneLineOfJson) {
+TEST(LogLinesTest, OnlyWholeIdsAreFieldsAndAnyMessageStaysOneLineOfJson) {
   const std::string text = json_log_line(
       "warn", "my-j-0123456789abcdef0123456789abcdef j-0123 w-0123456789abcd\nforged\x1b[31m\xff",
       "t");

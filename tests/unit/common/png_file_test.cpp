@@ -100,7 +100,7 @@ int expected_linear_code(float v) {
   return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
 }
 
-TEST(PngFile, CodesReadBackExactlyThroughOpenImageIO) {
+TEST(PngFileTest, CodesReadBackExactlyThroughOpenImageIO) {
   const fs::path dir = fresh_dir();
   const Image image = test_pattern();
   write_image(image, dir / "srgb.png", OutputTransfer::srgb);
@@ -136,7 +136,7 @@ TEST(PngFile, CodesReadBackExactlyThroughOpenImageIO) {
   EXPECT_EQ(std::lround(read_image(dir / "half.png").pixels()[0] * 255.0f), 128);
 }
 
-TEST(PngFile, HoldsExactlyTheEncodedCodes) {
+TEST(PngFileTest, HoldsExactlyTheEncodedCodes) {
   // The file's pixels are EncodedImage's bytes, whatever libpng's settings.
   const fs::path dir = fresh_dir();
   const Image image = test_pattern();
@@ -155,7 +155,7 @@ TEST(PngFile, HoldsExactlyTheEncodedCodes) {
     }
 }
 
-TEST(PngFile, SrgbChunkOnlyForSrgbCodes) {
+TEST(PngFileTest, SrgbChunkOnlyForSrgbCodes) {
   const fs::path dir = fresh_dir();
   Image image(3, 2);
   write_image(image, dir / "srgb.png", OutputTransfer::srgb);
@@ -192,7 +192,7 @@ bool module_mapped() {
 
 constexpr const char* kFreshProcess = "TESSERA_PNG_TEST_FRESH_PROCESS";
 
-TEST(PngFile, WritingOneOpensNoModule) {
+TEST(PngFileTest, WritingOneOpensNoModule) {
   // The tests share one process, where another may have opened the module already, so this
   // one runs itself again alone, in a fresh process of this program.
   if (std::getenv(kFreshProcess) == nullptr) {
@@ -231,7 +231,7 @@ TEST(PngFile, WritingOneOpensNoModule) {
   EXPECT_TRUE(module_mapped());
 }
 
-TEST(PngFile, AnUnwritablePathIsNamedInTheError) {
+TEST(PngFileTest, AnUnwritablePathIsNamedInTheError) {
   const fs::path dir = fresh_dir();
   const Image image(4, 4);
   const auto error_of = [&](const fs::path& path) -> std::string {
@@ -250,7 +250,7 @@ TEST(PngFile, AnUnwritablePathIsNamedInTheError) {
   EXPECT_EQ(names_in(dir), std::vector<std::string>{"file"});
 }
 
-TEST(PngFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
+TEST(PngFileTest, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
   // Writes fail past a file size limit (EFBIG, with SIGXFSZ ignored): a big image fails in
   // the middle, inside libpng, and a tiny one only when fclose() flushes it.
   const fs::path dir = fresh_dir();
@@ -290,7 +290,7 @@ TEST(PngFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
   EXPECT_EQ(names_in(dir), std::vector<std::string>{"a.png"});
 }
 
-TEST(PngFile, LibpngsOwnErrorsBecomeExceptions) {
+TEST(PngFileTest, LibpngsOwnErrorsBecomeExceptions) {
   const fs::path dir = fresh_dir();
   const std::uint8_t codes[3] = {1, 2, 3};
   try {

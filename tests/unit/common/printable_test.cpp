@@ -9,13 +9,13 @@
 namespace tessera {
 namespace {
 
-TEST(Printable, KeepsTextOfEveryScriptAsItIs) {
+TEST(PrintableTest, KeepsTextOfEveryScriptAsItIs) {
   for (const std::string text : {"plain ascii ~!@#", "été", "日本語", "emoji 🎬", "a\\b \"q\""})
     EXPECT_EQ(printable(text), text);
   EXPECT_EQ(find_control_character("été 日本 🎬"), std::string::npos);
 }
 
-TEST(Printable, SpellsOutEveryControlCharacter) {
+TEST(PrintableTest, SpellsOutEveryControlCharacter) {
   EXPECT_EQ(printable("a\nb"), "a\\x0ab");
   EXPECT_EQ(printable("a\rb"), "a\\x0db");
   EXPECT_EQ(printable("\x1b[31mred"), "\\x1b[31mred");
@@ -28,7 +28,7 @@ TEST(Printable, SpellsOutEveryControlCharacter) {
   EXPECT_EQ(find_control_character(std::string("\0", 1)), 0u);
 }
 
-TEST(Printable, SpellsOutTheBidirectionalFormattingCharacters) {
+TEST(PrintableTest, SpellsOutTheBidirectionalFormattingCharacters) {
   // U+202E RIGHT-TO-LEFT OVERRIDE would show "evil\u202Egnp.exe" as "evilexe.png".
   EXPECT_EQ(printable("evil\xe2\x80\xaegnp.exe"), "evil\\xe2\\x80\\xaegnp.exe");
   for (const char* bidi : {"\xd8\x9c", "\xe2\x80\x8e", "\xe2\x80\x8f", "\xe2\x80\xaa",
@@ -42,7 +42,7 @@ TEST(Printable, SpellsOutTheBidirectionalFormattingCharacters) {
             std::string::npos);
 }
 
-TEST(Printable, SpellsOutBytesThatAreNotUtf8) {
+TEST(PrintableTest, SpellsOutBytesThatAreNotUtf8) {
   EXPECT_EQ(printable("\xff"), "\\xff");
   EXPECT_EQ(printable("\xc0\xaf"), "\\xc0\\xaf");                    // an overlong '/'
   EXPECT_EQ(printable("\xed\xa0\x80"), "\\xed\\xa0\\x80");           // a surrogate

@@ -30,7 +30,7 @@ Scene at_frame(const json& document, int frame) {
 
 // --- the "animation" member ---
 
-TEST(SceneAnimation, StillSceneIsFrameZero) {
+TEST(SceneAnimationTest, StillSceneIsFrameZero) {
   const Scene scene = parse_scene(minimal_scene());
   EXPECT_FALSE(scene.animation.animated);
   EXPECT_EQ(scene.animation.first, 0);
@@ -39,7 +39,7 @@ TEST(SceneAnimation, StillSceneIsFrameZero) {
   EXPECT_TRUE(scene.animation.tracks.empty());
 }
 
-TEST(SceneAnimation, RangeAndRate) {
+TEST(SceneAnimationTest, RangeAndRate) {
   const Scene scene = parse_scene(animated(minimal_scene(), 1, 48));
   EXPECT_TRUE(scene.animation.animated);
   EXPECT_EQ(scene.animation.first, 1);
@@ -49,7 +49,7 @@ TEST(SceneAnimation, RangeAndRate) {
   EXPECT_EQ(scene.frame, 1);  // parse_scene() reads the first frame
 }
 
-TEST(SceneAnimation, RangeErrors) {
+TEST(SceneAnimationTest, RangeErrors) {
   const json base = minimal_scene();
   EXPECT_TRUE(fails_at(with(base, "/animation", 24), "/animation", {"must be an object"}));
   EXPECT_TRUE(
@@ -77,12 +77,12 @@ TEST(SceneAnimation, RangeErrors) {
 
 // --- where tracks stand, and their errors ---
 
-TEST(SceneAnimation, TrackNeedsAnAnimation) {
+TEST(SceneAnimationTest, TrackNeedsAnAnimation) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/camera/eye", track({{0, {0, 0, 5}}})), "/camera/eye",
                        {"is a keyframe track, but the scene is not animated"}));
 }
 
-TEST(SceneAnimation, TrackStructureErrors) {
+TEST(SceneAnimationTest, TrackStructureErrors) {
   const json base = animated(minimal_scene());
   EXPECT_TRUE(fails_at(with(base, "/camera/eye", {{"keys", json::array()}}), "/camera/eye/keys",
                        {"must hold at least one key"}));
@@ -105,7 +105,7 @@ TEST(SceneAnimation, TrackStructureErrors) {
                        {"must be an integer"}));
 }
 
-TEST(SceneAnimation, KeysObeyTheFieldsOwnRules) {
+TEST(SceneAnimationTest, KeysObeyTheFieldsOwnRules) {
   const json base = animated(minimal_scene());
   // Shape: a vector field takes [x, y, z] keys.
   EXPECT_TRUE(fails_at(with(base, "/camera/eye", track({{0, {0, 0, 5}}, {5, 5}})),
@@ -126,7 +126,7 @@ TEST(SceneAnimation, KeysObeyTheFieldsOwnRules) {
       "/lights/0/direction/keys/0/1", {"must be a non-zero vector"}));
 }
 
-TEST(SceneAnimation, OnlyAnimatableFieldsTakeTracks) {
+TEST(SceneAnimationTest, OnlyAnimatableFieldsTakeTracks) {
   const json base = animated(minimal_scene());
   EXPECT_TRUE(fails_at(with(base, "/image/width", track({{0, 4}})), "/image/width",
                        {"must be an integer, got object"}));
@@ -138,7 +138,7 @@ TEST(SceneAnimation, OnlyAnimatableFieldsTakeTracks) {
       "/objects/0/center", {"must be an array of 3 numbers, got object"}));
 }
 
-TEST(SceneAnimation, EveryFrameIsChecked) {
+TEST(SceneAnimationTest, EveryFrameIsChecked) {
   // Valid at every key, but zero half-way: refused at submit, naming the frame.
   EXPECT_TRUE(
       fails_at(animated(with_light({{"type", "directional"},
@@ -157,7 +157,7 @@ TEST(SceneAnimation, EveryFrameIsChecked) {
                "/objects/0/transform/0/scale", {"at frame 2, must be non-zero"}));
 }
 
-TEST(SceneAnimation, TracksInAMeshFilesObject) {
+TEST(SceneAnimationTest, TracksInAMeshFilesObject) {
   const FolderSceneFiles files(std::filesystem::path(TESSERA_SOURCE_DIR) / "examples");
   json document = animated(minimal_scene());
   document["objects"] = {{{"type", "mesh"},
@@ -176,7 +176,7 @@ TEST(SceneAnimation, TracksInAMeshFilesObject) {
   }
 }
 
-TEST(SceneAnimation, TrackLimit) {
+TEST(SceneAnimationTest, TrackLimit) {
   json document = animated(minimal_scene());
   document["camera"]["eye"] = track({{0, {0, 0, 5}}});
   document["camera"]["fov_y"] = track({{0, 40}});
@@ -193,7 +193,7 @@ TEST(SceneAnimation, TrackLimit) {
   EXPECT_EQ(parse_scene(document, limits).animation.tracks.size(), 2u);
 }
 
-TEST(SceneAnimation, FrameOutsideTheRange) {
+TEST(SceneAnimationTest, FrameOutsideTheRange) {
   const json document = animated(minimal_scene(), 1, 10);
   try {
     at_frame(document, 11);
@@ -214,7 +214,7 @@ double eye_x(const json& keys, const std::string& interpolation, int frame) {
   return at_frame(document, frame).camera.eye.x;
 }
 
-TEST(SceneAnimation, Linear) {
+TEST(SceneAnimationTest, Linear) {
   const json keys = {{0, 0}, {10, 10}, {20, 30}};
   EXPECT_EQ(eye_x(keys, "linear", 0), 0.0);
   EXPECT_EQ(eye_x(keys, "linear", 3), 3.0);
@@ -225,7 +225,7 @@ TEST(SceneAnimation, Linear) {
   EXPECT_EQ(eye_x(keys, "linear", 40), 30.0);
 }
 
-TEST(SceneAnimation, Step) {
+TEST(SceneAnimationTest, Step) {
   const json keys = {{0, 1}, {5, 2}, {10, 3}};
   EXPECT_EQ(eye_x(keys, "step", 4), 1.0);
   EXPECT_EQ(eye_x(keys, "step", 5), 2.0);
@@ -233,7 +233,7 @@ TEST(SceneAnimation, Step) {
   EXPECT_EQ(eye_x(keys, "step", 30), 3.0);
 }
 
-TEST(SceneAnimation, SmoothIsCatmullRom) {
+TEST(SceneAnimationTest, SmoothIsCatmullRom) {
   // Interior segment 10..20: tangents (30 - 0) / 20 = 1.5 and (30 - 10) / 20 = 1 per frame.
   // At s = 1/2: h00 = h01 = 1/2, h10 = 1/8, h11 = -1/8, so
   // 10/2 + 10 * 1.5 / 8 + 30/2 - 10 * 1 / 8 = 5 + 1.875 + 15 - 1.25 = 20.625.
@@ -249,7 +249,7 @@ TEST(SceneAnimation, SmoothIsCatmullRom) {
   EXPECT_NEAR(eye_x({{0, 0}, {10, 10}}, "smooth", 5), 5.0, 1e-12);
 }
 
-TEST(SceneAnimation, SmoothStaysWithinBoundsOfBoundedFields) {
+TEST(SceneAnimationTest, SmoothStaysWithinBoundsOfBoundedFields) {
   // Keys 1, 0, 0, 1 at 0, 10, 20, 30: between 10 and 20 Catmull-Rom dips to
   // 10/8 * (-0.05) - 10/8 * 0.05 = -0.125 at 15. A position may go there; a colour stays
   // between its two keys, at 0.
@@ -261,7 +261,7 @@ TEST(SceneAnimation, SmoothStaysWithinBoundsOfBoundedFields) {
   EXPECT_GT(at_frame(document, 25).background.r, 0.0);
 }
 
-TEST(SceneAnimation, NumberKeysOfAColourStandForGrey) {
+TEST(SceneAnimationTest, NumberKeysOfAColourStandForGrey) {
   json document = animated(minimal_scene(), 0, 10);
   document["ambient_light"] = track({{0, 0.2}, {10, {0.4, 0.6, 1.2}}});
   // The linear formula's own arithmetic, a + s * (b - a), at s = 1/2.
@@ -270,7 +270,7 @@ TEST(SceneAnimation, NumberKeysOfAColourStandForGrey) {
   EXPECT_EQ(at_frame(document, 0).ambient_light, Color(0.2));
 }
 
-TEST(SceneAnimation, EveryAnimatableField) {
+TEST(SceneAnimationTest, EveryAnimatableField) {
   json document = animated(minimal_scene(), 0, 4);
   document["camera"] = {{"eye", track({{0, {0, 0, 5}}, {4, {4, 0, 5}}})},
                         {"look_at", track({{0, {0, 0, 0}}, {4, {0, 4, 0}}})},
@@ -332,7 +332,7 @@ TEST(SceneAnimation, EveryAnimatableField) {
             parse_scene(with(minimal_scene(), "/objects", still)).objects[0].transform);
 }
 
-TEST(SceneAnimation, AdvancingEqualsReadingWhole) {
+TEST(SceneAnimationTest, AdvancingEqualsReadingWhole) {
   json document = animated(minimal_scene(), 0, 6);
   document["camera"]["eye"] = track({{0, {0, 0, 5}}, {3, {1, 2, 5}}, {6, {0, 0, 6}}}, "smooth");
   document["lights"] = {{{"type", "point"},
@@ -367,7 +367,7 @@ TEST(SceneAnimation, AdvancingEqualsReadingWhole) {
 
 // --- frame lists ---
 
-TEST(FrameList, Forms) {
+TEST(FrameListTest, Forms) {
   EXPECT_EQ(parse_frame_list("7", 1, 48, 1000), (std::vector<int>{7}));
   EXPECT_EQ(parse_frame_list("1-5", 1, 48, 1000), (std::vector<int>{1, 2, 3, 4, 5}));
   EXPECT_EQ(parse_frame_list("1-10x3", 1, 48, 1000), (std::vector<int>{1, 4, 7, 10}));
@@ -375,7 +375,7 @@ TEST(FrameList, Forms) {
   EXPECT_EQ(parse_frame_list("10-12,1,5,11", 1, 48, 1000), (std::vector<int>{1, 5, 10, 11, 12}));
 }
 
-TEST(FrameList, Errors) {
+TEST(FrameListTest, Errors) {
   const auto error = [](std::string_view text) -> std::string {
     try {
       parse_frame_list(text, 1, 48, 100);
@@ -402,7 +402,7 @@ TEST(FrameList, Errors) {
   EXPECT_NE(error("1-48,1-48,1-48").find("more than 100 frames"), std::string::npos);
 }
 
-TEST(FrameList, FormatReadsBack) {
+TEST(FrameListTest, FormatReadsBack) {
   EXPECT_EQ(format_frame_list({1, 2, 3, 4, 5}), "1-5");
   EXPECT_EQ(format_frame_list({1, 3, 5, 7}), "1-7x2");
   EXPECT_EQ(format_frame_list({1, 2, 7}), "1,2,7");

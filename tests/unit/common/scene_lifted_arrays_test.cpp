@@ -52,7 +52,7 @@ std::string error_of(const std::function<Scene()>& parse) {
   return "";
 }
 
-TEST(SceneLiftedArrays, TheMeshArraysAreLiftedAndGiveTheOrdinaryScene) {
+TEST(SceneLiftedArraysTest, TheMeshArraysAreLiftedAndGiveTheOrdinaryScene) {
   const std::string text = grid_scene().dump();
   const auto lifted = parse_json_fast_lifted(text, 64, 64);
   ASSERT_TRUE(lifted.has_value());
@@ -74,7 +74,7 @@ TEST(SceneLiftedArrays, TheMeshArraysAreLiftedAndGiveTheOrdinaryScene) {
   EXPECT_EQ(edited.width, 7);
 }
 
-TEST(SceneLiftedArrays, ABrokenRuleInALiftedArrayGetsTheOrdinaryError) {
+TEST(SceneLiftedArraysTest, ABrokenRuleInALiftedArrayGetsTheOrdinaryError) {
   const json scene = grid_scene();
   const json variants[] = {
       with(scene, "/objects/0/triangles/300/1", 400),               // out of range
@@ -100,7 +100,7 @@ TEST(SceneLiftedArrays, ABrokenRuleInALiftedArrayGetsTheOrdinaryError) {
   EXPECT_EQ(error_of([&] { return parse_scene_text(variants[4].dump()); }), "");
 }
 
-TEST(SceneLiftedArrays, OnlyMeshesArraysAreLifted) {
+TEST(SceneLiftedArraysTest, OnlyMeshesArraysAreLifted) {
   // A sphere with a misplaced "positions" key keeps it in the document, for the error.
   json scene = grid_scene();
   scene["objects"][0]["type"] = "sphere";

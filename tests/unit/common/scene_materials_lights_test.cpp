@@ -15,7 +15,7 @@ json with_material(const std::string& name, json material) {
   return with(minimal_scene(), "/materials", {{name, std::move(material)}});
 }
 
-TEST(SceneMaterials, Shape) {
+TEST(SceneMaterialsTest, Shape) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/materials", json::array()), "/materials",
                        {"must be an object mapping material names to materials, got array"}));
   EXPECT_TRUE(fails_at(with_material("red", 1), "/materials/red",
@@ -24,7 +24,7 @@ TEST(SceneMaterials, Shape) {
                        {"unknown key \"difuse\"", "did you mean \"diffuse\"?"}));
 }
 
-TEST(SceneMaterials, FieldRules) {
+TEST(SceneMaterialsTest, FieldRules) {
   EXPECT_TRUE(fails_at(with_material("m", {{"emission", {1, -1, 1}}}), "/materials/m/emission/1",
                        {"must be >= 0"}));
   EXPECT_TRUE(fails_at(with_material("m", {{"ambient", "red"}}), "/materials/m/ambient",
@@ -43,7 +43,7 @@ TEST(SceneMaterials, FieldRules) {
       fails_at(with_material("m", {{"ior", 0}}), "/materials/m/ior", {"must be > 0, got 0"}));
 }
 
-TEST(SceneMaterials, Checker) {
+TEST(SceneMaterialsTest, Checker) {
   EXPECT_TRUE(fails_at(with_material("m", {{"checker", json::object()}}),
                        "/materials/m/checker/size", {"required"}));
   EXPECT_TRUE(fails_at(with_material("m", {{"checker", {{"size", 0}}}}),
@@ -66,7 +66,7 @@ TEST(SceneMaterials, Checker) {
   EXPECT_EQ(given.materials[1].checker->diffuse, Color(0));
 }
 
-TEST(SceneMaterials, ReflectionDefaultsToSpecular) {
+TEST(SceneMaterialsTest, ReflectionDefaultsToSpecular) {
   const Scene scene =
       parse_scene(with(with_material("shiny", {{"specular", {0.5, 0.6, 0.7}}}), "/materials/mirror",
                        {{"specular", 0.2}, {"reflection", 1}}));
@@ -75,12 +75,12 @@ TEST(SceneMaterials, ReflectionDefaultsToSpecular) {
   EXPECT_EQ(scene.materials[1].reflection, Color(1.0));
 }
 
-TEST(SceneMaterials, PointerEscapesNames) {
+TEST(SceneMaterialsTest, PointerEscapesNames) {
   EXPECT_TRUE(fails_at(with_material("glass/blue~2", {{"ior", -1}}),
                        "/materials/glass~1blue~02/ior", {"must be > 0, got -1"}));
 }
 
-TEST(SceneMaterials, CountLimit) {
+TEST(SceneMaterialsTest, CountLimit) {
   Limits limits;
   limits.max_materials = 1;
   const json two = with(with_material("a", json::object()), "/materials/b", json::object());
@@ -95,7 +95,7 @@ TEST(SceneMaterials, CountLimit) {
 
 // --- lights ---
 
-TEST(SceneLights, Shape) {
+TEST(SceneLightsTest, Shape) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/lights", json::object()), "/lights",
                        {"must be an array of lights, got object"}));
   EXPECT_TRUE(fails_at(with_light("sun"), "/lights/0", {"must be a light object, got string"}));
@@ -106,7 +106,7 @@ TEST(SceneLights, Shape) {
   EXPECT_TRUE(fails_at(with_light({{"type", 3}}), "/lights/0/type", {"must be a string"}));
 }
 
-TEST(SceneLights, Point) {
+TEST(SceneLightsTest, Point) {
   EXPECT_TRUE(fails_at(with_light({{"type", "point"}}), "/lights/0/position", {"required"}));
   EXPECT_TRUE(fails_at(with_light({{"type", "point"}, {"position", {0, 0, 0}}, {"cutoff", 10}}),
                        "/lights/0/cutoff", {"unknown key \"cutoff\""}));
@@ -122,7 +122,7 @@ TEST(SceneLights, Point) {
   EXPECT_EQ(light.attenuation.quadratic, 0.0);
 }
 
-TEST(SceneLights, Attenuation) {
+TEST(SceneLightsTest, Attenuation) {
   const json point = {{"type", "point"}, {"position", {0, 0, 0}}};
   EXPECT_TRUE(fails_at(with(with_light(point), "/lights/0/attenuation", {0, 0, 0}),
                        "/lights/0/attenuation", {"must not be all zero", "infinitely bright"}));
@@ -134,7 +134,7 @@ TEST(SceneLights, Attenuation) {
   EXPECT_EQ(std::get<PointLight>(scene.lights[0]).attenuation.quadratic, 2.0);
 }
 
-TEST(SceneLights, Directional) {
+TEST(SceneLightsTest, Directional) {
   EXPECT_TRUE(fails_at(with_light({{"type", "directional"}}), "/lights/0/direction", {"required"}));
   EXPECT_TRUE(fails_at(with_light({{"type", "directional"}, {"direction", {0, 0, 0}}}),
                        "/lights/0/direction", {"non-zero"}));
@@ -145,7 +145,7 @@ TEST(SceneLights, Directional) {
   EXPECT_EQ(light.intensity, Color(1, 0.5, 0));
 }
 
-TEST(SceneLights, Spot) {
+TEST(SceneLightsTest, Spot) {
   const json spot = {{"type", "spot"}, {"position", {0, 4, 0}}, {"direction", {0, -2, 0}}};
   EXPECT_TRUE(fails_at(with(with_light(spot), "/lights/0/cutoff", 0), "/lights/0/cutoff",
                        {"must be in (0, 90], got 0"}));
@@ -167,7 +167,7 @@ TEST(SceneLights, Spot) {
   EXPECT_EQ(defaults.attenuation.constant, 1.0);
 }
 
-TEST(SceneLights, CountLimit) {
+TEST(SceneLightsTest, CountLimit) {
   Limits limits;
   limits.max_lights = 1;
   const json light = {{"type", "directional"}, {"direction", {0, -1, 0}}};

@@ -28,7 +28,7 @@ json with_transform(json steps) {
 
 // --- objects in general ---
 
-TEST(SceneObjects, Shape) {
+TEST(SceneObjectsTest, Shape) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/objects", json::object()), "/objects",
                        {"must be an array of objects, got object"}));
   EXPECT_TRUE(fails_at(with_object(1), "/objects/0", {"must be an object", "got number"}));
@@ -38,7 +38,7 @@ TEST(SceneObjects, Shape) {
                         "got \"sphre\"", "did you mean \"sphere\"?"}));
 }
 
-TEST(SceneObjects, UnknownKeySuggestsKnownOne) {
+TEST(SceneObjectsTest, UnknownKeySuggestsKnownOne) {
   const json object = {{"type", "sphere"}, {"center", {0, 0, 0}}, {"raduis", 1}};
   EXPECT_TRUE(fails_at(with_object(object), "/objects/0/raduis",
                        {"unknown key \"raduis\"", "did you mean \"radius\"?"}));
@@ -47,7 +47,7 @@ TEST(SceneObjects, UnknownKeySuggestsKnownOne) {
                        "/objects/0/normal", {"unknown key \"normal\""}));
 }
 
-TEST(SceneObjects, MaterialReference) {
+TEST(SceneObjectsTest, MaterialReference) {
   json scene = with(with_object(sphere()), "/materials/glass", json::object());
   EXPECT_TRUE(fails_at(with(scene, "/objects/0/material", "glas"), "/objects/0/material",
                        {"unknown material \"glas\"", "did you mean \"glass\"?"}));
@@ -64,7 +64,7 @@ TEST(SceneObjects, MaterialReference) {
   EXPECT_EQ(parse_scene(with(scene, "/objects/0/material", "glass")).objects[0].material, 1u);
 }
 
-TEST(SceneObjects, CountLimits) {
+TEST(SceneObjectsTest, CountLimits) {
   Limits limits;
   limits.max_objects = 1;
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/objects", {sphere(), sphere()}), "/objects",
@@ -82,7 +82,7 @@ TEST(SceneObjects, CountLimits) {
 
 // --- shapes ---
 
-TEST(SceneShapes, Sphere) {
+TEST(SceneShapesTest, Sphere) {
   json object = sphere();
   object["radius"] = -1;
   try {
@@ -101,7 +101,7 @@ TEST(SceneShapes, Sphere) {
   EXPECT_TRUE(fails_at(with_object(object), "/objects/0/radius", {"required"}));
 }
 
-TEST(SceneShapes, Plane) {
+TEST(SceneShapesTest, Plane) {
   const json plane = {{"type", "plane"}, {"point", {0, -1, 0}}, {"normal", {0, 0, 0}}};
   EXPECT_TRUE(fails_at(with_object(plane), "/objects/0/normal", {"must be a non-zero vector"}));
   const Scene scene = parse_scene(with(with_object(plane), "/objects/0/normal", {3, 0, 4}));
@@ -111,7 +111,7 @@ TEST(SceneShapes, Plane) {
   EXPECT_NEAR(parsed.normal.z, 0.8, 1e-15);
 }
 
-TEST(SceneShapes, Box) {
+TEST(SceneShapesTest, Box) {
   const json box = {{"type", "box"}, {"min", {0, 2, 0}}, {"max", {1, 1, 1}}};
   EXPECT_TRUE(
       fails_at(with_object(box), "/objects/0/max",
@@ -122,7 +122,7 @@ TEST(SceneShapes, Box) {
   EXPECT_EQ(std::get<Box>(scene.objects[0].shape).max, Vec3(1, 3, 1));
 }
 
-TEST(SceneShapes, Triangle) {
+TEST(SceneShapesTest, Triangle) {
   const json triangle = {{"type", "triangle"}, {"vertices", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}};
   EXPECT_TRUE(fails_at(with(with_object(triangle), "/objects/0/vertices", {{0, 0, 0}, {1, 0, 0}}),
                        "/objects/0/vertices", {"must be an array of 3 points"}));
@@ -147,7 +147,7 @@ TEST(SceneShapes, Triangle) {
   EXPECT_NEAR((*normals)[2].y, 0.6, 1e-15);
 }
 
-TEST(SceneShapes, MeshIndices) {
+TEST(SceneShapesTest, MeshIndices) {
   const json mesh = with_object(square_mesh());
   EXPECT_TRUE(fails_at(with(mesh, "/objects/0/triangles/1/2", 4), "/objects/0/triangles/1/2",
                        {"must be <= 3 (the mesh has 4 positions), got 4"}));
@@ -170,7 +170,7 @@ TEST(SceneShapes, MeshIndices) {
 
 // Mesh elements are read by a fast check that builds no JSON Pointer, and only what it
 // refuses goes through the full rules: those still parse, or fail at their own pointer.
-TEST(SceneShapes, MeshElementsOffTheFastPathParseOrFailAtTheirPointer) {
+TEST(SceneShapesTest, MeshElementsOffTheFastPathParseOrFailAtTheirPointer) {
   const json mesh = with_object(square_mesh());
   const Scene scene = parse_scene(with(mesh, "/objects/0/triangles/1", {0.0, 2, 3.0}));
   EXPECT_EQ(std::get<Mesh>(scene.objects[0].shape).triangles[1],
@@ -186,7 +186,7 @@ TEST(SceneShapes, MeshElementsOffTheFastPathParseOrFailAtTheirPointer) {
   EXPECT_NEAR(std::get<Mesh>(huge.objects[0].shape).normals[0].x, std::sqrt(0.5), 1e-15);
 }
 
-TEST(SceneShapes, MeshNormalsAndThin) {
+TEST(SceneShapesTest, MeshNormalsAndThin) {
   const json mesh = with_object(square_mesh());
   EXPECT_TRUE(fails_at(with(mesh, "/objects/0/normals", {{0, 0, 1}}), "/objects/0/normals",
                        {"must have one normal per position (4), got 1"}));
@@ -207,7 +207,7 @@ TEST(SceneShapes, MeshNormalsAndThin) {
 
 // --- transforms ---
 
-TEST(SceneTransforms, StepShape) {
+TEST(SceneTransformsTest, StepShape) {
   EXPECT_TRUE(fails_at(with_transform(json::object()), "/objects/0/transform",
                        {"must be an array of transform steps, got object"}));
   EXPECT_TRUE(fails_at(with_transform({"scale"}), "/objects/0/transform/0",
@@ -222,7 +222,7 @@ TEST(SceneTransforms, StepShape) {
                        {"unknown key", "did you mean \"translate\"?"}));
 }
 
-TEST(SceneTransforms, StepRules) {
+TEST(SceneTransformsTest, StepRules) {
   EXPECT_TRUE(fails_at(with_transform({{{"translate", {1, 0}}}}),
                        "/objects/0/transform/0/translate", {"must be an array of 3 numbers"}));
   EXPECT_TRUE(fails_at(with_transform({{{"rotate", {{"axis", {0, 1, 0}}}}}}),
@@ -241,7 +241,7 @@ TEST(SceneTransforms, StepRules) {
 
 json row_major(std::array<double, 16> values) { return json(values); }
 
-TEST(SceneTransforms, MatrixRules) {
+TEST(SceneTransformsTest, MatrixRules) {
   EXPECT_TRUE(fails_at(with_transform({{{"matrix", {1, 0, 0, 1}}}}),
                        "/objects/0/transform/0/matrix",
                        {"must be an array of 16 numbers", "got an array of 4 elements"}));
@@ -258,7 +258,7 @@ TEST(SceneTransforms, MatrixRules) {
   EXPECT_EQ(m * glm::dvec4(1, 1, 1, 1), glm::dvec4(7, 7, 8, 1));
 }
 
-TEST(SceneTransforms, SingularProductIsRejected) {
+TEST(SceneTransformsTest, SingularProductIsRejected) {
   // Each step alone is fine; together they squash space below the threshold.
   EXPECT_TRUE(fails_at(with_transform({{{"scale", 1e-3}}, {{"scale", 1e-3}}}),
                        "/objects/0/transform", {"singular"}));
@@ -267,7 +267,7 @@ TEST(SceneTransforms, SingularProductIsRejected) {
                        "/objects/0/transform", {"non-finite"}));
 }
 
-TEST(SceneTransforms, StepsApplyInOrder) {
+TEST(SceneTransformsTest, StepsApplyInOrder) {
   const auto transform_of = [](json steps) {
     return parse_scene(with_transform(std::move(steps))).objects[0].transform;
   };
@@ -282,7 +282,7 @@ TEST(SceneTransforms, StepsApplyInOrder) {
   EXPECT_EQ(transform_of(json::array()), Mat4(1.0));
 }
 
-TEST(Transform, ComposeAndRotate) {
+TEST(TransformTest, ComposeAndRotate) {
   const std::vector<TransformStep> steps = {Rotate{Vec3(0, 0, 1), 90.0}, Translate{Vec3(0, 0, 2)}};
   EXPECT_EQ(compose_transform(steps) * glm::dvec4(1, 0, 0, 1), glm::dvec4(0, 1, 2, 1));
   const Mat4 r = step_matrix(Rotate{Vec3(1, 1, 1), 120.0});
@@ -295,7 +295,7 @@ TEST(Transform, ComposeAndRotate) {
 
 // --- suggestions ---
 
-TEST(Suggest, EditDistance) {
+TEST(SuggestTest, EditDistance) {
   EXPECT_EQ(edit_distance("radius", "radius"), 0u);
   EXPECT_EQ(edit_distance("raduis", "radius"), 1u);  // a swap is one edit
   EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);
@@ -303,7 +303,7 @@ TEST(Suggest, EditDistance) {
   EXPECT_EQ(edit_distance("abc", ""), 3u);
 }
 
-TEST(Suggest, ClosestMatch) {
+TEST(SuggestTest, ClosestMatch) {
   const std::vector<std::string_view> keys = {"min", "max", "radius"};
   EXPECT_EQ(closest_match("mxa", keys), "max");
   EXPECT_EQ(closest_match("radus", keys), "radius");

@@ -24,11 +24,11 @@ namespace {
 
 // --- the document and its JSON text ---
 
-TEST(SceneDocument, MustBeAnObject) {
+TEST(SceneDocumentTest, MustBeAnObject) {
   EXPECT_TRUE(fails_at(json::array(), "", {"must be a JSON object", "got array"}));
 }
 
-TEST(SceneDocument, SyntaxErrorNamesLineAndColumn) {
+TEST(SceneDocumentTest, SyntaxErrorNamesLineAndColumn) {
   try {
     parse_scene_text("{\n  \"image\": ,\n}");
     FAIL() << "expected a syntax error";
@@ -39,7 +39,7 @@ TEST(SceneDocument, SyntaxErrorNamesLineAndColumn) {
   }
 }
 
-TEST(SceneDocument, ColumnsCountCharactersNotBytes) {
+TEST(SceneDocumentTest, ColumnsCountCharactersNotBytes) {
   try {
     parse_scene_text("{\"é\": x}");
     FAIL() << "expected a syntax error";
@@ -53,7 +53,7 @@ std::string nested_arrays(int depth) {
          std::string(static_cast<std::size_t>(depth - 1), ']') + "}";
 }
 
-TEST(SceneDocument, RejectsNestingDeeperThan64) {
+TEST(SceneDocumentTest, RejectsNestingDeeperThan64) {
   try {
     parse_scene_text(nested_arrays(65));
     FAIL() << "expected a nesting error";
@@ -63,7 +63,7 @@ TEST(SceneDocument, RejectsNestingDeeperThan64) {
   }
 }
 
-TEST(SceneDocument, AcceptsNestingOf64AndIgnoresBracketsInStrings) {
+TEST(SceneDocumentTest, AcceptsNestingOf64AndIgnoresBracketsInStrings) {
   // Gets past the JSON stage, so the scene rules complain instead.
   try {
     parse_scene_text(nested_arrays(64));
@@ -77,7 +77,7 @@ TEST(SceneDocument, AcceptsNestingOf64AndIgnoresBracketsInStrings) {
 }
 
 // nlohmann refuses a literal beyond the range of double rather than storing infinity.
-TEST(SceneDocument, HugeLiteralIsAJsonError) {
+TEST(SceneDocumentTest, HugeLiteralIsAJsonError) {
   const std::string text = "{\"image\": {\"width\": 4, \"height\": 3},\n \"background\": 1e999}";
   try {
     parse_scene_text(text);
@@ -92,7 +92,7 @@ TEST(SceneDocument, HugeLiteralIsAJsonError) {
 
 // simdjson parses first; whatever it accepts must be exactly what nlohmann makes of the
 // same text, and what it refuses goes to nlohmann, which words the error or accepts it.
-TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
+TEST(SceneDocumentTest, TheFastParserAgreesWithNlohmannOrStepsAside) {
   const char* const texts[] = {"0",
                                "-0.0",
                                "5",
@@ -154,13 +154,13 @@ TEST(SceneDocument, TheFastParserAgreesWithNlohmannOrStepsAside) {
   EXPECT_THROW(parse_json_text("{} x"), SceneError);
 }
 
-TEST(SceneDocument, NanIsRejected) {
+TEST(SceneDocumentTest, NanIsRejected) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/camera/eye/2", nan), "/camera/eye/2",
                        {"must be a finite number", "nan"}));
 }
 
-TEST(SceneDocument, ReadJsonFile) {
+TEST(SceneDocumentTest, ReadJsonFile) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("tessera_scene_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -187,7 +187,7 @@ TEST(SceneDocument, ReadJsonFile) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(SceneDocument, Version) {
+TEST(SceneDocumentTest, Version) {
   EXPECT_NO_THROW(parse_scene(with(minimal_scene(), "/version", 1)));
   EXPECT_NO_THROW(parse_scene(with(minimal_scene(), "/version", 1.0)));
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/version", 2), "/version", {"must be 1", "got 2"}));
@@ -197,20 +197,20 @@ TEST(SceneDocument, Version) {
   EXPECT_TRUE(fails_at(with(with(minimal_scene(), "/version", 2), "/new_key", 1), "/version", {}));
 }
 
-TEST(SceneDocument, UnknownTopLevelKey) {
+TEST(SceneDocumentTest, UnknownTopLevelKey) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/backgruond", 0), "/backgruond",
                        {"unknown key \"backgruond\"", "did you mean \"background\"?"}));
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/zzz", 0), "/zzz",
                        {"unknown key \"zzz\"", "known keys here:", "\"objects\""}));
 }
 
-TEST(SceneDocument, PointerEscapesUnknownKeys) {
+TEST(SceneDocumentTest, PointerEscapesUnknownKeys) {
   EXPECT_TRUE(fails_at(with(minimal_scene(), "/a~1b~0c", 0), "/a~1b~0c", {"unknown key"}));
 }
 
 // --- image ---
 
-TEST(SceneImage, Required) {
+TEST(SceneImageTest, Required) {
   json scene = minimal_scene();
   scene.erase("image");
   EXPECT_TRUE(fails_at(scene, "/image", {"required"}));
@@ -221,7 +221,7 @@ TEST(SceneImage, Required) {
       fails_at(with(minimal_scene(), "/image", 640), "/image", {"must be an object, got number"}));
 }
 
-TEST(SceneImage, SizeRules) {
+TEST(SceneImageTest, SizeRules) {
   const json scene = minimal_scene();
   EXPECT_TRUE(fails_at(with(scene, "/image/width", 0), "/image/width", {"must be >= 1, got 0"}));
   EXPECT_TRUE(fails_at(with(scene, "/image/width", 20000), "/image/width",
@@ -240,7 +240,7 @@ TEST(SceneImage, SizeRules) {
 
 // --- camera ---
 
-TEST(SceneCamera, RequiredParts) {
+TEST(SceneCameraTest, RequiredParts) {
   json scene = minimal_scene();
   scene.erase("camera");
   EXPECT_TRUE(fails_at(scene, "/camera", {"required"}));
@@ -252,7 +252,7 @@ TEST(SceneCamera, RequiredParts) {
   EXPECT_TRUE(fails_at(scene, "/camera/look_at", {"required"}));
 }
 
-TEST(SceneCamera, VectorRules) {
+TEST(SceneCameraTest, VectorRules) {
   const json scene = minimal_scene();
   EXPECT_TRUE(fails_at(with(scene, "/camera/eye", {0, 1}), "/camera/eye",
                        {"must be an array of 3 numbers, got an array of 2 elements"}));
@@ -264,7 +264,7 @@ TEST(SceneCamera, VectorRules) {
                        {"must be a number, got null"}));
 }
 
-TEST(SceneCamera, FieldOfView) {
+TEST(SceneCameraTest, FieldOfView) {
   const json scene = minimal_scene();
   EXPECT_TRUE(
       fails_at(with(scene, "/camera/fov_y", 0), "/camera/fov_y", {"must be in (0, 180), got 0"}));
@@ -273,7 +273,7 @@ TEST(SceneCamera, FieldOfView) {
   EXPECT_DOUBLE_EQ(parse_scene(with(scene, "/camera/fov_y", 179.5)).camera.fov_y_degrees, 179.5);
 }
 
-TEST(SceneCamera, Geometry) {
+TEST(SceneCameraTest, Geometry) {
   const json scene = minimal_scene();
   EXPECT_TRUE(fails_at(with(scene, "/camera/look_at", {0, 0, 5}), "/camera/look_at",
                        {"must differ from \"eye\""}));
@@ -287,7 +287,7 @@ TEST(SceneCamera, Geometry) {
 
 // --- render settings ---
 
-TEST(SceneRender, Rules) {
+TEST(SceneRenderTest, Rules) {
   const json scene = minimal_scene();
   EXPECT_TRUE(
       fails_at(with(scene, "/render", json::array()), "/render", {"must be an object, got array"}));
@@ -314,7 +314,7 @@ TEST(SceneRender, Rules) {
                        {"unknown key", "\"samples_per_pixel\""}));
 }
 
-TEST(SceneRender, Values) {
+TEST(SceneRenderTest, Values) {
   json scene = minimal_scene();
   scene["render"] = {
       {"samples_per_pixel", 16}, {"max_depth", 0}, {"tile_size", 8}, {"output_transfer", "linear"}};
@@ -327,7 +327,7 @@ TEST(SceneRender, Values) {
 
 // --- colors ---
 
-TEST(SceneColors, Rules) {
+TEST(SceneColorsTest, Rules) {
   const json scene = minimal_scene();
   EXPECT_EQ(parse_scene(with(scene, "/background", 0.5)).background, Color(0.5));
   EXPECT_EQ(parse_scene(with(scene, "/ambient_light", {0.1, 0.2, 0.3})).ambient_light,
@@ -344,7 +344,7 @@ TEST(SceneColors, Rules) {
 
 // --- a whole scene ---
 
-TEST(SceneValid, MinimalSceneGetsDefaults) {
+TEST(SceneValidTest, MinimalSceneGetsDefaults) {
   const Scene scene = parse_scene(minimal_scene());
   EXPECT_EQ(scene.width, 4);
   EXPECT_EQ(scene.height, 3);
@@ -371,7 +371,7 @@ TEST(SceneValid, MinimalSceneGetsDefaults) {
   EXPECT_TRUE(scene.objects.empty());
 }
 
-TEST(SceneValid, CompleteScene) {
+TEST(SceneValidTest, CompleteScene) {
   const Scene scene = parse_scene_text(R"({
     "version": 1,
     "image": {"width": 640, "height": 480},
@@ -470,7 +470,7 @@ std::pair<std::string, std::uint64_t> limit_broken(const json& document, const L
   return {"(none: it parsed)", 0};
 }
 
-TEST(SceneLimits, EachLimitIsNamedWithItsValue) {
+TEST(SceneLimitsTest, EachLimitIsNamedWithItsValue) {
   Limits tight;
   tight.max_width = 100;
   tight.max_pixels = 30;

@@ -16,7 +16,7 @@ json cylinder() {
 
 json cone() { return {{"type", "cone"}, {"center", {-1, 0, 2}}, {"radius", 2}, {"height", 3}}; }
 
-TEST(SceneQuadrics, CylinderAndConeAreRead) {
+TEST(SceneQuadricsTest, CylinderAndConeAreRead) {
   const Scene scene = parse_scene(with(minimal_scene(), "/objects", {cylinder(), cone()}));
   ASSERT_EQ(scene.objects.size(), 2u);
   const auto& parsed_cylinder = std::get<Cylinder>(scene.objects[0].shape);
@@ -32,7 +32,7 @@ TEST(SceneQuadrics, CylinderAndConeAreRead) {
   EXPECT_TRUE(is_solid(scene.objects[1]));
 }
 
-TEST(SceneQuadrics, TakeMaterialAndTransformLikeEveryObject) {
+TEST(SceneQuadricsTest, TakeMaterialAndTransformLikeEveryObject) {
   json object = cylinder();
   object["material"] = {{"diffuse", 0.25}};
   object["transform"] = {{{"translate", {0, 1, 0}}}};
@@ -45,7 +45,7 @@ TEST(SceneQuadrics, TakeMaterialAndTransformLikeEveryObject) {
   EXPECT_EQ(named.objects[0].material, 1u);
 }
 
-TEST(SceneQuadrics, TypeListNamesThem) {
+TEST(SceneQuadricsTest, TypeListNamesThem) {
   EXPECT_TRUE(fails_at(with_object({{"type", "cylindre"}}), "/objects/0/type",
                        {"\"cylinder\"", "\"cone\"", "did you mean \"cylinder\"?"}));
   EXPECT_TRUE(
@@ -89,12 +89,12 @@ void expect_fields_checked(const json& shape) {
                        "/objects/0/transform/0/scale", {}));
 }
 
-TEST(SceneQuadrics, EveryFieldIsChecked) {
+TEST(SceneQuadricsTest, EveryFieldIsChecked) {
   expect_fields_checked(cylinder());
   expect_fields_checked(cone());
 }
 
-TEST(SceneQuadrics, CostNoTriangles) {
+TEST(SceneQuadricsTest, CostNoTriangles) {
   // Exact shapes, never tessellated: like spheres they count nothing against max_triangles,
   // in parse_scene and in the coordinator's first reading alike.
   Limits limits;

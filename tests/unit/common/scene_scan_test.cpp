@@ -94,7 +94,7 @@ Limits small_limits() {
   return limits;
 }
 
-TEST(SceneScan, RefusesEachCountLimitAsParseSceneDoes) {
+TEST(SceneScanTest, RefusesEachCountLimitAsParseSceneDoes) {
   const Limits limits = small_limits();
   EXPECT_TRUE(refused_like_parse_scene(scene_with("objects", many(sphere(), 4)), limits));
   EXPECT_TRUE(refused_like_parse_scene(scene_with("lights", many(light(), 3)), limits));
@@ -116,7 +116,7 @@ TEST(SceneScan, RefusesEachCountLimitAsParseSceneDoes) {
       refused_like_parse_scene(scene_with("objects", {box(), box(), mesh(6), triangle}), limits));
 }
 
-TEST(SceneScan, PassesWhatIsWithinTheLimits) {
+TEST(SceneScanTest, PassesWhatIsWithinTheLimits) {
   const Limits limits = small_limits();
   json scene = scene_with("objects", {box(), box(), mesh(6)});
   scene["lights"] = many(light(), 2);
@@ -133,7 +133,7 @@ TEST(SceneScan, PassesWhatIsWithinTheLimits) {
   EXPECT_FALSE(scan_error(R"({"materials": {"a": {}, "b": {}, "a": {}}})", limits));
 }
 
-TEST(SceneScan, RepeatedMembersAreCountedAfresh) {
+TEST(SceneScanTest, RepeatedMembersAreCountedAfresh) {
   Limits limits;
   limits.max_objects = 3;
   // The document keeps the last "objects": two here, three in each one before.
@@ -148,7 +148,7 @@ TEST(SceneScan, RepeatedMembersAreCountedAfresh) {
 // The property the coordinator relies on: the refusal comes as the first element too many
 // begins, whatever follows. Here what follows is not even JSON, so any parse of the whole
 // text would have said "invalid JSON" instead.
-TEST(SceneScan, StopsAtTheFirstElementTooMany) {
+TEST(SceneScanTest, StopsAtTheFirstElementTooMany) {
   Limits limits;
   limits.max_objects = 2;
   const std::string head = R"({"scene": {"objects": [{"type": "sphere"}, {}, {"type": "sph)";
@@ -174,7 +174,7 @@ TEST(SceneScan, StopsAtTheFirstElementTooMany) {
 
 // Every piece that is later built as nodes whole is bounded, whatever the text holds:
 // a huge array where three numbers belong is refused at its piece, before it is built.
-TEST(SceneScan, NoPieceHoldsMoreThanItsShareOfValues) {
+TEST(SceneScanTest, NoPieceHoldsMoreThanItsShareOfValues) {
   const Limits limits;
   const json huge = json(std::vector<int>(70'000, 1));
   json big_center = scene_with("objects", {sphere(), sphere()});
@@ -211,7 +211,7 @@ TEST(SceneScan, NoPieceHoldsMoreThanItsShareOfValues) {
   EXPECT_FALSE(scan_error(scene_with("objects", {mesh(100'000)}).dump(), many_triangles));
 }
 
-TEST(SceneScan, SyntaxAndNestingAsParseJsonText) {
+TEST(SceneScanTest, SyntaxAndNestingAsParseJsonText) {
   const std::vector<std::string> texts = {R"({"objects": [1, 2,]})",
                                           R"({"a": 1} x)",
                                           "{\"a\": \"\x01\"}",
@@ -235,7 +235,7 @@ TEST(SceneScan, SyntaxAndNestingAsParseJsonText) {
 
 // The texts under examples/ and some awkward ones: kept apart, the objects come back as the
 // same stored text (dump()) and the same Scene, or the same error.
-TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
+TEST(SceneStreamTest, SameTextAndSceneAsTheWholeDocument) {
   std::vector<std::string> texts;
   for (const auto& entry : std::filesystem::directory_iterator(TESSERA_SOURCE_DIR "/examples"))
     if (entry.path().extension() == ".json") texts.push_back(read_text_file(entry.path()));
@@ -318,7 +318,7 @@ TEST(SceneStream, SameTextAndSceneAsTheWholeDocument) {
   }
 }
 
-TEST(SceneStream, UnknownMembersAreNotBuilt) {
+TEST(SceneStreamTest, UnknownMembersAreNotBuilt) {
   const std::string_view keys[] = {"name", "scene"};
   ObjectTexts objects;
   const json document = parse_json_objects_apart(
@@ -333,7 +333,7 @@ TEST(SceneStream, UnknownMembersAreNotBuilt) {
   EXPECT_EQ(objects.size(), 1u);
 }
 
-TEST(SceneStream, AMeshIsCheckedWithItsArraysLifted) {
+TEST(SceneStreamTest, AMeshIsCheckedWithItsArraysLifted) {
   ObjectTexts objects;
   objects.add(mesh(100));
   objects.add(sphere());

@@ -21,7 +21,7 @@ int status_of(const AccessPolicy& policy, const char* role, const char* authoriz
   return refused ? refused->status : 0;
 }
 
-TEST(Access, EachRoleTakesOnlyItsOwnToken) {
+TEST(AccessTest, EachRoleTakesOnlyItsOwnToken) {
   EXPECT_EQ(status_of(both, role_client, "Bearer client-secret"), 0);
   EXPECT_EQ(status_of(both, role_worker, "Bearer worker-secret"), 0);
   EXPECT_EQ(status_of(both, role_client, "bearer client-secret"), 0);  // the scheme in any case
@@ -36,7 +36,7 @@ TEST(Access, EachRoleTakesOnlyItsOwnToken) {
   EXPECT_EQ(status_of(both, "", ""), 0);  // public routes need nothing
 }
 
-TEST(Access, RefusalsSayWhatIsWrongInTheErrorShapeAndChallenge) {
+TEST(AccessTest, RefusalsSayWhatIsWrongInTheErrorShapeAndChallenge) {
   const auto missing = both.check(role_client, "");
   ASSERT_TRUE(missing);
   EXPECT_NE(missing->body.find("\"missing_token\""), std::string::npos) << missing->body;
@@ -58,7 +58,7 @@ TEST(Access, RefusalsSayWhatIsWrongInTheErrorShapeAndChallenge) {
     EXPECT_EQ(refused->body.find("secret"), std::string::npos) << refused->body;
 }
 
-TEST(Access, ARoleWithoutATokenIsOpen) {
+TEST(AccessTest, ARoleWithoutATokenIsOpen) {
   const AccessPolicy workers_only(AccessTokens{"", "worker-secret", ""});
   EXPECT_FALSE(workers_only.protects(role_client));
   EXPECT_TRUE(workers_only.protects(role_worker));
@@ -68,7 +68,7 @@ TEST(Access, ARoleWithoutATokenIsOpen) {
   EXPECT_EQ(status_of(open, role_worker, "Bearer anything"), 0);
 }
 
-TEST(Access, BearerTokenParsing) {
+TEST(AccessTest, BearerTokenParsing) {
   EXPECT_EQ(bearer_token("Bearer abc"), "abc");
   EXPECT_EQ(bearer_token("BEARER  abc  "), "abc");
   EXPECT_FALSE(bearer_token("Bearer   "));
@@ -76,7 +76,7 @@ TEST(Access, BearerTokenParsing) {
   EXPECT_FALSE(bearer_token("Token abc"));
 }
 
-TEST(Secret, FromTheValueThenTheFileThenTheEnvironment) {
+TEST(SecretTest, FromTheValueThenTheFileThenTheEnvironment) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("tessera-secret-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);

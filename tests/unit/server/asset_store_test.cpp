@@ -59,7 +59,7 @@ TEST_F(AssetStoreTest, AnAssetASubmissionReferencesIsNotOldAnyMore) {
   EXPECT_FALSE(store.reference("../../etc/passwd"));
 }
 
-TEST(AssetCollector, FindsEveryDigestAStoredSceneNames) {
+TEST(AssetCollectorTest, FindsEveryDigestAStoredSceneNames) {
   const std::string a(64, 'a'), b(64, '0');
   const std::string scene =
       R"({"objects": [{"asset": "sha256:)" + a + R"(", "files": {"x": "sha256:)" + b +
@@ -67,7 +67,7 @@ TEST(AssetCollector, FindsEveryDigestAStoredSceneNames) {
   EXPECT_EQ(protocol::digests_named_in(scene), (std::set<std::string>{a, b}));
 }
 
-TEST(AssetDigest, ReadsOnlyItsFormAndWritesItBack) {
+TEST(AssetDigestTest, ReadsOnlyItsFormAndWritesItBack) {
   using protocol::AssetDigest;
   const std::string hex = "0123456789abcdef" + std::string(48, 'f');
   const auto digest = AssetDigest::parse("sha256:" + hex);

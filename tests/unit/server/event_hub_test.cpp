@@ -37,7 +37,7 @@ std::string last_id(const std::string& text) {
   return text.substr(at + 4, text.find('\n', at) - at - 4);
 }
 
-TEST(EventHub, EachStreamSeesItsOwnEventsInOrder) {
+TEST(EventHubTest, EachStreamSeesItsOwnEventsInOrder) {
   EventHub hub;
   const auto all = hub.subscribe("", std::nullopt);
   const auto job_a = hub.subscribe("j-a", std::nullopt);
@@ -53,7 +53,7 @@ TEST(EventHub, EachStreamSeesItsOwnEventsInOrder) {
   EXPECT_EQ(hub.subscribers(), 3u);
 }
 
-TEST(EventHub, AWaitingStreamIsWokenByItsNextEvent) {
+TEST(EventHubTest, AWaitingStreamIsWokenByItsNextEvent) {
   EventHub hub;
   const auto job = hub.subscribe("j-a", std::nullopt);
   int woken = 0;
@@ -72,7 +72,7 @@ TEST(EventHub, AWaitingStreamIsWokenByItsNextEvent) {
   EXPECT_EQ(woken, 2) << "something is there already";
 }
 
-TEST(EventHub, ALastEventIdResumesRightAfterIt) {
+TEST(EventHubTest, ALastEventIdResumesRightAfterIt) {
   EventHub hub;
   const auto first = hub.subscribe("j-a", std::nullopt);
   hub.publish("tile", "1", false, "j-a");
@@ -88,7 +88,7 @@ TEST(EventHub, ALastEventIdResumesRightAfterIt) {
   EXPECT_EQ(taken(*resumed), (std::vector<std::string>{"tile 3", "tile 4"}));
 }
 
-TEST(EventHub, AnIdNoLongerKeptOrFromAnotherProcessResyncs) {
+TEST(EventHubTest, AnIdNoLongerKeptOrFromAnotherProcessResyncs) {
   EventLimits limits;
   limits.kept_events = 2;
   EventHub hub(limits);
@@ -111,7 +111,7 @@ TEST(EventHub, AnIdNoLongerKeptOrFromAnotherProcessResyncs) {
   }
 }
 
-TEST(EventHub, ASubscriberThatFallsBehindIsSentResyncAndThenFollows) {
+TEST(EventHubTest, ASubscriberThatFallsBehindIsSentResyncAndThenFollows) {
   EventLimits limits;
   limits.queue_events = 3;
   EventHub hub(limits);
@@ -128,7 +128,7 @@ TEST(EventHub, ASubscriberThatFallsBehindIsSentResyncAndThenFollows) {
   EXPECT_EQ(taken(*slow), (std::vector<std::string>{"job 5"}));
 }
 
-TEST(EventHub, EndingAllEndsEachStreamOnceTaken) {
+TEST(EventHubTest, EndingAllEndsEachStreamOnceTaken) {
   EventHub hub;
   const auto stream = hub.subscribe("", std::nullopt);
   hub.publish("job", "1", true);
@@ -143,7 +143,7 @@ TEST(EventHub, EndingAllEndsEachStreamOnceTaken) {
   EXPECT_TRUE(ended);
 }
 
-TEST(EventHub, AStreamResumedAcrossATimeNobodyFollowedItsJobResyncs) {
+TEST(EventHubTest, AStreamResumedAcrossATimeNobodyFollowedItsJobResyncs) {
   EventHub hub;
   auto first = hub.subscribe("j-a", std::nullopt);
   EXPECT_TRUE(hub.follows_or_skips("j-a"));

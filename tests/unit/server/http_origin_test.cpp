@@ -66,7 +66,7 @@ class HttpOriginTest : public ::testing::Test {
   std::string last_;
 };
 
-TEST(OriginPolicy, TheServersOwnPagesAreOfItsSchemeToo) {
+TEST(OriginPolicyTest, TheServersOwnPagesAreOfItsSchemeToo) {
   const OriginPolicy none;
   const auto refused = [&](const char* origin, bool tls) {
     return origin_problem(none, "farm.example:8640", origin, tls).has_value();

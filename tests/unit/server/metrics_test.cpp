@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-TEST(Metrics, AHistogramCountsEachValueInItsBucketAndTheOnesAbove) {
+TEST(MetricsTest, AHistogramCountsEachValueInItsBucketAndTheOnesAbove) {
   Histogram histogram({0.01, 0.1, 1});
   for (const double value : {0.005, 0.01, 0.05, 2.0}) histogram.observe(value);
   std::string out;
@@ -32,7 +32,7 @@ TEST(Metrics, AHistogramCountsEachValueInItsBucketAndTheOnesAbove) {
             "t_seconds_count{route=\"/x\"} 4\n");
 }
 
-TEST(Metrics, RequestsAreCountedByPatternMethodAndStatusNeverByTheirOwnPath) {
+TEST(MetricsTest, RequestsAreCountedByPatternMethodAndStatusNeverByTheirOwnPath) {
   HttpMetrics metrics;
   metrics.record("/v1/jobs/{id}", "GET", 200, 0.002);
   metrics.record("/v1/jobs/{id}", "GET", 200, 0.003);
@@ -57,7 +57,7 @@ TEST(Metrics, RequestsAreCountedByPatternMethodAndStatusNeverByTheirOwnPath) {
   EXPECT_EQ(label_value("a\"b\\c\nd"), "a\\\"b\\\\c\\nd");
 }
 
-TEST(Metrics, OnlyTheMetricsTokenOpensTheMetricsRole) {
+TEST(MetricsTest, OnlyTheMetricsTokenOpensTheMetricsRole) {
   const AccessPolicy open(AccessTokens{"api", "worker", ""});
   EXPECT_FALSE(open.protects(role_metrics)) << "without a token, the route answers loopback only";
   const AccessPolicy policy(AccessTokens{"api", "worker", "scrape"});
@@ -71,9 +71,9 @@ TEST(Metrics, OnlyTheMetricsTokenOpensTheMetricsRole) {
       << "the metrics token opens nothing else";
 }
 
-class MetricsRoute : public ::testing::Test {
+class MetricsRouteTest : public ::testing::Test {
  protected:
-  MetricsRoute()
+  MetricsRouteTest()
       : dir_(fs::temp_directory_path() / ("tessera-metrics-" + std::to_string(::getpid()))),
         store_((fs::remove_all(dir_), dir_)),
         scheduler_(store_, clock_),
@@ -83,7 +83,7 @@ class MetricsRoute : public ::testing::Test {
     context_.data_dir = dir_;
     add_api_routes(router_, context_);
   }
-  ~MetricsRoute() override { fs::remove_all(dir_); }
+  ~MetricsRouteTest() override { fs::remove_all(dir_); }
 
   // The answer to GET /metrics from `peer`.
   HttpResponse scrape(const std::string& peer) {
@@ -109,7 +109,7 @@ class MetricsRoute : public ::testing::Test {
   Router router_;
 };
 
-TEST_F(MetricsRoute, WithoutATokenOnlyThisMachineIsAnswered) {
+TEST_F(MetricsRouteTest, WithoutATokenOnlyThisMachineIsAnswered) {
   for (const char* local : {"127.0.0.1:5000", "127.8.9.10:1", "[::1]:5000", "[::ffff:127.0.0.1]:7"})
     EXPECT_EQ(scrape(local).status, 200) << local;
   for (const char* remote :
@@ -123,7 +123,7 @@ TEST_F(MetricsRoute, WithoutATokenOnlyThisMachineIsAnswered) {
   EXPECT_EQ(scrape("10.0.0.7:5000").status, 200);
 }
 
-TEST_F(MetricsRoute, EveryJobStateAndWorkerStateIsAlwaysASeries) {
+TEST_F(MetricsRouteTest, EveryJobStateAndWorkerStateIsAlwaysASeries) {
   const HttpResponse answer = scrape("127.0.0.1:1");
   EXPECT_EQ(answer.content_type, "text/plain; version=0.0.4; charset=utf-8");
   for (const char* state : {"queued", "running", "paused", "completed", "failed", "canceled"})

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 using test::openapi_routes;
 using test::Route;
 
-TEST(OpenApi, ServerRoutesAndTheContractAgree) {
+TEST(OpenApiTest, ServerRoutesAndTheContractAgree) {
   const fs::path dir =
       fs::temp_directory_path() / ("tessera-openapi-" + std::to_string(::getpid()));
   fs::remove_all(dir);

@@ -254,7 +254,7 @@ TEST_F(StoreThreadFaultsTest, AShortageThatPassesIsWaitedOutAndFailsNothing) {
   EXPECT_EQ(stored_workers(), (std::vector<std::string>{"w-1", "w-2"}));
 }
 
-TEST(StoreErrors, ErrnosNameTheirFault) {
+TEST(StoreErrorsTest, ErrnosNameTheirFault) {
   EXPECT_EQ(fault_of_errno(ENOSPC), StoreFault::disk_full);
   EXPECT_EQ(fault_of_errno(EDQUOT), StoreFault::disk_full);
   EXPECT_EQ(fault_of_errno(EMFILE), StoreFault::transient);

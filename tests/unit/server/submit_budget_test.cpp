@@ -9,7 +9,7 @@
 namespace tessera {
 namespace {
 
-TEST(SubmitBudget, HoldsWhatFitsAndRefusesTheRest) {
+TEST(SubmitBudgetTest, HoldsWhatFitsAndRefusesTheRest) {
   SubmitBudget budget(100);
   auto first = budget.try_hold(60);
   ASSERT_TRUE(first);
@@ -21,7 +21,7 @@ TEST(SubmitBudget, HoldsWhatFitsAndRefusesTheRest) {
   EXPECT_FALSE(budget.try_hold(1));
 }
 
-TEST(SubmitBudget, AHoldGivesItsShareBackWhenDone) {
+TEST(SubmitBudgetTest, AHoldGivesItsShareBackWhenDone) {
   SubmitBudget budget(100);
   {
     auto hold = budget.try_hold(80);
@@ -36,7 +36,7 @@ TEST(SubmitBudget, AHoldGivesItsShareBackWhenDone) {
   EXPECT_TRUE(budget.try_hold(30));  // the retry gets through
 }
 
-TEST(SubmitBudget, MoreThanTheWholeBudgetGoesAlone) {
+TEST(SubmitBudgetTest, MoreThanTheWholeBudgetGoesAlone) {
   SubmitBudget budget(100);
   {
     auto huge = budget.try_hold(1000);

@@ -81,7 +81,7 @@ void check_equivalence(const std::vector<Animated>& fields, bool expect_shared,
   EXPECT_FALSE(same_bits(render_local(frame_zero, 1, 16).image, still));
 }
 
-TEST(AnimationDeterminism, Camera) {
+TEST(AnimationDeterminismTest, Camera) {
   check_equivalence({{"/camera/eye", {0, 2, 7}, {2, 3, 6}},
                      {"/camera/look_at", {0, 0.8, 0}, {0.5, 0.5, 0}},
                      {"/camera/up", {0, 1, 0}, {0.3, 1, 0}},
@@ -89,7 +89,7 @@ TEST(AnimationDeterminism, Camera) {
                     true);
 }
 
-TEST(AnimationDeterminism, Lights) {
+TEST(AnimationDeterminismTest, Lights) {
   check_equivalence({{"/lights/0/position", {3, 5, 4}, {-2, 6, 3}},
                      {"/lights/0/intensity", 1, {0.5, 1.5, 2}},
                      {"/lights/1/direction", {1, -1, -0.5}, {0.5, -1, 0.5}},
@@ -99,14 +99,14 @@ TEST(AnimationDeterminism, Lights) {
                     true);
 }
 
-TEST(AnimationDeterminism, Transforms) {
+TEST(AnimationDeterminismTest, Transforms) {
   check_equivalence({{"/objects/3/transform/0/rotate/degrees", 30, 120},
                      {"/objects/3/transform/0/rotate/axis", {0, 1, 0}, {0.2, 1, 0.1}},
                      {"/objects/3/transform/1/translate", {0, 0, 0}, {1, 0.2, 0.5}}},
                     false);
 }
 
-TEST(AnimationDeterminism, Materials) {
+TEST(AnimationDeterminismTest, Materials) {
   check_equivalence({{"/materials/mirror/diffuse", 0.1, {0.6, 0.1, 0.1}},
                      {"/materials/mirror/specular", 0.8, 0.3},
                      {"/materials/mirror/shininess", 80, 10},
@@ -114,18 +114,18 @@ TEST(AnimationDeterminism, Materials) {
                     true);
 }
 
-TEST(AnimationDeterminism, TransmissionReadsTheObjectsAgain) {
+TEST(AnimationDeterminismTest, TransmissionReadsTheObjectsAgain) {
   // A transmission track may let a material begin or cease to let light through, which
   // changes how its shapes are registered: every frame reads and builds its objects.
   check_equivalence({{"/materials/glass/transmission", 0.9, {0.2, 0.9, 0.5}}}, false);
 }
 
-TEST(AnimationDeterminism, InlineMaterial) {
+TEST(AnimationDeterminismTest, InlineMaterial) {
   // A track inside an object: the objects are read again, and built again.
   check_equivalence({{"/objects/3/material/diffuse", {0.8, 0.3, 0.2}, {0.1, 0.2, 0.9}}}, false);
 }
 
-TEST(AnimationDeterminism, BackgroundAndAmbient) {
+TEST(AnimationDeterminismTest, BackgroundAndAmbient) {
   check_equivalence({{"/background", {0.3, 0.4, 0.6}, 0}, {"/ambient_light", 0.1, {0.4, 0.2, 0}}},
                     true);
 }
@@ -137,7 +137,7 @@ json example(const std::filesystem::path& path) {
   return document;
 }
 
-TEST(AnimationDeterminism, TexturesAreSharedWithTheGeometry) {
+TEST(AnimationDeterminismTest, TexturesAreSharedWithTheGeometry) {
   // Decoded and mip-mapped once, for frame 0; a moving camera changes every footprint.
   const std::filesystem::path dir = std::filesystem::path(TESSERA_BINARY_DIR) / "examples";
   const FolderSceneFiles files(dir);
@@ -148,7 +148,7 @@ TEST(AnimationDeterminism, TexturesAreSharedWithTheGeometry) {
                     true, base, &files);
 }
 
-TEST(AnimationDeterminism, AMeshFileThatTurns) {
+TEST(AnimationDeterminismTest, AMeshFileThatTurns) {
   // A track in a mesh file's object: the whole text is read again for the frame, the
   // file with it, and its parts placed by the frame's transform.
   const std::filesystem::path dir = std::filesystem::path(TESSERA_SOURCE_DIR) / "examples";
@@ -178,7 +178,7 @@ json scene_with_meshes() {
   return document;
 }
 
-TEST(AnimationDeterminism, MovingMeshesArePlacedAgainNotBuilt) {
+TEST(AnimationDeterminismTest, MovingMeshesArePlacedAgainNotBuilt) {
   const std::vector<Animated> fields = {
       {"/objects/8/transform/0/rotate/degrees", 60, 150},
       {"/objects/8/transform/1/translate", {0.4, 1.3, 1.2}, {0.9, 1.0, 0.6}},
@@ -204,7 +204,7 @@ TEST(AnimationDeterminism, MovingMeshesArePlacedAgainNotBuilt) {
   EXPECT_EQ(frame.geometry().mesh_bvh(1), nullptr);
 }
 
-TEST(AnimationDeterminism, APlacedMeshLooksAsItsTrianglesPlacedByHand) {
+TEST(AnimationDeterminismTest, APlacedMeshLooksAsItsTrianglesPlacedByHand) {
   // Each moving torus of scene_with_meshes() placed by its transform, against the same
   // torus with that transform applied to its corners and normals here (corners swapped
   // where it mirrors), which its BVH then holds as they are: the hits rebuilt in object
@@ -253,7 +253,7 @@ TEST(AnimationDeterminism, APlacedMeshLooksAsItsTrianglesPlacedByHand) {
   EXPECT_FALSE(same_bits(a, c));
 }
 
-TEST(AnimationDeterminism, MovingMeshesRenderTheSameOnAnyTiling) {
+TEST(AnimationDeterminismTest, MovingMeshesRenderTheSameOnAnyTiling) {
   // The frame's pixels on one thread and 16-pixel tiles, and on two and 7-pixel tiles.
   const std::vector<Animated> fields = {{"/objects/8/transform/0/rotate/degrees", 60, 150}};
   SceneFrames frames(animated_scene(fields, scene_with_meshes()).dump(), Limits{});
@@ -262,18 +262,18 @@ TEST(AnimationDeterminism, MovingMeshesRenderTheSameOnAnyTiling) {
   EXPECT_TRUE(same_bits(render_local(frame, 1, 16).image, render_local(frame, 2, 7).image));
 }
 
-TEST(AnimationDeterminism, TransmissionSwitchedOnRebuilds) {
+TEST(AnimationDeterminismTest, TransmissionSwitchedOnRebuilds) {
   // A material that starts to transmit light changes how its shapes are registered.
   check_equivalence({{"/materials/mirror/transmission", 0, 0.5}}, false);
 }
 
-TEST(AnimationDeterminism, TransmissionSwitchedOnRebuildsMeshesToo) {
+TEST(AnimationDeterminismTest, TransmissionSwitchedOnRebuildsMeshesToo) {
   // The frame is read whole again: the torus with no transform, in the scene's own BVH,
   // is built again from its arrays (which frame 0 freed once Embree held them).
   check_equivalence({{"/materials/mirror/transmission", 0, 0.5}}, false, scene_with_meshes());
 }
 
-TEST(AnimationDeterminism, AMeshThatStartsStillIsPlacedOnceItMoves) {
+TEST(AnimationDeterminismTest, AMeshThatStartsStillIsPlacedOnceItMoves) {
   // Frame 0 has the torus where its arrays put it; frame `shown`, moved, places a BVH of
   // its own, which a later frame made from that one places again.
   json base = scene_with_meshes();

@@ -70,7 +70,7 @@ std::vector<int> take_indexes(BatchTiles& batch, int count) {
   return indexes;
 }
 
-TEST(BatchTiles, MoreTilesAreAskedForBeforeTheyRunOutAndFollowInOrder) {
+TEST(BatchTilesTest, MoreTilesAreAskedForBeforeTheyRunOutAndFollowInOrder) {
   FakeCoordinator coordinator;
   BatchTiles batch(tiles(0, 8), 2, 1, coordinator.extend());
   EXPECT_EQ(take_indexes(batch, 5), (std::vector<int>{0, 1, 2, 3, 4}));
@@ -93,7 +93,7 @@ TEST(BatchTiles, MoreTilesAreAskedForBeforeTheyRunOutAndFollowInOrder) {
 
 // least_left() is what the worker says the threads take in an extension's round trip:
 // read anew before each ask, so that fast tiles are asked for sooner than a quarter batch.
-TEST(BatchTiles, MoreAreAskedForSoonerWhenLeastLeftSaysSo) {
+TEST(BatchTilesTest, MoreAreAskedForSoonerWhenLeastLeftSaysSo) {
   FakeCoordinator coordinator;
   std::atomic<int> least_left{1};
   BatchTiles batch(
@@ -114,7 +114,7 @@ TEST(BatchTiles, MoreAreAskedForSoonerWhenLeastLeftSaysSo) {
   coordinator.answer(std::vector<ClaimedTile>{});
 }
 
-TEST(BatchTiles, NoAnswerEndsTheLeaseWithTheTilesItHas) {
+TEST(BatchTilesTest, NoAnswerEndsTheLeaseWithTheTilesItHas) {
   FakeCoordinator coordinator;
   coordinator.answer(std::nullopt);  // the lease was lost, or the coordinator is unreachable
   BatchTiles batch(tiles(0, 3), 4, 1, coordinator.extend());  // asks at once
@@ -123,7 +123,7 @@ TEST(BatchTiles, NoAnswerEndsTheLeaseWithTheTilesItHas) {
   EXPECT_EQ(batch.count(), 3);
 }
 
-TEST(BatchTiles, TheLastTilesAreMarkedOnceNoneWillBeAdded) {
+TEST(BatchTilesTest, TheLastTilesAreMarkedOnceNoneWillBeAdded) {
   FakeCoordinator coordinator;
   BatchTiles batch(tiles(0, 5), 8, 2, coordinator.extend());
   ASSERT_TRUE(coordinator.wait_for_calls(1));
@@ -138,7 +138,7 @@ TEST(BatchTiles, TheLastTilesAreMarkedOnceNoneWillBeAdded) {
   EXPECT_EQ(last, (std::vector<bool>{false, false, true, true}));  // 3 and then 2 left: not yet
 }
 
-TEST(BatchTiles, TilesAddedAfterCloseAreCountedSoThatTheyCanBeGivenBack) {
+TEST(BatchTilesTest, TilesAddedAfterCloseAreCountedSoThatTheyCanBeGivenBack) {
   FakeCoordinator coordinator;
   BatchTiles batch(tiles(0, 2), 4, 1, coordinator.extend());
   ASSERT_TRUE(coordinator.wait_for_calls(1));

@@ -34,7 +34,7 @@ json torus(double major, double minor, bool smooth) {
   return mesh;
 }
 
-TEST(Determinism, CompactMeshesGiveTheBitsOfMeshesThatKeepTheirCorners) {
+TEST(DeterminismTest, CompactMeshesGiveTheBitsOfMeshesThatKeepTheirCorners) {
   // Meshes above kCompactMeshTriangles read their corners through Embree's buffers; with the
   // threshold at 0 every mesh does, and every pixel must keep its bits: smooth and flat,
   // mirrored by their transform, opaque and glass (whose bounds the shadow rays test).
@@ -69,7 +69,7 @@ TEST(Determinism, CompactMeshesGiveTheBitsOfMeshesThatKeepTheirCorners) {
             0);
 }
 
-TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
+TEST(DeterminismTest, BitIdenticalForAnyTileSizeAndThreadCount) {
   const Renderer renderer(parse_scene(test::busy_scene()));
   const Image reference = render_local(renderer, 1, 32).image;
   for (int tile_size : {1, 7, 32, 64})
@@ -83,7 +83,7 @@ TEST(Determinism, BitIdenticalForAnyTileSizeAndThreadCount) {
     }
 }
 
-TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
+TEST(DeterminismTest, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
   // render_tile intersects primary rays, and their shadow rays, sixteen at a time; the
   // tracer's single-ray path must give every pixel the very same bits.
   json scene = test::busy_scene();
@@ -104,7 +104,7 @@ TEST(Determinism, PacketsOfPrimaryRaysGiveTheBitsOfSingleRays) {
   EXPECT_EQ(differing, 0) << "of " << image.width() * image.height() << " pixels";
 }
 
-TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
+TEST(DeterminismTest, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
   // With several samples, render_tile makes each sample's sixteen camera rays at once; every
   // pixel must still be the mean of single rays through sample_offset()'s positions, summed
   // in sample order and divided as render_tile divides (by a reciprocal for powers of two).
@@ -134,7 +134,7 @@ TEST(Determinism, PacketsOfSeveralSamplesGiveTheBitsOfSingleRays) {
   }
 }
 
-TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
+TEST(DeterminismTest, CameraPacketsHaveTheBitsOfSingleRays) {
   const Renderer renderer(parse_scene(test::busy_scene()));
   const PinholeCamera& camera = renderer.camera();
   // Positions anywhere on the image plane and a little beyond it, as edge blocks have.
@@ -157,7 +157,7 @@ TEST(Determinism, CameraPacketsHaveTheBitsOfSingleRays) {
   }
 }
 
-TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
+TEST(DeterminismTest, ATileRenderedAloneMatchesTheWholeImage) {
   // As when a worker on another machine, with a freshly built BVH, renders one tile.
   const json scene = test::busy_scene();
   const Image whole = render_local(Renderer(parse_scene(scene)), 2, 16).image;
@@ -172,7 +172,7 @@ TEST(Determinism, ATileRenderedAloneMatchesTheWholeImage) {
         << "row " << y;
 }
 
-TEST(Determinism, SamplesSpreadOverThePixelAndAverageEqually) {
+TEST(DeterminismTest, SamplesSpreadOverThePixelAndAverageEqually) {
   // The edge of an emitting box runs down the middle of the left pixel: with 64 samples
   // spread over the pixel, about half hit it.
   json scene = {{"image", {{"width", 2}, {"height", 1}}},

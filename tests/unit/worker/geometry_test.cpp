@@ -13,7 +13,7 @@ using test::pinhole_scene;
 using test::render_image;
 using test::render_pixel;
 
-TEST(Geometry, NonUniformlyScaledSphereIsAnEllipsoid) {
+TEST(GeometryTest, NonUniformlyScaledSphereIsAnEllipsoid) {
   // x²/4 + y² + z² = 1, hit by a ray along -z at x = 1.5: z = √(1 - 1.5²/4) and the
   // normal is ∝ (x/4, y, z). Light travels along -z, so the pixel is K_D · n.z.
   json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
@@ -31,7 +31,7 @@ TEST(Geometry, NonUniformlyScaledSphereIsAnEllipsoid) {
   EXPECT_EQ(render_pixel(scene).r, 0.0);
 }
 
-TEST(Geometry, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
+TEST(GeometryTest, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
   // Such a transform takes the renderer's world-space shortcut for spheres. Scaled by 2
   // about the origin, then moved to (0, 0, -3): a sphere of radius 2 at (0, 0, -3),
   // rotated about its own centre, which changes nothing. A ray along -z at x = 1.2 meets
@@ -53,7 +53,7 @@ TEST(Geometry, RotatedUniformlyScaledSphereIsASphereOfScaledRadius) {
   EXPECT_EQ(render_pixel(scene).r, 0.0);
 }
 
-TEST(Geometry, TheNearestOfSeveralPlanesIsHit) {
+TEST(GeometryTest, TheNearestOfSeveralPlanesIsHit) {
   // All the planes of a scene share one Embree primitive; the nearest must win whatever the
   // order of the objects, and a transmissive plane in front lets the next one show through.
   auto plane_at = [](double z, double emission, json material_extra = json::object()) {
@@ -69,7 +69,7 @@ TEST(Geometry, TheNearestOfSeveralPlanesIsHit) {
   EXPECT_NEAR(render_pixel(scene).r, 0.5 * 0.75, 1e-12);
 }
 
-TEST(Geometry, PacketsFindWhateverIsNearestOfAnOpaquePlaneAndTheRest) {
+TEST(GeometryTest, PacketsFindWhateverIsNearestOfAnOpaquePlaneAndTheRest) {
   // Packets test opaque planes themselves and let Embree look only nearer than the plane:
   // a sphere behind the plane stays hidden, one in front of it is seen, and one cut by it
   // shows its cap above the plane.
@@ -90,7 +90,7 @@ TEST(Geometry, PacketsFindWhateverIsNearestOfAnOpaquePlaneAndTheRest) {
   EXPECT_EQ(render_pixel(scene).r, 0.5f);
 }
 
-TEST(Geometry, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
+TEST(GeometryTest, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
   // The shadow walk's packets: each lane goes only as far as its own reach, and sees only
   // the surfaces under the mask. Straight down from y = 10: a glass sphere whose top is at
   // y = 4, then the opaque floor at y = 0.
@@ -139,7 +139,7 @@ TEST(Geometry, BoundedPacketsFindOnlyWhatTheirMaskHoldsBeforeTheirReach) {
   }
 }
 
-TEST(Geometry, OpaquePlanesStayOutOfEmbreeAndSingleRaysStillMeetThem) {
+TEST(GeometryTest, OpaquePlanesStayOutOfEmbreeAndSingleRaysStillMeetThem) {
   // Straight down from y = 10 onto a sphere whose top is at y = 4, over the floor at y = 0.
   json scene = pinhole_scene({0, 10, 0}, {0, 0, 0}, {0, 0, -1});
   scene["objects"] = {{{"type", "plane"},
@@ -181,7 +181,7 @@ TEST(Geometry, OpaquePlanesStayOutOfEmbreeAndSingleRaysStillMeetThem) {
   }
 }
 
-TEST(Geometry, TransformStepsApplyInOrder) {
+TEST(GeometryTest, TransformStepsApplyInOrder) {
   // Scale by 2, then translate by x+3: the unit sphere covers x in [1, 5]. The other order
   // would cover [4, 8], missing the ray at x = 1.5.
   json scene = pinhole_scene({1.5, 0, 10}, {1.5, 0, 0});
@@ -196,7 +196,7 @@ TEST(Geometry, TransformStepsApplyInOrder) {
   EXPECT_EQ(render_pixel(scene).r, 0.0);
 }
 
-TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
+TEST(GeometryTest, BoxUnderMirroringTransformStaysSolid) {
   // A mirroring scale flips triangle winding; refraction must still see the box as a
   // solid (enter then leave), so a ray at normal incidence passes straight through.
   json scene = pinhole_scene({0.3, 0.2, 5}, {0.3, 0.2, 0});
@@ -210,7 +210,7 @@ TEST(Geometry, BoxUnderMirroringTransformStaysSolid) {
   EXPECT_NEAR(render_pixel(scene).r, 0.25, 1e-6);
 }
 
-TEST(Geometry, BoxesAreMetOnEachFaceFromOutsideAndInside) {
+TEST(GeometryTest, BoxesAreMetOnEachFaceFromOutsideAndInside) {
   // Boxes are tested analytically: along the axes in world space when the transform only
   // scales and moves them (the first), in object space otherwise (the second).
   const json transforms[2] = {{{{"scale", {2, 1, -0.5}}}, {{"translate", {1, -1, 2}}}},
@@ -297,7 +297,7 @@ void expect_uniform_sky(const Vec3& centre, double radius, const json& material)
   EXPECT_EQ(dark, 0) << "centre " << centre.x << " radius " << radius;
 }
 
-TEST(Geometry, NoSelfIntersectionNearOrFarSmallOrLarge) {
+TEST(GeometryTest, NoSelfIntersectionNearOrFarSmallOrLarge) {
   const json mirror = {{"ambient", 0}, {"diffuse", 0}, {"reflection", 1}};
   const json clear_glass = {{"ambient", 0}, {"diffuse", 0}, {"transmission", 1}, {"ior", 1.5}};
   for (const auto& [centre, radius] :
@@ -327,7 +327,7 @@ void expect_clean_far_floor(const json& floor, const Vec3& normal) {
   EXPECT_EQ(wrong, 0) << floor.dump();
 }
 
-TEST(Geometry, NoShadowAcneOnALargeFarAwayFloor) {
+TEST(GeometryTest, NoShadowAcneOnALargeFarAwayFloor) {
   // A slightly tilted plane: its points do not round to floats lying on it.
   expect_clean_far_floor(
       {{"type", "plane"}, {"point", {1e5, 0, -1e5}}, {"normal", {0.02, 1, 0.03}}}, {0.02, 1, 0.03});
@@ -336,7 +336,7 @@ TEST(Geometry, NoShadowAcneOnALargeFarAwayFloor) {
                          {0, 1, 0});
 }
 
-TEST(Geometry, CheckerOnACellBoundaryHasNoSpeckle) {
+TEST(GeometryTest, CheckerOnACellBoundaryHasNoSpeckle) {
   // The floor at y = 0 lies exactly on a cell boundary of a unit checkerboard. Seen from
   // straight above, pixel (i, j) hits x = ex + sx·h·tan(fov/2), z = ez - sy·h·tan(fov/2).
   const int size = 96;
@@ -370,7 +370,7 @@ TEST(Geometry, CheckerOnACellBoundaryHasNoSpeckle) {
   EXPECT_EQ(wrong, 0);
 }
 
-TEST(Geometry, SmoothMeshNormalsAreInterpolated) {
+TEST(GeometryTest, SmoothMeshNormalsAreInterpolated) {
   // One triangle in z = 0 whose vertex normals all tilt 60° towards +x: lit along -z, a
   // flat normal gives K_D, the interpolated one K_D · cos 60°.
   json scene = pinhole_scene({0.2, 0.2, 5}, {0.2, 0.2, 0});
@@ -387,7 +387,7 @@ TEST(Geometry, SmoothMeshNormalsAreInterpolated) {
   EXPECT_NEAR(render_pixel(scene).r, 1.0, 1e-6);
 }
 
-TEST(Geometry, AMeshHitHasTheNormalOfTheFloatCornersEmbreeIntersected) {
+TEST(GeometryTest, AMeshHitHasTheNormalOfTheFloatCornersEmbreeIntersected) {
   // The hit is rebuilt on the triangle Embree saw, whose corners are floats: the normal
   // (worked out when the mesh is built) must be the one of those floats, bit for bit, not of
   // the doubles they were rounded from.

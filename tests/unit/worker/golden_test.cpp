@@ -54,7 +54,7 @@ nlohmann::json read_example(const fs::path& path) {
 
 void PrintTo(const Example& example, std::ostream* out) { *out << example.name; }
 
-class Golden : public ::testing::TestWithParam<Example> {};
+class GoldenTest : public ::testing::TestWithParam<Example> {};
 
 // `image` against tests/golden/NAME.exr, or written there with TESSERA_UPDATE_GOLDEN=1.
 void expect_matches_golden(const Image& image, const std::string& name) {
@@ -100,17 +100,17 @@ void shrink(nlohmann::json& document) {
   document["image"]["height"] = std::max(1, kGoldenWidth * height / width);
 }
 
-TEST_P(Golden, MatchesReferenceImage) {
+TEST_P(GoldenTest, MatchesReferenceImage) {
   nlohmann::json document = read_example(GetParam().path);
   shrink(document);
   const FolderSceneFiles files(GetParam().path.parent_path());
   expect_matches_golden(test::render_image(document, 2, 0, &files), GetParam().name);
 }
 
-INSTANTIATE_TEST_SUITE_P(Examples, Golden, ::testing::ValuesIn(examples()),
+INSTANTIATE_TEST_SUITE_P(Examples, GoldenTest, ::testing::ValuesIn(examples()),
                          [](const auto& info) { return info.param.name; });
 
-TEST(Examples, CoverEveryFeature) {
+TEST(ExamplesTest, CoverEveryFeature) {
   std::set<std::string> lights, shapes;
   bool checker = false, transmissive = false, deep = false, big_mesh = false;
   for (const Example& example : examples()) {
@@ -146,9 +146,9 @@ void PrintTo(const AnimationFrame& shown, std::ostream* out) {
   *out << shown.name << " frame " << shown.frame;
 }
 
-class GoldenFrames : public ::testing::TestWithParam<AnimationFrame> {};
+class GoldenFramesTest : public ::testing::TestWithParam<AnimationFrame> {};
 
-TEST_P(GoldenFrames, MatchReferenceImages) {
+TEST_P(GoldenFramesTest, MatchReferenceImages) {
   const fs::path path =
       fs::path(TESSERA_SOURCE_DIR) / "examples" / "animation" / (GetParam().name + ".json");
   nlohmann::json document = read_json_file(path);
@@ -159,7 +159,7 @@ TEST_P(GoldenFrames, MatchReferenceImages) {
 }
 
 INSTANTIATE_TEST_SUITE_P(
-    Animations, GoldenFrames,
+    Animations, GoldenFramesTest,
     ::testing::Values(AnimationFrame{"turntable", 1}, AnimationFrame{"turntable", 13},
                       AnimationFrame{"turntable", 30}, AnimationFrame{"corridor_flythrough", 1},
                       AnimationFrame{"corridor_flythrough", 30},

@@ -47,7 +47,7 @@ void expect_near(const Vec3& actual, const Vec3& expected, double tolerance,
       << expected.x << ", " << expected.y << ", " << expected.z << ")";
 }
 
-TEST(QuadricGeometry, CylinderSideAndCapsAtKnownDistances) {
+TEST(QuadricGeometryTest, CylinderSideAndCapsAtKnownDistances) {
   // Radius 1, from y = 0 to y = 2.
   const OneObject scene(cylinder({0, 1, 0}, 1, 2));
   // Along -z at x = 0.6 (as a float), y = 1.5: the side at z = √(1 - x²), with the normal
@@ -89,7 +89,7 @@ TEST(QuadricGeometry, CylinderSideAndCapsAtKnownDistances) {
   EXPECT_FALSE(scene.hit({0.6, 1.5, 5}, {0, 0, 1}));
 }
 
-TEST(QuadricGeometry, CylinderFromInsideMeetsItsOutwardSurface) {
+TEST(QuadricGeometryTest, CylinderFromInsideMeetsItsOutwardSurface) {
   const OneObject scene(cylinder({0, 1, 0}, 1, 2));
   auto hit = scene.hit({0, 1, 0}, {1, 0, 0});
   ASSERT_TRUE(hit);
@@ -109,7 +109,7 @@ TEST(QuadricGeometry, CylinderFromInsideMeetsItsOutwardSurface) {
   EXPECT_EQ(hit->normal, Vec3(1, 0, 0));
 }
 
-TEST(QuadricGeometry, ConeSideBaseAndApex) {
+TEST(QuadricGeometryTest, ConeSideBaseAndApex) {
   // Radius 1, height 2: the base at y = -1, the apex at y = 1. At height y the radius is
   // (1 - y) / 2, and the side's outward normal is (2·u, 1) / √5 for u across the axis.
   const OneObject scene(cone({0, 0, 0}, 1, 2));
@@ -151,7 +151,7 @@ TEST(QuadricGeometry, ConeSideBaseAndApex) {
   EXPECT_FALSE(scene.hit({0, 0, 5}, {0, 0, 1}));
 }
 
-TEST(QuadricGeometry, RaysGrazingTheConesApex) {
+TEST(QuadricGeometryTest, RaysGrazingTheConesApex) {
   const OneObject scene(cone({0, 0, 0}, 1, 2));
   // Just below the apex the cone is 5e-5 wide: met there, on the side, with the side's
   // normal and not a made-up one.
@@ -174,7 +174,7 @@ TEST(QuadricGeometry, RaysGrazingTheConesApex) {
   EXPECT_FALSE(scene.hit({0, 3, 5}, {0, -1.5, -10}));
 }
 
-TEST(QuadricGeometry, RaysParallelToTheConesSide) {
+TEST(QuadricGeometryTest, RaysParallelToTheConesSide) {
   // Radius 1 and height 1: the side slopes at 45°, and (0, -1, -1) runs along its far
   // generator (the quadratic's leading coefficient is exactly 0). The apex is at y = 0.5.
   const OneObject scene(cone({0, 0, 0}, 1, 1));
@@ -243,7 +243,7 @@ void expect_hits_through(const json& object, const Vec3& object_inside,
   }
 }
 
-TEST(QuadricGeometry, UnderTransformsHitsAreWhereTheTransformPutsThem) {
+TEST(QuadricGeometryTest, UnderTransformsHitsAreWhereTheTransformPutsThem) {
   // A rotation, a scale along other axes than the shape's, a mirror and a move.
   const json transforms[3] = {
       {{{"rotate", {{"axis", {0, 0, 1}}, {"degrees", 90}}}}, {{"translate", {1, -1, 2}}}},
@@ -307,7 +307,7 @@ void expect_refracted_onto_lamp(json solid, const Vec3& eye, const Vec3& towards
   EXPECT_GT(glm::length(unbent - lamp), 1.0);
 }
 
-TEST(QuadricGeometry, RaysRefractInAndOutOfTheSolids) {
+TEST(QuadricGeometryTest, RaysRefractInAndOutOfTheSolids) {
   // A cylinder of radius 1 on the y axis, met along -z at x = 0.5: the ray bends towards
   // the axis, crosses a chord of 2·cos θt and leaves where the chord ends.
   const double sin_i = 0.5;
@@ -362,7 +362,7 @@ void expect_no_self_intersection(json object, const Vec3& centre, double size) {
   EXPECT_GT(far_sides, hits * 4 / 5);
 }
 
-TEST(QuadricGeometry, NoSelfIntersectionNearOrFarSmallOrLarge) {
+TEST(QuadricGeometryTest, NoSelfIntersectionNearOrFarSmallOrLarge) {
   for (const auto& [centre, size] :
        {std::pair{Vec3(0, 0, 0), 1.0}, std::pair{Vec3(1e5, -2e5, 3e5), 10.0},
         std::pair{Vec3(0, 0, 0), 1e4}, std::pair{Vec3(2, 1, 0), 1e-3}}) {

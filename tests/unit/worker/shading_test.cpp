@@ -38,7 +38,7 @@ json looking_down(const Vec3& at = {0, 0, 0}) {
   return pinhole_scene(at + Vec3(0, 5, 0), at, {0, 0, -1});
 }
 
-TEST(Shading, AmbientAndEmissionOnly) {
+TEST(ShadingTest, AmbientAndEmissionOnly) {
   json scene = pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["ambient_light"] = {0.5, 0.25, 1.0};
   scene["objects"].push_back(
@@ -47,7 +47,7 @@ TEST(Shading, AmbientAndEmissionOnly) {
   expect_color(render_pixel(scene), {0.01 + 0.1, 0.02 + 0.1, 0.03 + 0.6});
 }
 
-TEST(Shading, AHitThatSendsNoRayOnTakesItsCheckerCellsEmissionAndAmbient) {
+TEST(ShadingTest, AHitThatSendsNoRayOnTakesItsCheckerCellsEmissionAndAmbient) {
   // With no lights and no bounce left, a hit's colour is I_E + K_A·I_A alone, worked out by
   // a shorter path than a hit that sends rays on: it must still follow the checkerboard,
   // and give every pixel the bits the full path gives it.
@@ -86,13 +86,13 @@ TEST(Shading, AHitThatSendsNoRayOnTakesItsCheckerCellsEmissionAndAmbient) {
       0);
 }
 
-TEST(Shading, MissShowsTheBackground) {
+TEST(ShadingTest, MissShowsTheBackground) {
   json scene = pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["background"] = {0.1, 0.2, 0.3};
   expect_color(render_pixel(scene), {0.1, 0.2, 0.3});
 }
 
-TEST(Shading, DiffuseUnderDirectionalLight) {
+TEST(ShadingTest, DiffuseUnderDirectionalLight) {
   json scene = looking_down();
   scene["objects"].push_back(floor_plane(matte(0.6)));
   scene["lights"].push_back(
@@ -105,7 +105,7 @@ TEST(Shading, DiffuseUnderDirectionalLight) {
   expect_color(render_pixel(scene), {0, 0, 0});
 }
 
-TEST(Shading, PointLightAttenuationByEachCoefficient) {
+TEST(ShadingTest, PointLightAttenuationByEachCoefficient) {
   // Light 3 units straight above the lit point: d = 3, N·L = 1.
   const struct {
     double kc, kl, kq, denominator;
@@ -121,7 +121,7 @@ TEST(Shading, PointLightAttenuationByEachCoefficient) {
   }
 }
 
-TEST(Shading, SpotConeEdgeAndExponent) {
+TEST(ShadingTest, SpotConeEdgeAndExponent) {
   // Spot at (0,4,0) pointing down; lit point (1,0,0): D·L' = N·L = 4/√17 (angle 14.04°).
   const double cos_angle = 4.0 / std::sqrt(17.0);
   auto scene_with = [](double cutoff, double exponent) {
@@ -143,7 +143,7 @@ TEST(Shading, SpotConeEdgeAndExponent) {
   expect_color(render_pixel(scene_with(-1, -1)), Color(0.6 * cos_angle * cos_angle));
 }
 
-TEST(Shading, SpecularHighlightExponent) {
+TEST(ShadingTest, SpecularHighlightExponent) {
   // L at 30° from N in the x-y plane: R = (-sin 30°, cos 30°, 0), V = N, so V·R = cos 30°.
   const double v_dot_r = std::cos(std::numbers::pi / 6);
   for (double n : {1.0, 10.0, 50.0}) {
@@ -167,7 +167,7 @@ json shadow_scene(const json& blocker) {
   return scene;
 }
 
-TEST(Shading, ShadowsFromOpaqueAndTransmissiveOccluders) {
+TEST(ShadingTest, ShadowsFromOpaqueAndTransmissiveOccluders) {
   expect_color(render_pixel(shadow_scene(nullptr)), Color(0.1 + 0.6));
   expect_color(render_pixel(shadow_scene(sphere({0, 2, 0}, 0.5, matte(0.5)))), Color(0.1));
   // A solid glass sphere: the shadow ray crosses two surfaces, each passing K_T.
@@ -181,7 +181,7 @@ TEST(Shading, ShadowsFromOpaqueAndTransmissiveOccluders) {
   expect_color(render_pixel(shadow_scene(pane)), Color(0.1 + 0.6 * 0.5));
 }
 
-TEST(Shading, ShadowRaysWalkThroughEveryTransmissiveObjectOnTheirWay) {
+TEST(ShadingTest, ShadowRaysWalkThroughEveryTransmissiveObjectOnTheirWay) {
   // Two glass spheres and a glass box one above another over the shaded point: the walk goes
   // on after leaving each of them, and each surface passes its K_T.
   const json tinted = {{"diffuse", 0}, {"transmission", {1.0, 0.5, 0.8}}, {"ior", 1.5}};
@@ -198,7 +198,7 @@ TEST(Shading, ShadowRaysWalkThroughEveryTransmissiveObjectOnTheirWay) {
   expect_color(render_pixel(scene), Color(0.1) + 0.6 * through);
 }
 
-TEST(Shading, AShadowRayLeavingTheLastGlassOnItsWayStopsWalking) {
+TEST(ShadingTest, AShadowRayLeavingTheLastGlassOnItsWayStopsWalking) {
   // Shadow rays: one query for anything opaque, then one per transmissive surface crossed.
   // Leaving a sphere, the ray can never meet it again, and no other transmissive object's
   // box lies ahead: the walk ends without asking Embree for the nothing that is there.
@@ -219,7 +219,7 @@ TEST(Shading, AShadowRayLeavingTheLastGlassOnItsWayStopsWalking) {
   EXPECT_EQ(shadow_rays(), 5u);
 }
 
-TEST(Shading, MirrorReflectionAndDepthZero) {
+TEST(ShadingTest, MirrorReflectionAndDepthZero) {
   // The camera looks at the mirror floor at 45°; the mirror ray goes up at 45° into an
   // emitting sphere.
   json scene = pinhole_scene({0, 1, 1}, {0, 0, 0});
@@ -230,7 +230,7 @@ TEST(Shading, MirrorReflectionAndDepthZero) {
   expect_color(render_pixel(scene), Color(0.0));
 }
 
-TEST(Shading, MaxDepthCutsOffBetweenParallelMirrors) {
+TEST(ShadingTest, MaxDepthCutsOffBetweenParallelMirrors) {
   // Two facing mirrors that each emit 0.1 and reflect half: the ray bounces forever, so
   // with depth D the pixel is 0.1 · (1 + 1/2 + ... + 1/2^D).
   for (int depth : {0, 1, 2, 5}) {
@@ -251,7 +251,7 @@ const json glass(double kt, double ior) {
   return {{"ambient", 0}, {"diffuse", 0}, {"transmission", kt}, {"ior", ior}};
 }
 
-TEST(Shading, RefractionThroughAGlassSlabShiftsTheRay) {
+TEST(ShadingTest, RefractionThroughAGlassSlabShiftsTheRay) {
   // A slab 1 thick (z from -0.5 to 0.5), hit at 45°: inside, sin θt = sin 45° / 1.5, and
   // the ray leaves parallel to itself, shifted. A small emitter sits on the shifted line.
   const Vec3 d = glm::normalize(Vec3(1, 0, -1));
@@ -271,7 +271,7 @@ TEST(Shading, RefractionThroughAGlassSlabShiftsTheRay) {
   }
 }
 
-TEST(Shading, RefractionThroughAGlassSphere) {
+TEST(ShadingTest, RefractionThroughAGlassSphere) {
   // A ray parallel to the axis at height h = 0.5 through a unit ball of ior 1.5: it enters
   // at θ1 = asin h, bends to θ2 = asin(h/1.5), leaves at polar angle θ1 + π - 2θ2, turned
   // towards the axis by 2(θ1 - θ2).
@@ -301,14 +301,14 @@ json prism_scene(double ior) {
   return scene;
 }
 
-TEST(Shading, TotalInternalReflectionFollowsTheMirrorDirection) {
+TEST(ShadingTest, TotalInternalReflectionFollowsTheMirrorDirection) {
   // Critical angle for ior 1.5 is 41.8° < 45°: three K_T on the way to the emitter.
   expect_color(render_pixel(prism_scene(1.5)), Color(0.9 * 0.9 * 0.9));
   // For ior 1.2 (critical angle 56.4°) the ray refracts out of the hypotenuse instead.
   expect_color(render_pixel(prism_scene(1.2)), Color(0.0));
 }
 
-TEST(Shading, ThinSurfaceLetsTheRayPassUnbent) {
+TEST(ShadingTest, ThinSurfaceLetsTheRayPassUnbent) {
   json scene = pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["objects"].push_back({{"type", "plane"},
                               {"point", {0, 0, 0}},

@@ -55,7 +55,7 @@ bool eventually_sent(std::mutex& mutex,
   return false;
 }
 
-TEST(TileUploads, TilesReadyTogetherShareOneRequestAndFlushSendsTheRest) {
+TEST(TileUploadsTest, TilesReadyTogetherShareOneRequestAndFlushSendsTheRest) {
   Recorder recorder;
   // A gather long enough that the test, not the timer, decides when groups go.
   TileUploads uploads(recorder.send(), 10s, 256, 1 << 20);
@@ -68,7 +68,7 @@ TEST(TileUploads, TilesReadyTogetherShareOneRequestAndFlushSendsTheRest) {
   EXPECT_EQ(recorder.sent().size(), 1u);
 }
 
-TEST(TileUploads, AGroupGoesWhenItsGatherTimeIsUpWithoutAFlush) {
+TEST(TileUploadsTest, AGroupGoesWhenItsGatherTimeIsUpWithoutAFlush) {
   Recorder recorder;
   TileUploads uploads(recorder.send(), 20ms, 256, 1 << 20);
   uploads.push(tile(7));
@@ -76,7 +76,7 @@ TEST(TileUploads, AGroupGoesWhenItsGatherTimeIsUpWithoutAFlush) {
   EXPECT_EQ(recorder.sent(), (std::vector<std::vector<int>>{{7}}));
 }
 
-TEST(TileUploads, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
+TEST(TileUploadsTest, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
   Recorder recorder;
   // Each tile is 12 floats = 48 bytes; 100 bytes hold two.
   TileUploads uploads(recorder.send(), 10s, 256, 100);
@@ -98,7 +98,7 @@ TEST(TileUploads, GroupsStayUnderTheByteLimitButAlwaysCarryATile) {
 
 // The stall of issue 29: small tiles pile up while a group is on its way, and the next
 // group took them all, past the coordinator's tile limit, which refused it.
-TEST(TileUploads, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
+TEST(TileUploadsTest, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
   std::mutex mutex;
   std::condition_variable released;
   bool open = false;
@@ -133,7 +133,7 @@ TEST(TileUploads, TilesThatPileUpDuringAnUploadNeverMakeAGroupOverEitherLimit) {
   EXPECT_GE(groups.size(), 1u + (1365 + 255) / 256);
 }
 
-TEST(TileUploads, WithTwoSendersTheNextGroupGoesWhileOneWaitsForItsAnswer) {
+TEST(TileUploadsTest, WithTwoSendersTheNextGroupGoesWhileOneWaitsForItsAnswer) {
   std::mutex mutex;
   std::condition_variable changed;
   bool open = false;
@@ -167,7 +167,7 @@ TEST(TileUploads, WithTwoSendersTheNextGroupGoesWhileOneWaitsForItsAnswer) {
   EXPECT_EQ(sent, (std::vector<int>{0, 1, 2, 3, 4, 5}));  // each once
 }
 
-TEST(TileUploads, GroupsKeepToBothLimitsWhicheverComesFirst) {
+TEST(TileUploadsTest, GroupsKeepToBothLimitsWhicheverComesFirst) {
   Recorder recorder;
   // 10 floats = 40 bytes a tile: 4 tiles by count, or 2 by bytes (100).
   TileUploads uploads(recorder.send(), 10s, 4, 1 << 20);
@@ -187,7 +187,7 @@ TEST(TileUploads, GroupsKeepToBothLimitsWhicheverComesFirst) {
   EXPECT_EQ(after, 10u);
 }
 
-TEST(TileUploads, AfterSendPromptlyTilesGoWithoutWaitingForTheGatherUntilTheFlush) {
+TEST(TileUploadsTest, AfterSendPromptlyTilesGoWithoutWaitingForTheGatherUntilTheFlush) {
   Recorder recorder;
   // A gather far longer than the waits below: only send_promptly() can make these go.
   TileUploads uploads(recorder.send(), 60s, 256, 1 << 20);
@@ -213,7 +213,7 @@ TEST(TileUploads, AfterSendPromptlyTilesGoWithoutWaitingForTheGatherUntilTheFlus
   EXPECT_EQ(recorder.sent().back(), (std::vector<int>{3, 4}));
 }
 
-TEST(TileUploads, ARefusalDropsTheLeasesLaterTilesUntilTheFlush) {
+TEST(TileUploadsTest, ARefusalDropsTheLeasesLaterTilesUntilTheFlush) {
   Recorder recorder;
   recorder.refuse = true;
   // A group per tile (one tile fills the byte limit), so each goes as soon as it is pushed.

@@ -18,7 +18,7 @@ using shading_detail::in_odd_checker_cell;
 using shading_detail::power;
 using test::json;
 
-TEST(Power, WholeExponentsBySquaringAgreeWithPow) {
+TEST(PowerTest, WholeExponentsBySquaringAgreeWithPow) {
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 2000; ++trial) {
@@ -56,7 +56,7 @@ SurfaceHit hit_at(const Vec3& position, const Vec3& normal) {
   return hit;
 }
 
-TEST(Checker, IntegerCellParityIsFloorsParity) {
+TEST(CheckerTest, IntegerCellParityIsFloorsParity) {
   std::mt19937_64 random(11);
   std::uniform_real_distribution<double> coordinate(-50.0, 50.0);
   std::uniform_int_distribution<int> integer(-40, 40);
@@ -72,7 +72,7 @@ TEST(Checker, IntegerCellParityIsFloorsParity) {
   }
 }
 
-TEST(Checker, BeyondTwoToTheFiftyTwoCellsFloorDecides) {
+TEST(CheckerTest, BeyondTwoToTheFiftyTwoCellsFloorDecides) {
   // Every double this large is an integer, too large for the integer path: the floor path
   // answers, and agrees with the same parity by floor.
   const Vec3 n(0, 1, 0);
@@ -82,7 +82,7 @@ TEST(Checker, BeyondTwoToTheFiftyTwoCellsFloorDecides) {
   }
 }
 
-TEST(ShadowRays, ALightOnAWallFacingTheFloorLightsIt) {
+TEST(ShadowRaysTest, ALightOnAWallFacingTheFloorLightsIt) {
   // The floor lies at y = 100, so its shadow rays start 256 units in the last place above it
   // (2e-3): towards the light by 1.4e-3 of its 1.41 distance, a hundred times the 1e-5 by
   // which a shadow ray stops short. Measured from the surface point, the ray's reach would
@@ -104,7 +104,7 @@ TEST(ShadowRays, ALightOnAWallFacingTheFloorLightsIt) {
 
 // Packets of shadow rays test opaque planes outside Embree (SceneGeometry::occluded); a
 // plane between a point and the light must still block it there.
-TEST(ShadowRays, AnOpaquePlaneBetweenAPointAndTheLightShadowsIt) {
+TEST(ShadowRaysTest, AnOpaquePlaneBetweenAPointAndTheLightShadowsIt) {
   json scene = test::pinhole_scene({2, 3, 0}, {2, 0, 0}, {0, 0, -1});
   scene["objects"].push_back({{"type", "plane"},
                               {"point", {0, 0, 0}},
@@ -123,7 +123,7 @@ TEST(ShadowRays, AnOpaquePlaneBetweenAPointAndTheLightShadowsIt) {
   EXPECT_GT(test::render_pixel(walled).r, 0.1);
 }
 
-TEST(RenderTile, WritesIntoRowsOfALargerImageAndNothingElse) {
+TEST(RenderTileTest, WritesIntoRowsOfALargerImageAndNothingElse) {
   json scene = test::pinhole_scene({0, 0, 5}, {0, 0, 0});
   scene["image"] = {{"width", 24}, {"height", 20}};
   scene["ambient_light"] = 1;

@@ -58,9 +58,9 @@ nlohmann::json square_gltf(const std::string& uri) {
       .patch(nlohmann::json::array({{{"op", "add"}, {"path", "/buffers/0/uri"}, {"value", uri}}}));
 }
 
-class GltfFile : public test::MeshFileTest {};
+class GltfFileTest : public test::MeshFileTest {};
 
-TEST_F(GltfFile, NodeTransformsComposeDownTheHierarchy) {
+TEST_F(GltfFileTest, NodeTransformsComposeDownTheHierarchy) {
   write("square.gltf",
         square_gltf("data:application/octet-stream;base64," + base64(square_buffer())).dump());
   const Model model = load("square.gltf");
@@ -71,7 +71,7 @@ TEST_F(GltfFile, NodeTransformsComposeDownTheHierarchy) {
   EXPECT_EQ(mesh.positions, (std::vector<Vec3>{{10, 0, 0}, {12, 0, 0}, {12, 2, 0}, {10, 2, 0}}));
 }
 
-TEST_F(GltfFile, MetallicRoughnessAndTheKhrExtensionsMapToTheSeedModel) {
+TEST_F(GltfFileTest, MetallicRoughnessAndTheKhrExtensionsMapToTheSeedModel) {
   write("square.gltf",
         square_gltf("data:application/octet-stream;base64," + base64(square_buffer())).dump());
   const Material m = *load("square.gltf").parts[0].material;
@@ -86,7 +86,7 @@ TEST_F(GltfFile, MetallicRoughnessAndTheKhrExtensionsMapToTheSeedModel) {
   EXPECT_EQ(m.emission, Color(1.0, 0.0, 0.0));    // 0.25 x strength 4
 }
 
-TEST_F(GltfFile, AnExternalBinBesideTheModelAndNotOutsideIt) {
+TEST_F(GltfFileTest, AnExternalBinBesideTheModelAndNotOutsideIt) {
   write("models/mesh.bin", square_buffer());
   write("models/square.gltf", square_gltf("mesh.bin").dump());
   EXPECT_EQ(load("models/square.gltf").parts[0].mesh.triangles.size(), 2u);
@@ -96,7 +96,7 @@ TEST_F(GltfFile, AnExternalBinBesideTheModelAndNotOutsideIt) {
               HasSubstr("names \"../secret.bin\", which is outside the model's own folder"));
 }
 
-TEST_F(GltfFile, StripsAndFansBecomeCounterClockwiseTriangles) {
+TEST_F(GltfFileTest, StripsAndFansBecomeCounterClockwiseTriangles) {
   nlohmann::json gltf =
       square_gltf("data:application/octet-stream;base64," + base64(square_buffer()));
   auto& primitive = gltf["meshes"][0]["primitives"][0];
@@ -152,7 +152,7 @@ std::string interleaved_glb() {
   return gltf_bytes::glb(json, bin);
 }
 
-TEST_F(GltfFile, GlbWithInterleavedAttributesAndByteIndices) {
+TEST_F(GltfFileTest, GlbWithInterleavedAttributesAndByteIndices) {
   write("tri.glb", interleaved_glb());
   const Mesh mesh = load("tri.glb").parts[0].mesh;
   ASSERT_EQ(mesh.triangles.size(), 1u);
@@ -161,7 +161,7 @@ TEST_F(GltfFile, GlbWithInterleavedAttributesAndByteIndices) {
   EXPECT_EQ(mesh.normals[1], Vec3(0, 0, 1));
 }
 
-TEST_F(GltfFile, ErrorsNameAJsonPointerIntoTheGltf) {
+TEST_F(GltfFileTest, ErrorsNameAJsonPointerIntoTheGltf) {
   const std::string uri = "data:application/octet-stream;base64," + base64(square_buffer());
   nlohmann::json beyond = square_gltf(uri);
   beyond["accessors"][1]["count"] = 7;  // 14 bytes from a view of 12
@@ -187,7 +187,7 @@ TEST_F(GltfFile, ErrorsNameAJsonPointerIntoTheGltf) {
   EXPECT_THAT(load_error("broken.gltf"), HasSubstr("broken.gltf: "));
 }
 
-TEST_F(GltfFile, TexcoordsAndTheBaseColourAndEmissiveTextures) {
+TEST_F(GltfFileTest, TexcoordsAndTheBaseColourAndEmissiveTextures) {
   // The square's buffer, then four uvs (glTF's v runs down the image).
   std::string buffer = square_buffer();
   for (const float v : {0.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f, 0.f}) append(buffer, v);
@@ -226,7 +226,7 @@ TEST_F(GltfFile, TexcoordsAndTheBaseColourAndEmissiveTextures) {
   EXPECT_EQ(m.texture(TexturedTerm::emission)->scale, m.emission);
 }
 
-TEST_F(GltfFile, ATextureThatNamesNoImageIsAnErrorAtItsPointer) {
+TEST_F(GltfFileTest, ATextureThatNamesNoImageIsAnErrorAtItsPointer) {
   nlohmann::json gltf =
       square_gltf("data:application/octet-stream;base64," + base64(square_buffer()));
   gltf["textures"] = {{{"source", 3}}};
@@ -235,8 +235,8 @@ TEST_F(GltfFile, ATextureThatNamesNoImageIsAnErrorAtItsPointer) {
   EXPECT_THAT(load_error("square.gltf"), HasSubstr("/textures/0/source"));
 }
 
-TEST_F(GltfFile, APercentEncodedUriNamesTheDecodedFile) {
-  // The name model_references() sends to the farm under (ModelReferences tests it) is the
+TEST_F(GltfFileTest, APercentEncodedUriNamesTheDecodedFile) {
+  // The name model_references() sends to the farm under (ModelReferencesTest tests it) is the
   // one the reader asks for.
   write("my mesh.bin", square_buffer());
   write("square.gltf", square_gltf("my%20mesh.bin").dump());

@@ -28,7 +28,7 @@ f 1 2 4
 )";
 constexpr std::string_view two_materials_mtl = "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 1 0\n";
 
-class MeshFileScene : public test::MeshFileTest {
+class MeshFileSceneTest : public test::MeshFileTest {
  protected:
   Scene parse(const nlohmann::json& objects, const Limits& limits = {}) {
     nlohmann::json scene = {{"image", {{"width", 8}, {"height", 8}}},
@@ -48,7 +48,7 @@ class MeshFileScene : public test::MeshFileTest {
   }
 };
 
-TEST_F(MeshFileScene, AFileIsAMeshWithTheObjectsMaterialAndTransform) {
+TEST_F(MeshFileSceneTest, AFileIsAMeshWithTheObjectsMaterialAndTransform) {
   write("models/tetra.off", tetra_off);
   const Scene scene = parse(nlohmann::json::parse(R"([
     {"type": "mesh", "file": "models/tetra.off", "material": {"diffuse": [0, 0, 1]},
@@ -63,7 +63,7 @@ TEST_F(MeshFileScene, AFileIsAMeshWithTheObjectsMaterialAndTransform) {
   EXPECT_EQ(object.transform[3], glm::dvec4(1, 2, 3, 1));
 }
 
-TEST_F(MeshFileScene, EachFileMaterialBecomesAPartUnlessTheObjectNamesOne) {
+TEST_F(MeshFileSceneTest, EachFileMaterialBecomesAPartUnlessTheObjectNamesOne) {
   write("m.mtl", two_materials_mtl);
   write("two.obj", two_materials_obj);
   const Scene own = parse(nlohmann::json::parse(R"([{"type": "mesh", "file": "two.obj"}])"));
@@ -78,7 +78,7 @@ TEST_F(MeshFileScene, EachFileMaterialBecomesAPartUnlessTheObjectNamesOne) {
   EXPECT_EQ(overridden.materials.size(), 2u);  // the default and the object's: none of the file's
 }
 
-TEST_F(MeshFileScene, ErrorsPointAtTheObjectAndNameTheFile) {
+TEST_F(MeshFileSceneTest, ErrorsPointAtTheObjectAndNameTheFile) {
   write("tetra.off", tetra_off);
   SceneError missing = parse_error({{{"type", "mesh"}, {"file", "nowhere.obj"}}});
   EXPECT_EQ(missing.pointer(), "/objects/0/file");
@@ -104,7 +104,7 @@ TEST_F(MeshFileScene, ErrorsPointAtTheObjectAndNameTheFile) {
             1u);
 }
 
-TEST_F(MeshFileScene, FileTrianglesCountAgainstTheScenesLimit) {
+TEST_F(MeshFileSceneTest, FileTrianglesCountAgainstTheScenesLimit) {
   write("tetra.off", tetra_off);
   Limits limits;
   limits.max_triangles = 6;
@@ -118,7 +118,7 @@ TEST_F(MeshFileScene, FileTrianglesCountAgainstTheScenesLimit) {
                                        "remaining 2 of 6"));
 }
 
-TEST_F(MeshFileScene, WithoutFilesAMeshFileIsRefused) {
+TEST_F(MeshFileSceneTest, WithoutFilesAMeshFileIsRefused) {
   nlohmann::json scene = {{"image", {{"width", 8}, {"height", 8}}},
                           {"camera", {{"eye", {0, 0, 5}}, {"look_at", {0, 0, 0}}}},
                           {"objects", {{{"type", "mesh"}, {"file", "tetra.off"}}}}};
@@ -132,7 +132,7 @@ TEST_F(MeshFileScene, WithoutFilesAMeshFileIsRefused) {
 }
 
 // The farm's form: the model and its MTL are assets, found by digest.
-TEST_F(MeshFileScene, AssetsAreFoundByDigestAndTheirFilesThroughTheirMap) {
+TEST_F(MeshFileSceneTest, AssetsAreFoundByDigestAndTheirFilesThroughTheirMap) {
   const std::string obj_digest(64, 'a'), mtl_digest(64, 'b');
   write("store/" + obj_digest, two_materials_obj);
   write("store/" + mtl_digest, two_materials_mtl);

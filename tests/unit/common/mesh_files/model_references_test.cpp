@@ -11,7 +11,7 @@ namespace {
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
-class ModelReferences : public test::MeshFileTest {
+class ModelReferencesTest : public test::MeshFileTest {
  protected:
   std::vector<std::string> of(const std::string& name, MeshFormat format) {
     return model_references(dir_ / name, format, name);
@@ -26,7 +26,7 @@ class ModelReferences : public test::MeshFileTest {
   }
 };
 
-TEST_F(ModelReferences, AnObjNamesItsLibrariesAndTheirMapsOnce) {
+TEST_F(ModelReferencesTest, AnObjNamesItsLibrariesAndTheirMapsOnce) {
   write("m/a.obj", "mtllib a.mtl lib/b.mtl\nv 0 0 0\n");
   write("m/a.mtl", "newmtl x\nmap_Kd -clamp on tex/wood.png\nmap_Ka tex/wood.png\nbump n.png\n");
   write("m/lib/b.mtl", "newmtl y\nmap_Ke ./glow.png\n");
@@ -36,7 +36,7 @@ TEST_F(ModelReferences, AnObjNamesItsLibrariesAndTheirMapsOnce) {
   EXPECT_THAT(error_of("m/a.obj", MeshFormat::obj), HasSubstr("outside the model's own folder"));
 }
 
-TEST_F(ModelReferences, AGltfNamesItsBuffersAndImagesAsItsReaderDecodesTheirUris) {
+TEST_F(ModelReferencesTest, AGltfNamesItsBuffersAndImagesAsItsReaderDecodesTheirUris) {
   const nlohmann::json gltf = {
       {"asset", {{"version", "2.0"}}},
       {"buffers",

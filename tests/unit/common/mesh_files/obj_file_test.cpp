@@ -47,9 +47,9 @@ usemtl glass
 f -5 -4 -3 -2 -1
 )";
 
-class ObjFile : public test::MeshFileTest {};
+class ObjFileTest : public test::MeshFileTest {};
 
-TEST_F(ObjFile, PolygonsRelativeIndicesAndOnePartPerMaterial) {
+TEST_F(ObjFileTest, PolygonsRelativeIndicesAndOnePartPerMaterial) {
   write("parts.mtl", mtl);
   write("parts.obj", two_parts);
   const Model model = load("parts.obj");
@@ -62,7 +62,7 @@ TEST_F(ObjFile, PolygonsRelativeIndicesAndOnePartPerMaterial) {
   EXPECT_TRUE(model.parts[0].mesh.normals.empty());
 }
 
-TEST_F(ObjFile, MtlTermsMapToTheSeedModel) {
+TEST_F(ObjFileTest, MtlTermsMapToTheSeedModel) {
   write("parts.mtl", mtl);
   write("parts.obj", two_parts);
   const Model model = load("parts.obj");
@@ -84,7 +84,7 @@ TEST_F(ObjFile, MtlTermsMapToTheSeedModel) {
   EXPECT_NEAR(glass.emission.b, 0.3, 1e-7);
 }
 
-TEST_F(ObjFile, FileNormalsWhereEveryFaceHasThem) {
+TEST_F(ObjFileTest, FileNormalsWhereEveryFaceHasThem) {
   write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 0 1 1\nf 1//1 2//1 3//2\n");
   const Mesh mesh = load("n.obj").parts[0].mesh;
   ASSERT_EQ(mesh.normals.size(), 3u);
@@ -95,7 +95,7 @@ TEST_F(ObjFile, FileNormalsWhereEveryFaceHasThem) {
   EXPECT_TRUE(load("some.obj").parts[0].mesh.normals.empty());
 }
 
-TEST_F(ObjFile, TheSameCornerWithTwoNormalsBecomesTwoPositions) {
+TEST_F(ObjFileTest, TheSameCornerWithTwoNormalsBecomesTwoPositions) {
   write("crease.obj",
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nvn 0 1 0\nf 1//1 2//1 3//1\nf 2//2 1//2 "
         "4//2\n");
@@ -105,7 +105,7 @@ TEST_F(ObjFile, TheSameCornerWithTwoNormalsBecomesTwoPositions) {
   EXPECT_EQ(smooth.positions.size(), 4u);
 }
 
-TEST_F(ObjFile, ErrorsNameTheLine) {
+TEST_F(ObjFileTest, ErrorsNameTheLine) {
   write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2 9\n");
   EXPECT_THAT(
       load_error("range.obj"),
@@ -116,7 +116,7 @@ TEST_F(ObjFile, ErrorsNameTheLine) {
   EXPECT_THAT(load_error("points.obj"), HasSubstr("points.obj: has no triangles"));
 }
 
-TEST_F(ObjFile, AMaterialLibraryOutsideTheModelsFolderIsRefused) {
+TEST_F(ObjFileTest, AMaterialLibraryOutsideTheModelsFolderIsRefused) {
   write("secret.mtl", mtl);
   write("models/escape.obj",
         "v 0 0 0\nv 1 0 0\nv 0 1 0\n# comment\nmtllib ../secret.mtl\nf 1 2 3\n");
@@ -127,7 +127,7 @@ TEST_F(ObjFile, AMaterialLibraryOutsideTheModelsFolderIsRefused) {
   EXPECT_THAT(load_error("models/absolute.obj"), HasSubstr("outside the model's own folder"));
 }
 
-TEST_F(ObjFile, TrianglesOverTheLimitAreRefusedAtTheFaceThatCrossesIt) {
+TEST_F(ObjFileTest, TrianglesOverTheLimitAreRefusedAtTheFaceThatCrossesIt) {
   write("many.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\nf 1 2 4\n");
   try {
     load("many.obj", NormalsMode::file, 2);
@@ -138,7 +138,7 @@ TEST_F(ObjFile, TrianglesOverTheLimitAreRefusedAtTheFaceThatCrossesIt) {
   }
 }
 
-TEST_F(ObjFile, UvsSplitCornersAtSeamsAndMapsBecomeTextures) {
+TEST_F(ObjFileTest, UvsSplitCornersAtSeamsAndMapsBecomeTextures) {
   write("tex/wood.png", "png bytes: the reader only locates the file");
   write("box.mtl", "newmtl wood\nKa 0.5 0.5 0.5\nKd 0.8 0.6 0.4\nmap_Kd -clamp on tex/wood.png\n");
   // Two triangles sharing the edge 1-3, whose corner 3 has a different uv in each: a seam.
@@ -178,7 +178,7 @@ f 1/1 3/5 4/4
   EXPECT_FALSE(wood.texture(TexturedTerm::specular));
 }
 
-TEST_F(ObjFile, AMissingOrEscapingTextureIsAnError) {
+TEST_F(ObjFileTest, AMissingOrEscapingTextureIsAnError) {
   write("a.obj", "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
   write("a.mtl", "newmtl m\nmap_Kd gone.png\n");
   EXPECT_THAT(load_error("a.obj"), HasSubstr("gone.png"));
@@ -186,7 +186,7 @@ TEST_F(ObjFile, AMissingOrEscapingTextureIsAnError) {
   EXPECT_THAT(load_error("a.obj"), HasSubstr("outside the model's own folder"));
 }
 
-TEST_F(ObjFile, AFaceNamingAMissingUvNamesItsLine) {
+TEST_F(ObjFileTest, AFaceNamingAMissingUvNamesItsLine) {
   write("a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n");
   EXPECT_THAT(load_error("a.obj"), HasSubstr("a.obj:line 5"));
 }

@@ -26,9 +26,9 @@ constexpr std::string_view cube = R"(OFF
 4 0 4 7 3 0.5 0.5 0.5
 )";
 
-class OffFile : public test::MeshFileTest {};
+class OffFileTest : public test::MeshFileTest {};
 
-TEST_F(OffFile, ReadsQuadsAsTwoTrianglesEachAndSkipsCommentsAndColours) {
+TEST_F(OffFileTest, ReadsQuadsAsTwoTrianglesEachAndSkipsCommentsAndColours) {
   write("cube.off", cube);
   const Model model = load("cube.off");
   ASSERT_EQ(model.parts.size(), 1u);
@@ -42,7 +42,7 @@ TEST_F(OffFile, ReadsQuadsAsTwoTrianglesEachAndSkipsCommentsAndColours) {
   EXPECT_EQ(mesh.positions[1], Vec3(0, 1, 0));
 }
 
-TEST_F(OffFile, CountsMayShareTheHeaderLineAndNoffCarriesNormals) {
+TEST_F(OffFileTest, CountsMayShareTheHeaderLineAndNoffCarriesNormals) {
   write("tri.off", "NOFF 3 1 0\n0 0 0 0 0 2\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n");
   const Mesh mesh = load("tri.off").parts[0].mesh;
   ASSERT_EQ(mesh.normals.size(), 3u);
@@ -50,7 +50,7 @@ TEST_F(OffFile, CountsMayShareTheHeaderLineAndNoffCarriesNormals) {
   EXPECT_TRUE(load("tri.off", NormalsMode::flat).parts[0].mesh.normals.empty());
 }
 
-TEST_F(OffFile, SmoothNormalsAverageTheFacesAroundEachCorner) {
+TEST_F(OffFileTest, SmoothNormalsAverageTheFacesAroundEachCorner) {
   // Two triangles folded at a right angle along the edge 0-1.
   write("fold.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n");
   const Mesh mesh = load("fold.off", NormalsMode::smooth).parts[0].mesh;
@@ -60,14 +60,14 @@ TEST_F(OffFile, SmoothNormalsAverageTheFacesAroundEachCorner) {
   EXPECT_NEAR(glm::length(mesh.normals[2] - Vec3(0, 0, 1)), 0.0, 1e-12);
 }
 
-TEST_F(OffFile, DropsDegenerateFacesAndUnusedVertices) {
+TEST_F(OffFileTest, DropsDegenerateFacesAndUnusedVertices) {
   write("mess.off", "OFF\n5 2 0\n0 0 0\n1 0 0\n0 1 0\n2 0 0\n9 9 9\n3 0 1 2\n3 0 1 3\n");
   const Mesh mesh = load("mess.off").parts[0].mesh;
   EXPECT_EQ(mesh.triangles.size(), 1u);
   EXPECT_EQ(mesh.positions.size(), 3u);
 }
 
-TEST_F(OffFile, ErrorsNameTheFileAndLine) {
+TEST_F(OffFileTest, ErrorsNameTheFileAndLine) {
   write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
   EXPECT_EQ(load_error("bad_index.off"),
             "bad_index.off:line 6: vertex index \"3\" must be below the 3 vertices");
@@ -83,7 +83,7 @@ TEST_F(OffFile, ErrorsNameTheFileAndLine) {
   EXPECT_THAT(load_error("missing.off"), HasSubstr("missing.off: cannot open"));
 }
 
-TEST_F(OffFile, HugeCountsAreRefusedBeforeAnythingIsAllocated) {
+TEST_F(OffFileTest, HugeCountsAreRefusedBeforeAnythingIsAllocated) {
   // 2^31 vertices in a file of a few bytes: refused from the counts line, at once.
   write("huge.off", "OFF\n2147483648 1 0\n0 0 0\n");
   EXPECT_THAT(load_error("huge.off"),

@@ -37,7 +37,7 @@ end_header
 0 1
 )";
 
-class PlyFile : public test::MeshFileTest {
+class PlyFileTest : public test::MeshFileTest {
  protected:
   // The same model as ascii_quad, in binary of the given byte order; the face element has an
   // extra uchar "flags" property to skip.
@@ -68,7 +68,7 @@ class PlyFile : public test::MeshFileTest {
   }
 };
 
-TEST_F(PlyFile, AsciiQuadsAndTrianglesWithNormalsAndOtherElementsSkipped) {
+TEST_F(PlyFileTest, AsciiQuadsAndTrianglesWithNormalsAndOtherElementsSkipped) {
   write("quad.ply", ascii_quad);
   const Model model = load("quad.ply");
   ASSERT_EQ(model.parts.size(), 1u);
@@ -79,7 +79,7 @@ TEST_F(PlyFile, AsciiQuadsAndTrianglesWithNormalsAndOtherElementsSkipped) {
   EXPECT_EQ(mesh.normals[4], Vec3(0, 0, 1));
 }
 
-TEST_F(PlyFile, BinaryOfEitherByteOrderReadsAsTheAsciiDoes) {
+TEST_F(PlyFileTest, BinaryOfEitherByteOrderReadsAsTheAsciiDoes) {
   write("quad.ply", ascii_quad);
   write("little.ply", binary(false));
   write("big.ply", binary(true));
@@ -92,7 +92,7 @@ TEST_F(PlyFile, BinaryOfEitherByteOrderReadsAsTheAsciiDoes) {
   }
 }
 
-TEST_F(PlyFile, ErrorsNameTheLineOrTheByte) {
+TEST_F(PlyFileTest, ErrorsNameTheLineOrTheByte) {
   std::string text(ascii_quad);
   text.replace(text.find("3 1 4 2"), 7, "3 1 5 2");
   write("index.ply", text);
@@ -142,7 +142,7 @@ std::string float_grid(bool big_endian, std::uint32_t last_index = 4, float last
   return out;
 }
 
-TEST_F(PlyFile, LittleEndianFloatsAndTrianglesReadStraightAsTheGeneralPathReadsThem) {
+TEST_F(PlyFileTest, LittleEndianFloatsAndTrianglesReadStraightAsTheGeneralPathReadsThem) {
   write("little.ply", float_grid(false));
   write("big.ply", float_grid(true));
   const Mesh little = load("little.ply").parts[0].mesh;
@@ -162,7 +162,7 @@ TEST_F(PlyFile, LittleEndianFloatsAndTrianglesReadStraightAsTheGeneralPathReadsT
   EXPECT_EQ(load_error("nan.ply"), "nan.ply:byte 284: holds a value that is not a finite number");
 }
 
-TEST_F(PlyFile, HugeCountsAreRefusedFromTheHeader) {
+TEST_F(PlyFileTest, HugeCountsAreRefusedFromTheHeader) {
   write("huge.ply",
         "ply\nformat binary_little_endian 1.0\nelement vertex 2147483648\nproperty float x\n"
         "property float y\nproperty float z\nend_header\n0123456789ab");
